@@ -1,0 +1,80 @@
+//! `stickslip run`.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, EngineArg, SceneArgs, fail};
+use crate::runner::{RunError, run_scene};
+use crate::scene::Scene;
+
+/// Reads and validates the scene with `--set` overrides and the flag overrides after them.
+pub(crate) fn load_scene(args: &SceneArgs, extra: &[String]) -> Result<Scene, ExitCode> {
+    let mut overrides = args.set.clone();
+    overrides.extend_from_slice(extra);
+    Scene::from_file(&args.scene, &overrides).map_err(|e| fail(EXIT_BAD_INPUT, e))
+}
+
+/// Creates `dir` and checks it can be written, before any work is done.
+pub(crate) fn prepare_out_dir(dir: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("output directory {}: cannot create it: {e}", dir.display()))?;
+    let probe = dir.join(".stickslip-write-probe");
+    std::fs::write(&probe, b"").map_err(|e| format!("output directory {}: cannot write in it: {e}", dir.display()))?;
+    let _ = std::fs::remove_file(probe);
+    Ok(())
+}
+
+pub(crate) fn run(args: &SceneArgs, engine: Option<EngineArg>, seed: Option<u64>, out: Option<PathBuf>) -> ExitCode {
+    let mut extra = Vec::new();
+    if let Some(e) = engine {
+        extra.push(format!("run.engine={}", if matches!(e, EngineArg::Exact) { "exact" } else { "fixed" }));
+    }
+    if let Some(s) = seed {
+        extra.push(format!("run.seed={s}"));
+    }
+    let scene = match load_scene(args, &extra) {
+        Ok(s) => s,
+        Err(code) => return code,
+    };
+    let out = out.unwrap_or_else(|| Path::new("out").join(&scene.name));
+    if let Err(m) = prepare_out_dir(&out) {
+        return fail(EXIT_BAD_INPUT, m);
+    }
+    match run_scene(&scene, Some(&out)) {
+        Ok(s) => {
+            let per = s.friction_per_junction;
+            println!(
+                "scene {} ({} engine, seed {}, N = {}, t_end = {})",
+                s.scene,
+                s.engine_name(),
+                s.seed,
+                s.n,
+                s.t_end
+            );
+            println!(
+                "friction per junction {:.6} (std of total {:.6}) over [{}, {}]",
+                per, s.friction_std, s.t_warmup, s.t_end
+            );
+            println!(
+                "attached fraction {:.4}; regime {} ({} stick-slip cycles)",
+                s.attached_fraction_mean,
+                s.regime.as_str(),
+                s.stick_slip_cycles
+            );
+            let work = match (s.counters.steps, s.counters.events) {
+                (Some(n), _) => format!("{n} steps"),
+                (_, Some(n)) => format!("{n} events"),
+                _ => String::new(),
+            };
+            println!(
+                "{work}, {} ruptures, {} formations in {:.3} s; output in {}",
+                s.counters.ruptures,
+                s.counters.formations,
+                s.wall_seconds,
+                out.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e @ RunError::Output { .. }) => fail(EXIT_RUN_FAILED, e),
+        Err(e) => fail(EXIT_RUN_FAILED, e),
+    }
+}

@@ -1,0 +1,87 @@
+//! Engines: the *methods* that advance a scene. The runner owns the loop, the output grid
+//! and the observers; an engine only advances to the time it is asked for and reports
+//! what happened on the way.
+
+pub mod exact;
+pub mod fixed;
+
+use serde::{Serialize, de::DeserializeOwned};
+
+use crate::observe::{Observer, Sample};
+use crate::scene::{EngineKind, Scene};
+
+/// Counters an engine keeps; reported in `summary.json`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
+pub struct Counters {
+    pub ruptures: u64,
+    pub formations: u64,
+    /// Fixed engine: steps taken.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub steps: Option<u64>,
+    /// Exact engine: events executed (ruptures + formations).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub events: Option<u64>,
+    /// Exact engine: thinning candidates drawn (accepted or not).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub candidates: Option<u64>,
+    /// Exact engine, tilted law: accepted steps of the adaptive plate integrator.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ode_steps: Option<u64>,
+    /// Exact engine, tilted law: rejected steps of the adaptive plate integrator.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ode_rejected: Option<u64>,
+    /// Exact engine: coordinate re-basings (long runs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rebases: Option<u64>,
+}
+
+/// Why an engine could not go on.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EngineError {
+    /// The fixed-step plate update blew up (typically `dt` beyond the stability limit).
+    #[error("the plate diverged at step {step} (t = {t}): {quantity} = {value}; the time step fixed.dt is probably beyond the integrator's stability limit")]
+    Diverged { step: u64, t: f64, quantity: &'static str, value: f64 },
+    /// A quantity became NaN or infinite.
+    #[error("numerical trouble at t = {t}: {quantity} = {value}")]
+    NonFinite { t: f64, quantity: &'static str, value: f64 },
+    /// The adaptive integrator could not meet its tolerance.
+    #[error("the adaptive plate integrator failed at t = {t}: step size {h} too small for exact.rtol = {rtol}")]
+    StepSizeUnderflow { t: f64, h: f64, rtol: f64 },
+    /// The engine cannot run this scene.
+    #[error("the {engine} engine cannot run this scene: {reason}")]
+    Unsupported { engine: &'static str, reason: &'static str },
+}
+
+/// A method that advances a scene in time.
+pub trait Engine: Serialize + DeserializeOwned {
+    /// Which engine this is.
+    const KIND: EngineKind;
+    /// Current time.
+    fn time(&self) -> f64;
+    /// The engine's fixed step, if it has one: it can only stop on multiples of it.
+    fn time_step(&self) -> Option<f64>;
+    /// Advances to `t_stop` and reports segments (and events, if `O::EVENTS`) to `obs`.
+    ///
+    /// The exact engine stops at `t_stop` exactly. The fixed engine takes whole steps and
+    /// stops at the first step boundary `n dt >= t_stop` (to within `1e-9 dt`).
+    fn advance<O: Observer>(&mut self, t_stop: f64, obs: &mut O) -> Result<(), EngineError>;
+    /// The state now.
+    fn sample(&self) -> Sample;
+    /// Counters so far.
+    fn counters(&self) -> Counters;
+}
+
+/// Something to do with an engine once its concrete type is known (a run, a resume, a bench).
+pub trait EngineVisitor {
+    type Output;
+    fn visit<E: Engine>(self, engine: E) -> Self::Output;
+}
+
+/// Builds the engine the scene asks for (`run.engine`), specialised to the scene's force
+/// law, bond kind and options, and hands it to `visitor`.
+pub fn with_engine<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output, EngineError> {
+    match scene.run.engine {
+        EngineKind::Fixed => fixed::dispatch(scene, visitor),
+        EngineKind::Exact => exact::dispatch(scene, visitor),
+    }
+}

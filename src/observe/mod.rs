@@ -1,0 +1,193 @@
+//! What engines report, and the observers that receive it.
+//!
+//! Engines report three things:
+//! - [`Segment`]s: time integrals of the observables over consecutive pieces of the
+//!   trajectory that tile `[0, t]` (between events for the exact engine, one step for the
+//!   fixed engine). Window statistics are built from these, so they are exact integrals
+//!   of the engine's trajectory, not averages of a sampled trace.
+//! - [`JunctionEvent`]s: ruptures and formations, only when an observer wants them
+//!   ([`Observer::EVENTS`] is a constant, so engines compile the event path away otherwise).
+//! - [`Sample`]s: the state on the runner's output grid.
+//!
+//! Observers are combined with tuples and dispatched statically.
+
+pub mod regime;
+pub mod stats;
+
+use serde::{Deserialize, Serialize};
+
+/// The state at one instant.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Sample {
+    /// Time `t`.
+    pub t: f64,
+    /// Plate position `X`.
+    pub x: f64,
+    /// Plate velocity `Xd`.
+    pub v: f64,
+    /// Driving-spring force `F = K (V t - X)` (the friction force).
+    pub friction: f64,
+    /// Bond force `F_b = sum_i q_i f_i^x`.
+    pub bond_force: f64,
+    /// Number of attached junctions.
+    pub attached: u64,
+    /// Number of junctions `N`.
+    pub n: u64,
+}
+
+impl Sample {
+    /// `n(t) = attached / N`.
+    pub fn attached_fraction(&self) -> f64 {
+        self.attached as f64 / self.n as f64
+    }
+}
+
+/// Kind of a junction event.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum EventKind {
+    Rupture,
+    Formation,
+}
+
+impl EventKind {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            EventKind::Rupture => "rupture",
+            EventKind::Formation => "formation",
+        }
+    }
+}
+
+/// One junction switching state.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JunctionEvent {
+    /// Time of the event (for the fixed engine, the start of the step in which it flipped).
+    pub t: f64,
+    /// Junction index in `0..N`.
+    pub junction: u32,
+    pub kind: EventKind,
+    /// Extension `x_i` at the event (after re-attachment rules are applied, for formations).
+    pub extension: f64,
+    /// Tension `f_i` at the event.
+    pub tension: f64,
+}
+
+/// Time integrals of the observables over one piece `[t0, t1]` of the trajectory.
+///
+/// Means are `(1/h) int_{t0}^{t1} (.) dt` with `h = t1 - t0`; `friction_m2` is
+/// `int (F - friction)^2 dt`, so variances combine without cancellation (Chan et al.).
+#[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
+pub struct Segment {
+    pub t0: f64,
+    pub t1: f64,
+    /// Mean driving-spring force `F = K (V t - X)` over the segment.
+    pub friction: f64,
+    /// `int (F - mean)^2 dt` over the segment (>= 0).
+    pub friction_m2: f64,
+    /// Mean bond force `F_b`.
+    pub bond_force: f64,
+    /// Mean viscous force `eta Xd`.
+    pub viscous: f64,
+    /// Attached count (constant on a segment).
+    pub attached: u64,
+}
+
+/// Receives what an engine reports. All methods have empty defaults.
+pub trait Observer {
+    /// Whether this observer wants [`JunctionEvent`]s. Engines test this constant, so the
+    /// event path costs nothing when it is `false`.
+    const EVENTS: bool = false;
+    /// A junction ruptured or formed. Only called when `EVENTS` is true.
+    #[inline]
+    fn event(&mut self, _e: &JunctionEvent) {}
+    /// The engine advanced over `[s.t0, s.t1]`.
+    #[inline]
+    fn segment(&mut self, _s: &Segment) {}
+    /// A state on the output grid.
+    fn sample(&mut self, _s: &Sample) {}
+}
+
+/// Observes nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Nothing;
+impl Observer for Nothing {}
+
+impl<A: Observer, B: Observer> Observer for (A, B) {
+    const EVENTS: bool = A::EVENTS || B::EVENTS;
+    #[inline]
+    fn event(&mut self, e: &JunctionEvent) {
+        if A::EVENTS {
+            self.0.event(e);
+        }
+        if B::EVENTS {
+            self.1.event(e);
+        }
+    }
+    #[inline]
+    fn segment(&mut self, s: &Segment) {
+        self.0.segment(s);
+        self.1.segment(s);
+    }
+    fn sample(&mut self, s: &Sample) {
+        self.0.sample(s);
+        self.1.sample(s);
+    }
+}
+
+impl<A: Observer> Observer for Option<A> {
+    const EVENTS: bool = A::EVENTS;
+    #[inline]
+    fn event(&mut self, e: &JunctionEvent) {
+        if let Some(a) = self {
+            a.event(e)
+        }
+    }
+    #[inline]
+    fn segment(&mut self, s: &Segment) {
+        if let Some(a) = self {
+            a.segment(s)
+        }
+    }
+    fn sample(&mut self, s: &Sample) {
+        if let Some(a) = self {
+            a.sample(s)
+        }
+    }
+}
+
+impl<A: Observer + ?Sized> Observer for &mut A {
+    const EVENTS: bool = A::EVENTS;
+    #[inline]
+    fn event(&mut self, e: &JunctionEvent) {
+        (**self).event(e)
+    }
+    #[inline]
+    fn segment(&mut self, s: &Segment) {
+        (**self).segment(s)
+    }
+    fn sample(&mut self, s: &Sample) {
+        (**self).sample(s)
+    }
+}
+
+/// Collects everything in memory (for tests).
+#[derive(Clone, Debug, Default)]
+pub struct Recorder {
+    pub events: Vec<JunctionEvent>,
+    pub segments: Vec<Segment>,
+    pub samples: Vec<Sample>,
+}
+
+impl Observer for Recorder {
+    const EVENTS: bool = true;
+    fn event(&mut self, e: &JunctionEvent) {
+        self.events.push(*e);
+    }
+    fn segment(&mut self, s: &Segment) {
+        self.segments.push(*s);
+    }
+    fn sample(&mut self, s: &Sample) {
+        self.samples.push(*s);
+    }
+}

@@ -1,0 +1,57 @@
+//! `summary.json`: the run's window statistics, counters and resolved parameters.
+
+use serde::{Deserialize, Serialize};
+
+use crate::engine::Counters;
+use crate::observe::regime::Regime;
+use crate::scene::{EngineKind, Scene};
+
+/// Everything a run reports at its end.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Summary {
+    /// Scene name (file stem).
+    pub scene: String,
+    pub engine: EngineKind,
+    pub seed: u64,
+    /// Number of junctions `N`.
+    pub n: u64,
+    pub t_end: f64,
+    pub t_warmup: f64,
+    /// Time-weighted mean of `F = K (V t - X)` over `[t_warmup, t_end]`.
+    pub friction_mean: f64,
+    /// Time-weighted standard deviation of `F` over the window.
+    pub friction_std: f64,
+    /// `friction_mean / N`.
+    pub friction_per_junction: f64,
+    /// Time-weighted mean of `F_b`.
+    pub bond_force_mean: f64,
+    /// Time-weighted mean of `eta Xd`.
+    pub viscous_force_mean: f64,
+    /// Time-weighted mean of `n(t)`.
+    pub attached_fraction_mean: f64,
+    /// Mean tension at rupture over the window (weak bonds only).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub rupture_force_mean: Option<f64>,
+    /// Standard error of `rupture_force_mean`.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub rupture_force_sem: Option<f64>,
+    pub regime: Regime,
+    /// Stick→slip cycles counted by the regime criterion.
+    pub stick_slip_cycles: u64,
+    #[serde(flatten)]
+    pub counters: Counters,
+    /// Wall-clock time of the run in seconds.
+    pub wall_seconds: f64,
+    /// The resolved scene (every parameter, defaults filled in).
+    pub parameters: Scene,
+}
+
+impl Summary {
+    /// Engine name as a string.
+    pub fn engine_name(&self) -> &'static str {
+        match self.engine {
+            EngineKind::Exact => "exact",
+            EngineKind::Fixed => "fixed",
+        }
+    }
+}

@@ -1,0 +1,151 @@
+//! Validation: [`SceneFile`] (what the user wrote) to [`Scene`] (typed, checked parameters).
+//! Defaults and allowed ranges here are the ones documented in `docs/scenes.md`.
+
+use super::error::SceneError;
+use super::file::SceneFile;
+use super::params::*;
+
+/// Largest Park–Miller seed: the state must lie in `[1, 2^31 - 2]`.
+pub const PARK_MILLER_SEED_MAX: u64 = (1 << 31) - 2;
+/// Largest number of junctions (junction indices are stored as `u32`).
+pub const N_MAX: usize = u32::MAX as usize;
+/// Largest number of output samples a run may ask for.
+pub const SAMPLES_MAX: f64 = 1e9;
+/// Largest number of fixed steps a run may ask for.
+pub const STEPS_MAX: f64 = 1e15;
+
+fn finite_ge(field: &'static str, v: f64, lo: f64) -> Result<f64, SceneError> {
+    if v.is_finite() && v >= lo {
+        Ok(v)
+    } else {
+        Err(SceneError::invalid(field, v, format!("must be a finite number >= {lo}")))
+    }
+}
+
+fn finite_gt(field: &'static str, v: f64, lo: f64) -> Result<f64, SceneError> {
+    if v.is_finite() && v > lo {
+        Ok(v)
+    } else {
+        Err(SceneError::invalid(field, v, format!("must be a finite number > {lo}")))
+    }
+}
+
+impl SceneFile {
+    /// Checks every field, fills in defaults and returns the typed scene.
+    pub fn validate(&self, name: &str) -> Result<Scene, SceneError> {
+        let j = &self.junctions;
+        let n = j.n.unwrap_or(300);
+        if n == 0 || n > N_MAX {
+            return Err(SceneError::invalid("junctions.n", n, format!("must be a whole number from 1 to {N_MAX}")));
+        }
+        let junctions = JunctionParams {
+            n,
+            bond: j.bond.unwrap_or(BondKind::Strong),
+            force_law: j.force_law.unwrap_or(ForceLawKind::Tilted),
+            kappa: finite_ge("junctions.kappa", j.kappa.unwrap_or(0.1), 0.0)?,
+            l0: finite_gt("junctions.l0", j.l0.unwrap_or(1.0), 0.0)?,
+            lambda: finite_ge("junctions.lambda", j.lambda.unwrap_or(0.1), 0.0)?,
+            reattach: j.reattach.unwrap_or(Reattach::Residual),
+            k0: finite_ge("junctions.k0", j.k0.unwrap_or(0.1), 0.0)?,
+            kon0: finite_ge("junctions.kon0", j.kon0.unwrap_or(0.1), 0.0)?,
+            tau0: finite_gt("junctions.tau0", j.tau0.unwrap_or(2.0), 0.0)?,
+            alpha: finite_gt("junctions.alpha", j.alpha.unwrap_or(1.0), 0.0)?,
+            dx: finite_ge("junctions.dx", j.dx.unwrap_or(1.0), 0.0)?,
+            temperature: finite_gt("junctions.temperature", j.temperature.unwrap_or(1.0), 0.0)?,
+            initial: j.initial.unwrap_or(Initial::Detached),
+        };
+        if junctions.initial == Initial::Stationary && junctions.k0 + junctions.kon0 == 0.0 {
+            return Err(SceneError::invalid(
+                "junctions.initial",
+                "stationary",
+                "needs junctions.k0 + junctions.kon0 > 0 (the stationary attached probability is kon0/(kon0+k0))",
+            ));
+        }
+
+        let p = &self.plate;
+        let plate = PlateParams {
+            mass: finite_ge("plate.mass", p.mass.unwrap_or(75.0), 0.0)?,
+            eta: finite_ge("plate.eta", p.eta.unwrap_or(75.0), 0.0)?,
+            k: finite_ge("plate.k", p.k.unwrap_or(150.0), 0.0)?,
+            v: finite_ge("plate.v", p.v.unwrap_or(0.5), 0.0)?,
+        };
+        if plate.mass == 0.0 && plate.eta == 0.0 {
+            return Err(SceneError::invalid(
+                "plate.eta",
+                0,
+                "must be > 0 when plate.mass = 0 (an overdamped plate needs damping)",
+            ));
+        }
+
+        let r = &self.run;
+        let t_end = finite_gt("run.t_end", r.t_end.unwrap_or(150.0), 0.0)?;
+        let t_warmup = finite_ge("run.t_warmup", r.t_warmup.unwrap_or(0.0), 0.0)?;
+        if t_warmup >= t_end {
+            return Err(SceneError::invalid("run.t_warmup", t_warmup, format!("must be less than run.t_end ({t_end})")));
+        }
+        let run = RunParams { engine: r.engine.unwrap_or(EngineKind::Exact), t_end, t_warmup, seed: r.seed.unwrap_or(1) };
+
+        let f = &self.fixed;
+        let fixed = FixedParams {
+            dt: finite_gt("fixed.dt", f.dt.unwrap_or(1.0), 0.0)?,
+            rng: f.rng.unwrap_or(RngKind::ParkMiller),
+            flip: f.flip.unwrap_or(FlipRule::Linear),
+            integrator: f.integrator.unwrap_or(IntegratorKind::SemiImplicitEuler),
+        };
+        if run.engine == EngineKind::Fixed {
+            if t_end / fixed.dt > STEPS_MAX {
+                return Err(SceneError::invalid(
+                    "fixed.dt",
+                    fixed.dt,
+                    format!("gives more than {STEPS_MAX:e} steps over run.t_end ({t_end})"),
+                ));
+            }
+            if fixed.rng == RngKind::ParkMiller && !(1..=PARK_MILLER_SEED_MAX).contains(&run.seed) {
+                return Err(SceneError::invalid(
+                    "run.seed",
+                    run.seed,
+                    format!("must be in [1, {PARK_MILLER_SEED_MAX}] for the Park-Miller generator (fixed.rng = \"park-miller\")"),
+                ));
+            }
+        }
+
+        let e = &self.exact;
+        let exact = ExactParams {
+            rtol: e.rtol.unwrap_or(1e-10),
+            atol: e.atol.unwrap_or(1e-12),
+        };
+        if !(exact.rtol.is_finite() && (1e-14..=1e-2).contains(&exact.rtol)) {
+            return Err(SceneError::invalid("exact.rtol", exact.rtol, "must be a number from 1e-14 to 1e-2"));
+        }
+        finite_gt("exact.atol", exact.atol, 0.0)?;
+
+        let o = &self.output;
+        let sample_dt = match o.sample_dt {
+            Some(s) => finite_gt("output.sample_dt", s, 0.0)?,
+            None => default_sample_dt(t_end, run.engine, fixed.dt),
+        };
+        if t_end / sample_dt > SAMPLES_MAX {
+            return Err(SceneError::invalid(
+                "output.sample_dt",
+                sample_dt,
+                format!("gives more than {SAMPLES_MAX:e} samples over run.t_end ({t_end})"),
+            ));
+        }
+        let output = OutputParams {
+            sample_dt,
+            trace: o.trace.unwrap_or(true),
+            events: o.events.unwrap_or(false),
+            plot: o.plot.unwrap_or(false),
+        };
+        Ok(Scene { name: name.to_string(), junctions, plate, run, fixed, exact, output })
+    }
+}
+
+/// Default output interval: `t_end / 1000`, rounded up to whole steps for the fixed engine.
+pub fn default_sample_dt(t_end: f64, engine: EngineKind, dt: f64) -> f64 {
+    let s = t_end / 1000.0;
+    match engine {
+        EngineKind::Exact => s,
+        EngineKind::Fixed => (s / dt).ceil().max(1.0) * dt,
+    }
+}

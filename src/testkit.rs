@@ -1,0 +1,44 @@
+//! Scenes shared by tests and benches, so both exercise the same models.
+
+use crate::scene::Scene;
+
+/// The letter's Fig. 1 parameters (strong bonds, tilted law), as scene-file text.
+pub const FIG1: &str = r#"
+[junctions]
+n = 300
+bond = "strong"
+force_law = "tilted"
+kappa = 0.1
+l0 = 1.0
+lambda = 0.1
+k0 = 0.1
+kon0 = 0.1
+tau0 = 2.0
+alpha = 1.0
+dx = 1.0
+[plate]
+mass = 75.0
+eta = 75.0
+k = 150.0
+v = 0.5
+[run]
+engine = "fixed"
+t_end = 150.0
+seed = 1
+[fixed]
+dt = 1.0
+rng = "park-miller"
+[output]
+sample_dt = 1.0
+"#;
+
+/// Fig. 1 with `overrides` (`section.key=value`) applied.
+pub fn fig1_with(overrides: &[&str]) -> Scene {
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    Scene::from_toml_str(FIG1, "testkit", "fig1", &o).unwrap_or_else(|e| panic!("testkit scene: {e}"))
+}
+
+/// The letter's Fig. 1 scene.
+pub fn fig1() -> Scene {
+    fig1_with(&[])
+}
