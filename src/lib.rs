@@ -9,8 +9,10 @@
 pub mod cli;
 pub mod engine;
 pub mod observe;
+pub mod ode;
 pub mod output;
 pub mod physics;
+pub mod propagator;
 pub mod rng;
 pub mod runner;
 pub mod scene;

@@ -1,0 +1,1 @@
+//! Closed-form propagator of the linear-law plate between events (being built).
