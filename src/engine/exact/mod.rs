@@ -18,13 +18,16 @@ pub mod frame;
 pub mod linear;
 pub mod rupture;
 pub mod sumtree;
+pub mod tilted;
 
 use super::{EngineError, EngineVisitor};
+use crate::physics::{Strong, Weak};
 use crate::scene::{BondKind, ForceLawKind, Scene};
 
 pub use clocks::{ArrayQueue, ChannelQueue, PqQueue};
 pub use linear::ExactLinear;
 pub use rupture::{StrongRupture, WeakRupture};
+pub use tilted::ExactTilted;
 
 /// The event queue the engine uses (chosen by `benches/exact.rs`, see docs/performance.md).
 pub type DefaultQueue = ArrayQueue;
@@ -45,9 +48,7 @@ pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output
     match (scene.junctions.force_law, scene.junctions.bond) {
         (ForceLawKind::Linear, BondKind::Strong) => Ok(visitor.visit(strong_linear::<DefaultQueue>(scene))),
         (ForceLawKind::Linear, BondKind::Weak) => Ok(visitor.visit(weak_linear::<DefaultQueue>(scene))),
-        (ForceLawKind::Tilted, _) => Err(EngineError::Unsupported {
-            engine: "exact",
-            reason: "the tilted force law is not available in the exact engine yet; use force_law = \"linear\" or --engine fixed",
-        }),
+        (ForceLawKind::Tilted, BondKind::Strong) => Ok(visitor.visit(ExactTilted::new(scene, Strong::from_scene(scene))?)),
+        (ForceLawKind::Tilted, BondKind::Weak) => Ok(visitor.visit(ExactTilted::new(scene, Weak::from_scene(scene))?)),
     }
 }
