@@ -305,3 +305,43 @@ fn tiny_steps_to_close_limits_are_fine() {
     // The proposal survives the sliver step (it was cut short by t_max).
     assert!(ode.h_proposal().unwrap() >= h_prop);
 }
+
+/// A NaN returned at any stage rejects the trial step, even when it would not reach the new
+/// state (a RHS that ignores `y` absorbs a NaN argument): no accepted step ever used a NaN.
+#[test]
+fn no_accepted_step_uses_a_nan_stage() {
+    use stickslip::ode::coefficients::C;
+    let window = (0.5, 0.5 + 1e-4);
+    let mut f = |t: f64, _y: &[f64], d: &mut [f64]| {
+        d[0] = if t >= window.0 && t <= window.1 {
+            f64::NAN
+        } else {
+            1.0 + 0.1 * t
+        };
+    };
+    for h0 in [0.7, 0.9, 1.3, 2.1, 3.7] {
+        let mut ode = Dop853::with_config(
+            1,
+            Dop853Config {
+                h_init: Some(h0),
+                ..Dop853Config::default()
+            },
+        )
+        .unwrap();
+        let (mut t, mut y) = (0.0, [0.0]);
+        for _ in 0..1000 {
+            if ode.step(&mut f, &mut t, &mut y, 5.0).is_err() || t >= 5.0 {
+                break;
+            }
+            let (t_old, t_new) = ode.last_step().unwrap();
+            let h = t_new - t_old;
+            for (j, c) in C.iter().enumerate() {
+                let ts = t_old + c * h;
+                assert!(
+                    !(ts >= window.0 && ts <= window.1),
+                    "h0 {h0}: accepted step [{t_old}, {t_new}] evaluated NaN at stage {j}"
+                );
+            }
+        }
+    }
+}

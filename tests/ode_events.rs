@@ -171,3 +171,28 @@ fn locate_errors() {
     assert_eq!(ode.dense_component(0, t_new).unwrap(), y[0]);
     assert_eq!(ode.dense_component(0, t_old).unwrap(), 0.0);
 }
+
+/// The ends of the dense output are the accepted states bit for bit (not `y_old + (y_new -
+/// y_old)`, which may differ in the last bit), so a level reached exactly at a step end is
+/// seen by `locate` in that step.
+#[test]
+fn dense_output_ends_are_the_accepted_states() {
+    let mut sys = |t: f64, y: &[f64], d: &mut [f64]| {
+        d[0] = y[1];
+        d[1] = -y[0] + 0.3 * (1.7 * t).sin();
+        d[2] = (0.2 * y[0]).exp();
+    };
+    let mut ode = Dop853::new(3, 1e-10, 1e-12).unwrap();
+    let (mut t, mut y) = (0.0, [0.731, -0.217, 0.0]);
+    let mut out = [0.0; 3];
+    for k in 1..=300 {
+        let y_old = y;
+        ode.step(&mut sys, &mut t, &mut y, f64::from(k) * 0.37)
+            .unwrap();
+        let (t_old, t_new) = ode.last_step().unwrap();
+        ode.dense(t_new, &mut out).unwrap();
+        assert_eq!(out.map(f64::to_bits), y.map(f64::to_bits), "step {k}");
+        ode.dense(t_old, &mut out).unwrap();
+        assert_eq!(out.map(f64::to_bits), y_old.map(f64::to_bits), "step {k}");
+    }
+}
