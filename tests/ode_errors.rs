@@ -311,7 +311,7 @@ fn tiny_steps_to_close_limits_are_fine() {
 #[test]
 fn no_accepted_step_uses_a_nan_stage() {
     use stickslip::ode::coefficients::C;
-    let window = (0.5, 0.5 + 1e-4);
+    let window = (0.5, 0.5 + 1e-2);
     let mut f = |t: f64, _y: &[f64], d: &mut [f64]| {
         d[0] = if t >= window.0 && t <= window.1 {
             f64::NAN
@@ -319,7 +319,7 @@ fn no_accepted_step_uses_a_nan_stage() {
             1.0 + 0.1 * t
         };
     };
-    for h0 in [0.7, 0.9, 1.3, 2.1, 3.7] {
+    for h0 in (1..=60).map(|i| 0.05 * f64::from(i)) {
         let mut ode = Dop853::with_config(
             1,
             Dop853Config {

@@ -140,3 +140,24 @@ impl Dop853 {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `y_old + (y_new - y_old)` is not `y_new` when `y_new` is below the last bit of
+    /// `y_old`; the dense output must still return `y_new` at `t_new`, so that a level equal
+    /// to the accepted state is reached at the step end.
+    #[test]
+    fn step_end_returns_the_accepted_state_exactly() {
+        let mut ode = Dop853::new(1, 1e-10, 1e-12).unwrap();
+        let (y_old, y_new) = ([0.3], [1e-20]);
+        assert_ne!(y_old[0] + (y_new[0] - y_old[0]), y_new[0]);
+        ode.set_last_step_for_test(1.0, &y_old, 1.5, &y_new);
+        assert_eq!(ode.dense_component(0, 1.5).unwrap(), 1e-20);
+        assert_eq!(ode.dense_component(0, 1.0).unwrap(), 0.3);
+        // Falling to exactly 1e-20 at the end: the downward crossing of level 1e-20 is t_new.
+        assert_eq!(ode.locate(|_, y| 1e-20 - y[0]).unwrap(), Some(1.5));
+        assert!((ode.dense_component(0, 1.25).unwrap() - 0.15).abs() < 1e-15);
+    }
+}

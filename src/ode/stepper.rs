@@ -261,6 +261,29 @@ impl Dop853 {
         self.dense_valid.then_some((self.t_old, self.t_new))
     }
 
+    /// Test hook: installs a last step by hand (dense coefficients of the cubic Hermite part
+    /// only, from the given end states and derivatives).
+    #[cfg(test)]
+    pub(super) fn set_last_step_for_test(
+        &mut self,
+        t_old: f64,
+        y_old: &[f64],
+        t_new: f64,
+        y_new: &[f64],
+    ) {
+        let n = self.dim;
+        self.cont.fill(0.0);
+        for i in 0..n {
+            self.cont[i] = y_old[i];
+            self.cont[n + i] = y_new[i] - y_old[i];
+        }
+        self.y_end.copy_from_slice(y_new);
+        self.t_old = t_old;
+        self.t_new = t_new;
+        self.h_step = t_new - t_old;
+        self.dense_valid = true;
+    }
+
     pub(super) fn dense_interval(&self) -> Option<(f64, f64, f64)> {
         self.dense_valid
             .then_some((self.t_old, self.t_new, self.h_step))
