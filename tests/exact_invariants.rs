@@ -23,6 +23,9 @@ fn record(scene: &stickslip::Scene) -> Recorder {
     assert_eq!(ruptures, c.ruptures);
     assert_eq!(r.events.len() as u64 - ruptures, c.formations);
     assert_eq!(c.events, Some(c.ruptures + c.formations));
+    if scene.run.t_end >= 3000.0 {
+        assert!(c.rebases.unwrap() >= 1, "the run re-based {:?} times", c.rebases);
+    }
     r
 }
 
@@ -120,5 +123,28 @@ fn window_force_balance() {
         let dp = s.plate.mass * (r.samples.last().unwrap().v - r.samples[0].v);
         let residual = (f - fb - visc - dp) / t;
         assert!(residual.abs() < 1e-8 * (f / t).abs().max(1.0), "{bond}: residual {residual}");
+    }
+}
+
+/// Weak bonds force a re-basing whenever `beta dx kappa |y| > 64`: a long run re-bases many
+/// times, and time, samples, segments and the event log must come through intact.
+#[test]
+fn many_rebasings_keep_every_invariant() {
+    for law in ["linear", "tilted"] {
+        let t_end = if law == "linear" { 20_000.0 } else { 12_000.0 };
+        let s = scene(
+            stickslip::testkit::FIG1,
+            &[
+                "run.engine=exact",
+                &format!("junctions.force_law={law}"),
+                "junctions.bond=weak",
+                "junctions.n=40",
+                &format!("run.t_end={t_end}"),
+                "output.sample_dt=10",
+            ],
+        );
+        let r = record(&s);
+        check(&s, &r);
+        assert_eq!(r.samples.last().unwrap().t, t_end);
     }
 }

@@ -304,8 +304,9 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
     }
 
     fn advance<O: Observer>(&mut self, t_stop: f64, obs: &mut O) -> Result<(), EngineError> {
-        let tau_stop = self.frame.local(t_stop).max(self.tau);
         loop {
+            // In the local frame, which a re-basing inside this loop moves.
+            let tau_stop = self.frame.local(t_stop).max(self.tau);
             let (ch, t_next) = self.queue.first();
             if !(t_next <= tau_stop) {
                 let (y, v) = self.piece.traj.at(tau_stop - self.piece.tau0);

@@ -25,7 +25,6 @@ use serde::{Deserialize, Serialize};
 use super::bags::{Bags, Detached};
 use super::clocks::{ArrayQueue, ChannelQueue, Clock};
 use super::frame::Frame;
-use super::rupture::EXPONENT_CAP;
 use crate::engine::{Counters, Engine, EngineError};
 use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
 use crate::ode::{Dop853, OdeError, OdeSystem};
@@ -413,9 +412,10 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> Engine for ExactTilted<B> {
     }
 
     fn advance<O: Observer>(&mut self, t_stop: f64, obs: &mut O) -> Result<(), EngineError> {
-        let tau_stop = self.frame.local(t_stop).max(self.tau);
         let rtol = self.ode.config().rtol;
         loop {
+            // In the local frame, which a re-basing inside this loop moves.
+            let tau_stop = self.frame.local(t_stop).max(self.tau);
             let (ch, t_next) = self.queue.first();
             let target = t_next.min(tau_stop);
             if self.tau < target {
@@ -523,6 +523,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::engine::exact::rupture::EXPONENT_CAP;
 
     #[test]
     fn cap_factor_is_e_to_the_cap() {
