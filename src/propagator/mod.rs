@@ -494,6 +494,33 @@ impl Trajectory {
         (u, up)
     }
 
+    /// `at(h)` and `integrals(h, s)` in one call, with identical results: on the
+    /// short-interval (Taylor) path, which is where large-N engines spend their time, the
+    /// series is built once instead of twice.
+    pub fn at_with_integrals(&self, h: f64, s: f64) -> (f64, f64, Integrals) {
+        if h > 0.0 && self.use_taylor(h) {
+            let mut ser = self.series(h);
+            let (t, len) = (&ser.t, ser.len);
+            // Summed in the order of `taylor_at`, so `(y, y')` equal `at(h)` bit for bit.
+            let mut u = t[2] + t[3];
+            let mut du = 2.0 * t[2] + 3.0 * t[3];
+            for (n, &tn) in t.iter().enumerate().take(len).skip(4) {
+                u += tn;
+                du += n as f64 * tn;
+            }
+            let (y, v) = (self.y0 + (t[1] + u), self.v0 + du / h);
+            let mut i1 = 0.0;
+            for n in (1..len).rev() {
+                i1 += t[n] * RECIP[n + 1];
+            }
+            ser.t[1] -= s * h;
+            let i2 = hilbert_square(&ser.t[..len], h);
+            return (y, v, Integrals { i1: i1 * h, i2 });
+        }
+        let (y, v) = self.at(h);
+        (y, v, self.integrals(h, s))
+    }
+
     /// Integrals over `[0, h]` used for exact time averages:
     /// `i1 = int_0^h (y(tau) - y0) dtau`, `i2 = int_0^h (y(tau) - y0 - s tau)^2 dtau`.
     ///
@@ -749,6 +776,20 @@ mod tests {
                 assert_eq!(v, -0.25);
             } else {
                 assert_eq!(v, (2.0 - k * 0.5) / e);
+            }
+        }
+    }
+
+    #[test]
+    fn fused_call_equals_separate_calls() {
+        for &(m, eta, k) in &[(75.0, 75.0, 180.0), (1.0, 0.0, 4.0), (1e-6, 1.0, 1e3), (0.0, 2.0, 3.0), (2.0, 4.0, 2.0)] {
+            let p = LinearPlate::new(m, eta, k);
+            let tr = p.trajectory(0.3, -0.7, 5.0, 1.5);
+            for &h in &[1e-9, 1e-5, 1e-3, 0.05, 0.7, 3.0, 40.0] {
+                let (y, v, i) = tr.at_with_integrals(h, 0.5);
+                let (y2, v2) = tr.at(h);
+                let j = tr.integrals(h, 0.5);
+                assert_eq!((y, v, i.i1, i.i2), (y2, v2, j.i1, j.i2), "m {m} eta {eta} k {k} h {h}");
             }
         }
     }

@@ -13,13 +13,13 @@
 //! event, horizon end and stop; each restart reports the exact time integrals of the
 //! observables over the finished piece as a [`Segment`].
 
-use rand::RngExt;
 use rand_distr::{Distribution, Exp1};
 use serde::{Deserialize, Serialize};
 
 use super::bags::Bags;
 use super::clocks::{ChannelQueue, Clock};
 use super::frame::Frame;
+use super::pick::Pick;
 use super::rupture::RuptureModel;
 use crate::engine::{Counters, Engine, EngineError};
 use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
@@ -76,13 +76,16 @@ pub struct ExactLinear<R: RuptureModel, Q: ChannelQueue> {
     clocks: [Clock; CHANNELS],
     queue: Q,
     rng: Pcg64,
+    /// The next uniform pick of a detached junction.
+    next_formation: Pick,
     counters: Counters,
     events_since_rebase: u64,
 }
 
 impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
-    /// The engine at `t = 0` for `scene`, with rupture kinetics `rupture`.
-    pub fn new(scene: &Scene, rupture: R) -> Self {
+    /// The engine at `t = 0` for `scene`, with rupture kinetics made by `rupture` (after the
+    /// initial state has been drawn from the generator).
+    pub fn new(scene: &Scene, rupture: impl FnOnce(&mut Pcg64) -> R) -> Self {
         let j = &scene.junctions;
         let mut rng = pcg(scene.run.seed);
         let mut bags = Bags::with_capacity(j.n);
@@ -100,6 +103,8 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
             }
         }
         let plate = Plate::from_scene(scene);
+        let rupture = rupture(&mut rng);
+        let next_formation = Pick::draw(&mut rng);
         let mut e = ExactLinear {
             n: j.n,
             plate,
@@ -117,6 +122,7 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
             clocks: [Clock::default(); CHANNELS],
             queue: Q::new(CHANNELS),
             rng,
+            next_formation,
             counters: Counters {
                 events: Some(0),
                 candidates: Some(0),
@@ -149,13 +155,14 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
         self.piece = Piece { tau0: self.tau, y0: self.y, v0: self.yd, traj };
     }
 
-    /// Reports the piece `[piece.tau0, tau1]` as a segment, given the state at `tau1`.
-    fn close_piece<O: Observer>(&mut self, tau1: f64, y1: f64, v1: f64, obs: &mut O) {
+    /// Moves along the piece to local time `tau1` and reports `[piece.tau0, tau1]` as a
+    /// segment. Returns the plate state at `tau1`.
+    fn close_piece<O: Observer>(&mut self, tau1: f64, obs: &mut O) -> (f64, f64) {
         let pc = &self.piece;
         let h = tau1 - pc.tau0;
+        let (y1, v1, ints) = pc.traj.at_with_integrals(h.max(0.0), self.plate.v);
         if h > 0.0 {
             let p = &self.plate;
-            let ints = pc.traj.integrals(h, p.v);
             // Lag w.r.t. the driver: lag(s) = lag0 + (y(s) - y0 - V s).
             let lag0 = self.frame.lag(pc.y0, pc.tau0);
             let w1 = ints.i1 - 0.5 * p.v * h * h;
@@ -176,6 +183,7 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
         self.tau = tau1;
         self.y = y1;
         self.yd = v1;
+        (y1, v1)
     }
 
     /// Sets every channel's rate after a change of state; channel `fired` draws afresh.
@@ -230,7 +238,7 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
     /// Attaches a uniformly chosen detached junction now; if its rupture rate overflows
     /// (weak bonds), it ruptures at once.
     fn form_one<O: Observer>(&mut self, obs: &mut O) {
-        let slot = self.rng.random_range(0..self.bags.n_detached());
+        let slot = self.next_formation.take(self.bags.n_detached(), &mut self.rng);
         let d = self.bags.take_detached(slot);
         let x = match self.reattach {
             Reattach::Residual => d.x * (-self.lambda * (self.tau - d.t)).exp(),
@@ -284,6 +292,8 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
         self.maybe_rebase(obs);
         self.open_piece();
         self.refresh_clocks(fired);
+        self.next_formation.prefetch(&self.bags.detached);
+        self.rupture.prefetch(&self.bags.attached);
     }
 
     #[inline]
@@ -309,8 +319,7 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
             let tau_stop = self.frame.local(t_stop).max(self.tau);
             let (ch, t_next) = self.queue.first();
             if !(t_next <= tau_stop) {
-                let (y, v) = self.piece.traj.at(tau_stop - self.piece.tau0);
-                self.close_piece(tau_stop, y, v, obs);
+                let (y, v) = self.close_piece(tau_stop, obs);
                 self.check(y, v)?;
                 self.maybe_rebase(obs);
                 self.open_piece();
@@ -318,12 +327,13 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
                 return Ok(());
             }
             self.count_candidate();
-            let (y, v) = self.piece.traj.at(t_next - self.piece.tau0);
             match ch {
                 FORMATION => {
+                    // g = 1 below V0; above, the velocity at the candidate decides.
+                    let v = self.piece.traj.at(t_next - self.piece.tau0).1;
                     let g = self.formation.g(v);
                     if g >= 1.0 || self.rng.uniform() < g {
-                        self.close_piece(t_next, y, v, obs);
+                        let (y, v) = self.close_piece(t_next, obs);
                         self.check(y, v)?;
                         self.form_one(obs);
                         self.after_event(Some(FORMATION), obs);
@@ -331,9 +341,9 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
                         self.redraw(FORMATION, t_next);
                     }
                 }
-                RUPTURE => match self.rupture.pick(&mut self.rng, y, &self.bags.attached) {
+                RUPTURE => match self.rupture.pick(&mut self.rng, &self.piece.traj, t_next - self.piece.tau0, &self.bags.attached) {
                     Some(slot) => {
-                        self.close_piece(t_next, y, v, obs);
+                        let (y, v) = self.close_piece(t_next, obs);
                         self.check(y, v)?;
                         self.rupture_slot(slot, obs);
                         self.after_event(Some(RUPTURE), obs);
@@ -342,7 +352,7 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
                 },
                 _ => {
                     // End of a thinning horizon: restart the piece, recompute the bound.
-                    self.close_piece(t_next, y, v, obs);
+                    let (y, v) = self.close_piece(t_next, obs);
                     self.check(y, v)?;
                     self.maybe_rebase(obs);
                     self.open_piece();

@@ -16,6 +16,7 @@ pub mod bags;
 pub mod clocks;
 pub mod frame;
 pub mod linear;
+pub mod pick;
 pub mod rupture;
 pub mod sumtree;
 pub mod tilted;
@@ -34,13 +35,13 @@ pub type DefaultQueue = ArrayQueue;
 
 /// The exact engine for a `linear`-law scene with strong bonds.
 pub fn strong_linear<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<StrongRupture, Q> {
-    ExactLinear::new(scene, StrongRupture { k0: scene.junctions.k0 })
+    ExactLinear::new(scene, |rng| StrongRupture::new(scene.junctions.k0, rng))
 }
 
 /// The exact engine for a `linear`-law scene with weak bonds.
 pub fn weak_linear<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<WeakRupture, Q> {
     let j = &scene.junctions;
-    ExactLinear::new(scene, WeakRupture::new(j.k0, j.beta_dx() * j.kappa, j.n))
+    ExactLinear::new(scene, |_| WeakRupture::new(j.k0, j.beta_dx() * j.kappa, j.n))
 }
 
 /// Builds the exact engine for `scene`, specialised to its force law and bond kind.

@@ -16,10 +16,10 @@
 //!   that `a (y_hi - y_lo) <= 1`, which keeps the acceptance probability above
 //!   `exp(-1) / 2`. Cost per candidate: O(log N).
 
-use rand::RngExt;
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
 use super::bags::Attached;
+use super::pick::Pick;
 use super::sumtree::SumTree2;
 use crate::propagator::Trajectory;
 use crate::rng::{Pcg64, UniformSource};
@@ -53,19 +53,31 @@ pub trait RuptureModel: Clone + std::fmt::Debug + Serialize + DeserializeOwned {
     fn detached(&mut self, slot: usize, last: usize, moved: Option<f64>);
     /// The candidate rate over the trajectory that starts now, and its horizon.
     fn plan(&mut self, traj: &Trajectory, n_att: usize) -> Plan;
-    /// A candidate at plate position `y`: the slot that ruptures, or `None` if rejected.
-    fn pick(&mut self, rng: &mut Pcg64, y: f64, attached: &[Attached]) -> Option<usize>;
+    /// A candidate at time `s` on the piece `traj`: the slot that ruptures, or `None` if
+    /// rejected.
+    fn pick(&mut self, rng: &mut Pcg64, traj: &Trajectory, s: f64, attached: &[Attached]) -> Option<usize>;
     /// The coordinates were re-based: recompute everything from `attached`. Returns the
     /// slots whose rate is beyond [`EXPONENT_CAP`].
     fn rebuild(&mut self, attached: &[Attached]) -> Vec<usize>;
     /// Whether `a |y|` is large enough that the frame must be re-based now.
     fn needs_rebase(&self, y: f64) -> bool;
+    /// Prefetches the memory the next pick will touch.
+    #[inline]
+    fn prefetch(&self, _attached: &[Attached]) {}
 }
 
 /// Strong bonds: constant rate `k0`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StrongRupture {
     pub k0: f64,
+    /// The next uniform pick of an attached junction.
+    next: Pick,
+}
+
+impl StrongRupture {
+    pub fn new(k0: f64, rng: &mut Pcg64) -> StrongRupture {
+        StrongRupture { k0, next: Pick::draw(rng) }
+    }
 }
 
 impl RuptureModel for StrongRupture {
@@ -81,8 +93,12 @@ impl RuptureModel for StrongRupture {
         Plan { rate: self.k0 * n_att as f64, horizon: f64::INFINITY }
     }
     #[inline]
-    fn pick(&mut self, rng: &mut Pcg64, _y: f64, attached: &[Attached]) -> Option<usize> {
-        Some(rng.random_range(0..attached.len()))
+    fn pick(&mut self, rng: &mut Pcg64, _traj: &Trajectory, _s: f64, attached: &[Attached]) -> Option<usize> {
+        Some(self.next.take(attached.len(), rng))
+    }
+    #[inline]
+    fn prefetch(&self, attached: &[Attached]) {
+        self.next.prefetch(attached);
     }
     fn rebuild(&mut self, _attached: &[Attached]) -> Vec<usize> {
         Vec::new()
@@ -181,7 +197,8 @@ impl RuptureModel for WeakRupture {
         Plan { rate: self.k0 * (m + p), horizon: h }
     }
     #[inline]
-    fn pick(&mut self, rng: &mut Pcg64, y: f64, attached: &[Attached]) -> Option<usize> {
+    fn pick(&mut self, rng: &mut Pcg64, traj: &Trajectory, s: f64, attached: &[Attached]) -> Option<usize> {
+        let y = traj.at(s).0;
         let (m, p) = self.terms();
         let u = rng.uniform() * (m + p);
         let slot = if u < m {
