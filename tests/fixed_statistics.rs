@@ -27,7 +27,9 @@ const ALPHA: f64 = 1e-5;
 
 /// Two-sided normal critical value for `ALPHA` (about 4.42).
 fn z_crit() -> f64 {
-    Normal::new(0.0, 1.0).unwrap().inverse_cdf(1.0 - ALPHA / 2.0)
+    Normal::new(0.0, 1.0)
+        .unwrap()
+        .inverse_cdf(1.0 - ALPHA / 2.0)
 }
 
 /// Variance of the mean of `t` consecutive states of one stationary two-state chain.
@@ -72,7 +74,11 @@ impl EngineVisitor for ChainMean {
     fn visit<E: Engine>(self, mut e: E) -> (f64, f64) {
         let dt = e.time_step().unwrap();
         let n = e.sample().n;
-        let mut acc = Acc { from: self.warmup as f64 * dt - 0.5 * dt, sum: 0, count: 0 };
+        let mut acc = Acc {
+            from: self.warmup as f64 * dt - 0.5 * dt,
+            sum: 0,
+            count: 0,
+        };
         let mut vmax: f64 = 0.0;
         for k in 1..=self.warmup + self.steps {
             e.advance(k as f64 * dt, &mut acc).unwrap();
@@ -96,11 +102,20 @@ struct Case {
 fn run_case(c: &Case) {
     let (n, warmup, steps) = (2000u64, 100u64, 5000u64);
     let nn = format!("junctions.n={n}");
-    let mut o: Vec<&str> = vec![&nn, "junctions.kappa=0", "fixed.dt=1", "junctions.initial=detached"];
+    let mut o: Vec<&str> = vec![
+        &nn,
+        "junctions.kappa=0",
+        "fixed.dt=1",
+        "junctions.initial=detached",
+    ];
     o.extend(c.overrides.iter().map(String::as_str));
     let s: Scene = scene(&o);
     let (mean, vmax) = fixed::dispatch(&s, ChainMean { warmup, steps }).unwrap();
-    assert!(vmax <= s.junctions.v0(), "{}: the plate reached {vmax} > V0, so g < 1", c.name);
+    assert!(
+        vmax <= s.junctions.v0(),
+        "{}: the plate reached {vmax} > V0, so g < 1",
+        c.name
+    );
     let pi = c.a / (c.a + c.b);
     let rho = 1.0 - c.a - c.b;
     // The chain started detached: after `warmup` steps the bias is pi |rho|^warmup.
@@ -108,9 +123,21 @@ fn run_case(c: &Case) {
     let sd = (var_of_time_mean(pi, rho, steps) / n as f64).sqrt();
     let z = (mean - pi) / sd;
     let z_wrong = (mean - c.pi_wrong) / sd;
-    eprintln!("{}: mean {mean:.6}, pi {pi:.6}, sd {sd:.2e}, z {z:.2}, z against {:.4}: {z_wrong:.1}", c.name, c.pi_wrong);
-    assert!(z.abs() < z_crit(), "{}: mean {mean} vs pi {pi}: z = {z}", c.name);
-    assert!(z_wrong.abs() > z_crit(), "{}: no power against pi = {}: z = {z_wrong}", c.name, c.pi_wrong);
+    eprintln!(
+        "{}: mean {mean:.6}, pi {pi:.6}, sd {sd:.2e}, z {z:.2}, z against {:.4}: {z_wrong:.1}",
+        c.name, c.pi_wrong
+    );
+    assert!(
+        z.abs() < z_crit(),
+        "{}: mean {mean} vs pi {pi}: z = {z}",
+        c.name
+    );
+    assert!(
+        z_wrong.abs() > z_crit(),
+        "{}: no power against pi = {}: z = {z_wrong}",
+        c.name,
+        c.pi_wrong
+    );
 }
 
 fn overrides(v: &[&str]) -> Vec<String> {
@@ -125,7 +152,12 @@ fn linear_rule_stationary_fraction() {
     let (ae, be) = (-(-a).exp_m1(), -(-b).exp_m1());
     run_case(&Case {
         name: "linear",
-        overrides: overrides(&["junctions.kon0=0.3", "junctions.k0=0.2", "plate.v=0.05", "run.seed=11"]),
+        overrides: overrides(&[
+            "junctions.kon0=0.3",
+            "junctions.k0=0.2",
+            "plate.v=0.05",
+            "run.seed=11",
+        ]),
         a,
         b,
         pi_wrong: ae / (ae + be),
@@ -139,7 +171,14 @@ fn exponential_rule_stationary_fraction() {
     let (a, b) = (-(-0.5f64).exp_m1(), -(-0.25f64).exp_m1());
     run_case(&Case {
         name: "exponential",
-        overrides: overrides(&["junctions.kon0=0.5", "junctions.k0=0.25", "plate.v=0", "fixed.flip=exponential", "fixed.rng=pcg", "run.seed=5"]),
+        overrides: overrides(&[
+            "junctions.kon0=0.5",
+            "junctions.k0=0.25",
+            "plate.v=0",
+            "fixed.flip=exponential",
+            "fixed.rng=pcg",
+            "run.seed=5",
+        ]),
         a,
         b,
         pi_wrong: 0.5 / 0.75,
@@ -152,7 +191,13 @@ fn as_printed_rule_stationary_fraction() {
     // (the chain alternates). Wrong: the linear reading's pi = 0.6.
     run_case(&Case {
         name: "as-printed",
-        overrides: overrides(&["junctions.kon0=0.3", "junctions.k0=0.2", "plate.v=0", "fixed.flip=as-printed", "run.seed=3"]),
+        overrides: overrides(&[
+            "junctions.kon0=0.3",
+            "junctions.k0=0.2",
+            "plate.v=0",
+            "fixed.flip=as-printed",
+            "run.seed=3",
+        ]),
         a: 0.7,
         b: 0.8,
         pi_wrong: 0.6,
@@ -171,7 +216,8 @@ impl EngineVisitor for Counts {
         let dt = e.time_step().unwrap();
         (1..=self.samples as u64)
             .map(|k| {
-                e.advance((k * self.spacing) as f64 * dt, &mut Nothing).unwrap();
+                e.advance((k * self.spacing) as f64 * dt, &mut Nothing)
+                    .unwrap();
                 e.sample().attached
             })
             .collect()
@@ -224,7 +270,14 @@ fn attached_count_is_binomial_with_the_rules_stationary_fraction() {
         "fixed.flip=exponential",
         "run.seed=2024",
     ]);
-    let counts = fixed::dispatch(&s, Counts { samples: 5000, spacing: 40 }).unwrap();
+    let counts = fixed::dispatch(
+        &s,
+        Counts {
+            samples: 5000,
+            spacing: 40,
+        },
+    )
+    .unwrap();
     let (stat, df) = chi_square(&counts, n, pi);
     let crit = ChiSquared::new(df).unwrap().inverse_cdf(1.0 - ALPHA);
     eprintln!("chi2 = {stat:.1}, df {df}, critical {crit:.1}");
@@ -240,7 +293,13 @@ fn attached_count_is_binomial_with_the_rules_stationary_fraction() {
 fn stationary_initial_state_is_binomial() {
     // initial = "stationary": attached iff xi < kon0/(kon0+k0) = 0.25, N = 1e5 junctions.
     let n = 100_000u64;
-    let s = scene(&["junctions.n=100000", "junctions.initial=stationary", "junctions.kon0=0.1", "junctions.k0=0.3", "run.seed=77"]);
+    let s = scene(&[
+        "junctions.n=100000",
+        "junctions.initial=stationary",
+        "junctions.kon0=0.1",
+        "junctions.k0=0.3",
+        "run.seed=77",
+    ]);
     struct Initial;
     impl EngineVisitor for Initial {
         type Output = u64;

@@ -38,7 +38,14 @@ impl EngineVisitor for Record {
             times.push(engine.time());
             rec.samples.push(engine.sample());
         }
-        Trace { samples: rec.samples, segments: rec.segments, events: rec.events, counters: engine.counters(), error, times }
+        Trace {
+            samples: rec.samples,
+            segments: rec.segments,
+            events: rec.events,
+            counters: engine.counters(),
+            error,
+            times,
+        }
     }
 }
 
