@@ -64,7 +64,8 @@ pub enum Command {
 
 /// Prints a one-line error and returns the exit code.
 pub(crate) fn fail(code: u8, message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
+    // One line whatever the message holds (a path or a `--set` with a newline in it).
+    eprintln!("error: {}", crate::scene::error::printable(&message.to_string()));
     ExitCode::from(code)
 }
 
