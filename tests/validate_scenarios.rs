@@ -74,3 +74,23 @@ fn fig1_variants_differ_from_fig1_only_where_they_say() {
     exact.name = "fig1".into();
     assert_eq!(exact, testkit::fig1_with(&["run.engine=exact", "run.t_end=1000", "run.t_warmup=100"]));
 }
+
+/// The ```toml examples in the documentation are valid scenes.
+#[test]
+fn documented_scene_examples_validate() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut checked = 0;
+    for doc in ["docs/scenes.md", "README.md"] {
+        let text = std::fs::read_to_string(root.join(doc)).unwrap_or_else(|e| panic!("{doc}: {e}"));
+        let mut rest = text.as_str();
+        while let Some(start) = rest.find("```toml\n") {
+            let body = &rest[start + "```toml\n".len()..];
+            let end = body.find("```").unwrap_or_else(|| panic!("{doc}: unterminated ```toml block"));
+            Scene::from_toml_str(&body[..end], doc, "example", &[])
+                .unwrap_or_else(|e| panic!("{doc}: example scene refused: {e}\n{}", &body[..end]));
+            checked += 1;
+            rest = &body[end..];
+        }
+    }
+    assert!(checked >= 1, "no ```toml example found in the docs");
+}
