@@ -222,9 +222,12 @@ fn run_briefly(engine: EngineKind) {
                 );
             }
             // Exact engine: <F> = <F_b> + <eta Xd> + M (Xd(t_end) - Xd(t_warmup)) / (t_end - t_warmup).
-            if scene.run.engine == EngineKind::Exact
-                && let Some(start) = rows.iter().find(|r| r[0] == scene.run.t_warmup)
-            {
+            // (Checked when the trace has a row at t_warmup.)
+            let start = match scene.run.engine {
+                EngineKind::Exact => rows.iter().find(|r| r[0] == scene.run.t_warmup),
+                EngineKind::Fixed => None,
+            };
+            if let Some(start) = start {
                 let end = rows.last().unwrap();
                 let window = scene.run.t_end - scene.run.t_warmup;
                 let inertia = scene.plate.mass * (end[2] - start[2]) / window;
