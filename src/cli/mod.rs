@@ -64,8 +64,23 @@ pub enum Command {
 
 /// Prints a one-line error and returns the exit code.
 pub(crate) fn fail(code: u8, message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
+    // One line whatever the message holds (a path or a `--set` with a newline in it).
+    eprintln!("error: {}", crate::scene::error::printable(&message.to_string()));
     ExitCode::from(code)
+}
+
+/// clap's message as one line: its first paragraph (which names the argument and, on the
+/// lines after the first, the missing argument or the allowed values), joined by spaces.
+fn clap_one_line(e: &clap::Error) -> String {
+    use clap::error::ErrorKind;
+    if matches!(e.kind(), ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand) {
+        return "a command is required: `run` or `validate` (try --help)".to_string();
+    }
+    let text = e.to_string();
+    let first: Vec<&str> = text.lines().map(str::trim).take_while(|l| !l.is_empty()).collect();
+    let line = first.join(" ");
+    let line = line.trim_start_matches("error: ");
+    if line.is_empty() { "invalid arguments (try --help)".to_string() } else { line.to_string() }
 }
 
 /// Entry point of the binary.
@@ -78,10 +93,7 @@ pub fn main() -> ExitCode {
                 let _ = e.print();
                 return ExitCode::SUCCESS;
             }
-            // clap's message is several lines; keep the first (it names the argument).
-            let text = e.to_string();
-            let first = text.lines().next().unwrap_or("invalid arguments").trim_start_matches("error: ");
-            return fail(code, first);
+            return fail(code, clap_one_line(&e));
         }
     };
     match cli.command {

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, EngineArg, SceneArgs, fail};
-use crate::runner::{RunError, run_scene};
+use crate::runner::run_scene;
 use crate::scene::Scene;
 
 /// Reads and validates the scene with `--set` overrides and the flag overrides after them.
@@ -14,13 +14,34 @@ pub(crate) fn load_scene(args: &SceneArgs, extra: &[String]) -> Result<Scene, Ex
     Scene::from_file(&args.scene, &overrides).map_err(|e| fail(EXIT_BAD_INPUT, e))
 }
 
-/// Creates `dir` and checks it can be written, before any work is done.
-pub(crate) fn prepare_out_dir(dir: &Path) -> Result<(), String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("output directory {}: cannot create it: {e}", dir.display()))?;
+/// Creates `dir` and checks it can be written, before any work is done. Returns the
+/// directories it created (deepest first), so that a run that fails can remove them again.
+pub(crate) fn prepare_out_dir(dir: &Path) -> Result<Vec<PathBuf>, String> {
+    let mut created = Vec::new();
+    let mut d = Some(dir);
+    while let Some(p) = d.filter(|p| !p.as_os_str().is_empty() && !p.exists()) {
+        created.push(p.to_path_buf());
+        d = p.parent();
+    }
+    let fail = |what: &str, e: std::io::Error, created: &[PathBuf]| {
+        remove_if_empty(created);
+        format!("output directory {}: cannot {what}: {e}", dir.display())
+    };
+    std::fs::create_dir_all(dir).map_err(|e| fail("create it", e, &created))?;
     let probe = dir.join(".stickslip-write-probe");
-    std::fs::write(&probe, b"").map_err(|e| format!("output directory {}: cannot write in it: {e}", dir.display()))?;
+    std::fs::write(&probe, b"").map_err(|e| fail("write in it", e, &created))?;
     let _ = std::fs::remove_file(probe);
-    Ok(())
+    Ok(created)
+}
+
+/// Removes the directories `prepare_out_dir` created, deepest first, as long as they are
+/// empty (`remove_dir` never removes a directory that holds anything).
+pub(crate) fn remove_if_empty(created: &[PathBuf]) {
+    for d in created {
+        if std::fs::remove_dir(d).is_err() {
+            break;
+        }
+    }
 }
 
 pub(crate) fn run(args: &SceneArgs, engine: Option<EngineArg>, seed: Option<u64>, out: Option<PathBuf>) -> ExitCode {
@@ -36,9 +57,10 @@ pub(crate) fn run(args: &SceneArgs, engine: Option<EngineArg>, seed: Option<u64>
         Err(code) => return code,
     };
     let out = out.unwrap_or_else(|| Path::new("out").join(&scene.name));
-    if let Err(m) = prepare_out_dir(&out) {
-        return fail(EXIT_BAD_INPUT, m);
-    }
+    let created = match prepare_out_dir(&out) {
+        Ok(c) => c,
+        Err(m) => return fail(EXIT_BAD_INPUT, m),
+    };
     match run_scene(&scene, Some(&out)) {
         Ok(s) => {
             let per = s.friction_per_junction;
@@ -74,7 +96,10 @@ pub(crate) fn run(args: &SceneArgs, engine: Option<EngineArg>, seed: Option<u64>
             );
             ExitCode::SUCCESS
         }
-        Err(e @ RunError::Output { .. }) => fail(EXIT_RUN_FAILED, e),
-        Err(e) => fail(EXIT_RUN_FAILED, e),
+        Err(e) => {
+            // A failed run leaves no empty output directory behind.
+            remove_if_empty(&created);
+            fail(EXIT_RUN_FAILED, e)
+        }
     }
 }

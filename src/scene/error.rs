@@ -31,6 +31,26 @@ impl SceneError {
     }
 }
 
+/// `s` with control characters and line separators escaped (`\n`, `\u{2028}`), so that a
+/// user-supplied key, path or assignment cannot break a one-line message.
+pub fn printable(s: &str) -> String {
+    if !s.chars().any(needs_escape) {
+        return s.to_string();
+    }
+    s.chars().fold(String::with_capacity(s.len() + 8), |mut out, c| {
+        if needs_escape(c) {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+        out
+    })
+}
+
+fn needs_escape(c: char) -> bool {
+    c.is_control() || matches!(c, '\u{2028}' | '\u{2029}')
+}
+
 /// Collapses a multi-line message into one line.
 pub(crate) fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")

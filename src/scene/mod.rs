@@ -27,7 +27,7 @@ impl Scene {
             let path = e.path().to_string();
             SceneError::Schema {
                 origin: origin.to_string(),
-                path: if path == "." { "scene".to_string() } else { path },
+                path: if path == "." { "scene".to_string() } else { error::printable(&path) },
                 message: error::one_line(&e.into_inner().to_string()),
             }
         })?;
@@ -36,7 +36,7 @@ impl Scene {
 
     /// Reads, overrides and validates a scene file; the scene's name is the file stem.
     pub fn from_file(path: &Path, overrides: &[String]) -> Result<Scene, SceneError> {
-        let origin = path.display().to_string();
+        let origin = error::printable(&path.display().to_string());
         let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read { path: origin.clone(), source })?;
         let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
         Self::from_toml_str(&text, &origin, &name, overrides)

@@ -8,7 +8,7 @@ use super::error::SceneError;
 /// `value` is read as a TOML value (`0.1`, `true`, `"weak"`, `1e-6`); a bare word that is
 /// not a TOML value (`weak`, `park-miller`) is taken as a string.
 pub fn apply(table: &mut toml::Table, assignment: &str) -> Result<(), SceneError> {
-    let err = |reason| SceneError::Override { assignment: assignment.to_string(), reason };
+    let err = |reason| SceneError::Override { assignment: super::error::printable(assignment), reason };
     let (key, raw) = assignment.split_once('=').ok_or_else(|| err("expected section.key=value"))?;
     let (section, field) = key.trim().split_once('.').ok_or_else(|| err("expected section.key=value"))?;
     if section.is_empty() || field.is_empty() || field.contains('.') {
