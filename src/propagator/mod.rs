@@ -333,10 +333,36 @@ impl LinearPlate {
     }
 }
 
-/// Taylor terms `t_n = u^(n)(0) tau^n / n!`, `n = 0..len` (`t_0 = 0`).
+/// Taylor terms `t_n = u^(n)(0) tau^n / n!`, `n = 0..len` (`t_0 = 0`). The buffer is left
+/// uninitialised beyond `len` (zero-filling all `NT` entries cost a tenth of an event at
+/// large N); only the written prefix is ever read.
 struct Series {
-    t: [f64; NT],
+    t: [std::mem::MaybeUninit<f64>; NT],
     len: usize,
+}
+
+impl Series {
+    fn new() -> Series {
+        Series { t: [const { std::mem::MaybeUninit::uninit() }; NT], len: 0 }
+    }
+    /// Writes term `n`; terms must be written in order `0, 1, 2, ...`.
+    #[inline]
+    fn push(&mut self, n: usize, v: f64) {
+        debug_assert_eq!(n, self.len);
+        self.t[n] = std::mem::MaybeUninit::new(v);
+        self.len = n + 1;
+    }
+    /// The written terms `t_0 .. t_{len-1}`.
+    #[inline]
+    fn terms(&self) -> &[f64] {
+        // SAFETY: `push` writes entries in order and `len` counts them, so `0..len` are initialised.
+        unsafe { std::slice::from_raw_parts(self.t.as_ptr().cast::<f64>(), self.len) }
+    }
+    #[inline]
+    fn terms_mut(&mut self) -> &mut [f64] {
+        // SAFETY: as in `terms`.
+        unsafe { std::slice::from_raw_parts_mut(self.t.as_mut_ptr().cast::<f64>(), self.len) }
+    }
 }
 
 impl Trajectory {
@@ -364,25 +390,23 @@ impl Trajectory {
     #[inline]
     fn series(&self, tau: f64) -> Series {
         let p = &self.plate;
-        let mut s = Series {
-            t: [0.0; NT],
-            len: 4,
-        };
+        let mut s = Series::new();
         let aa = p.eta_m * tau;
         let bb = p.k_m * tau * tau;
         let t1 = self.v0 * tau;
         let t2 = (self.f0 - p.eta * self.v0) * p.inv_m * (0.5 * tau * tau);
         let t3 = self.b * p.inv_m * (tau * tau * tau * RECIP[6])
             - (aa * t2 * RECIP[3] + bb * t1 * RECIP[6]);
-        s.t[1] = t1;
-        s.t[2] = t2;
-        s.t[3] = t3;
+        s.push(0, 0.0);
+        s.push(1, t1);
+        s.push(2, t2);
+        s.push(3, t3);
         let mut dabs = 2.0 * t2.abs() + 3.0 * t3.abs();
         let (mut tm1, mut tm2) = (t3, t2);
         let mut n = 4;
         while n < NT {
             let tn = -(aa * tm1 * RECIP[n] + bb * tm2 * RECIP2[n]);
-            s.t[n] = tn;
+            s.push(n, tn);
             let nf = n as f64;
             dabs += nf * tn.abs();
             n += 1;
@@ -392,7 +416,6 @@ impl Trajectory {
             tm2 = tm1;
             tm1 = tn;
         }
-        s.len = n;
         s
     }
 
@@ -500,7 +523,8 @@ impl Trajectory {
     pub fn at_with_integrals(&self, h: f64, s: f64) -> (f64, f64, Integrals) {
         if h > 0.0 && self.use_taylor(h) {
             let mut ser = self.series(h);
-            let (t, len) = (&ser.t, ser.len);
+            let len = ser.len;
+            let t = ser.terms();
             // Summed in the order of `taylor_at`, so `(y, y')` equal `at(h)` bit for bit.
             let mut u = t[2] + t[3];
             let mut du = 2.0 * t[2] + 3.0 * t[3];
@@ -513,8 +537,8 @@ impl Trajectory {
             for n in (1..len).rev() {
                 i1 += t[n] * RECIP[n + 1];
             }
-            ser.t[1] -= s * h;
-            let i2 = hilbert_square(&ser.t[..len], h);
+            ser.terms_mut()[1] -= s * h;
+            let i2 = hilbert_square(ser.terms(), h);
             return (y, v, Integrals { i1: i1 * h, i2 });
         }
         let (y, v) = self.at(h);
@@ -536,10 +560,10 @@ impl Trajectory {
             let mut ser = self.series(h);
             let mut i1 = 0.0;
             for n in (1..ser.len).rev() {
-                i1 += ser.t[n] * RECIP[n + 1];
+                i1 += ser.terms()[n] * RECIP[n + 1];
             }
-            ser.t[1] -= s * h;
-            let i2 = hilbert_square(&ser.t[..ser.len], h);
+            ser.terms_mut()[1] -= s * h;
+            let i2 = hilbert_square(ser.terms(), h);
             return Integrals { i1: i1 * h, i2 };
         }
         match self.plate.branch {

@@ -24,7 +24,7 @@ use super::rupture::RuptureModel;
 use crate::engine::{Counters, Engine, EngineError};
 use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
 use crate::physics::{Formation, Plate};
-use crate::propagator::{LinearPlate, Trajectory};
+use crate::propagator::{Integrals, LinearPlate, Trajectory};
 use crate::rng::{Pcg64, UniformSource, pcg};
 use crate::scene::{EngineKind, Initial, Reattach, Scene};
 
@@ -80,6 +80,35 @@ pub struct ExactLinear<R: RuptureModel, Q: ChannelQueue> {
     next_formation: Pick,
     counters: Counters,
     events_since_rebase: u64,
+    #[serde(skip)]
+    plates: PlateCache,
+}
+
+/// Classified plates `M y'' + eta y' + (K + kappa n) y` for recent attached counts `n`: the
+/// count moves by one per event, so a small direct-mapped cache saves the classification
+/// (a square root and several divisions) on almost every event.
+#[derive(Clone, Debug, Default)]
+struct PlateCache {
+    entries: Vec<Option<(usize, LinearPlate)>>,
+}
+
+impl PlateCache {
+    const SLOTS: usize = 64;
+    #[inline]
+    fn get(&mut self, p: &Plate, kappa: f64, n_att: usize) -> LinearPlate {
+        if self.entries.is_empty() {
+            self.entries = vec![None; Self::SLOTS];
+        }
+        let slot = n_att % Self::SLOTS;
+        match self.entries[slot] {
+            Some((n, plate)) if n == n_att => plate,
+            _ => {
+                let plate = LinearPlate::new(p.mass, p.eta, p.k + kappa * n_att as f64);
+                self.entries[slot] = Some((n_att, plate));
+                plate
+            }
+        }
+    }
 }
 
 impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
@@ -130,6 +159,7 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
                 ..Default::default()
             },
             events_since_rebase: 0,
+            plates: PlateCache::default(),
         };
         let attached = std::mem::take(&mut e.bags.attached);
         for (slot, a) in attached.iter().enumerate() {
@@ -145,22 +175,27 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
 
     /// Starts a new closed-form piece at the current time and state.
     fn open_piece(&mut self) {
-        let n_att = self.bags.n_attached() as f64;
         let p = &self.plate;
-        let k = p.k + self.kappa * n_att;
         // M y'' + eta y' + k y = K (V (tau + s) - lag_ref) + kappa C.
         let a = p.k * (p.v * self.tau - self.frame.lag_ref) + self.kappa * self.bags.anchor_sum();
         let b = p.k * p.v;
-        let traj = LinearPlate::new(p.mass, p.eta, k).trajectory(self.y, self.yd, a, b);
+        let traj = self.plates.get(p, self.kappa, self.bags.n_attached()).trajectory(self.y, self.yd, a, b);
         self.piece = Piece { tau0: self.tau, y0: self.y, v0: self.yd, traj };
     }
 
     /// Moves along the piece to local time `tau1` and reports `[piece.tau0, tau1]` as a
     /// segment. Returns the plate state at `tau1`.
     fn close_piece<O: Observer>(&mut self, tau1: f64, obs: &mut O) -> (f64, f64) {
+        let h = (tau1 - self.piece.tau0).max(0.0);
+        let (y1, v1, ints) = self.piece.traj.at_with_integrals(h, self.plate.v);
+        self.report_piece(tau1, y1, v1, ints, obs);
+        (y1, v1)
+    }
+
+    /// Reports `[piece.tau0, tau1]` given the state and integrals at `tau1`, and moves there.
+    fn report_piece<O: Observer>(&mut self, tau1: f64, y1: f64, v1: f64, ints: Integrals, obs: &mut O) {
         let pc = &self.piece;
         let h = tau1 - pc.tau0;
-        let (y1, v1, ints) = pc.traj.at_with_integrals(h.max(0.0), self.plate.v);
         if h > 0.0 {
             let p = &self.plate;
             // Lag w.r.t. the driver: lag(s) = lag0 + (y(s) - y0 - V s).
@@ -183,7 +218,6 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
         self.tau = tau1;
         self.y = y1;
         self.yd = v1;
-        (y1, v1)
     }
 
     /// Sets every channel's rate after a change of state; channel `fired` draws afresh.
@@ -329,11 +363,12 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
             self.count_candidate();
             match ch {
                 FORMATION => {
-                    // g = 1 below V0; above, the velocity at the candidate decides.
-                    let v = self.piece.traj.at(t_next - self.piece.tau0).1;
+                    // The state (and, if accepted, the piece's integrals) at the candidate.
+                    let h = t_next - self.piece.tau0;
+                    let (y, v, ints) = self.piece.traj.at_with_integrals(h, self.plate.v);
                     let g = self.formation.g(v);
                     if g >= 1.0 || self.rng.uniform() < g {
-                        let (y, v) = self.close_piece(t_next, obs);
+                        self.report_piece(t_next, y, v, ints, obs);
                         self.check(y, v)?;
                         self.form_one(obs);
                         self.after_event(Some(FORMATION), obs);

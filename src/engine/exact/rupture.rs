@@ -122,11 +122,17 @@ pub struct WeakRupture {
     y_hi: f64,
     /// Last horizon length (the next search starts there).
     horizon: f64,
+    /// Last candidate rate: the horizon need not cover many more candidates than
+    /// [`CANDIDATES_PER_HORIZON`], because the bound is renewed at every event anyway.
+    last_rate: f64,
 }
+
+/// A horizon longer than this many expected candidates only loosens the bound.
+const CANDIDATES_PER_HORIZON: f64 = 32.0;
 
 impl WeakRupture {
     pub fn new(k0: f64, a: f64, n: usize) -> WeakRupture {
-        WeakRupture { k0, a, tree: SumTree2::new(n), y_lo: 0.0, y_hi: 0.0, horizon: 1.0 }
+        WeakRupture { k0, a, tree: SumTree2::new(n), y_lo: 0.0, y_hi: 0.0, horizon: 1.0, last_rate: 0.0 }
     }
     #[inline]
     fn weights(&self, c: f64) -> [f64; 2] {
@@ -172,8 +178,10 @@ impl RuptureModel for WeakRupture {
             let (m, p) = self.terms();
             return Plan { rate: self.k0 * (m + p), horizon: f64::INFINITY };
         }
-        // Longest horizon (within a factor 2) whose bound spread is at most SPREAD.
-        let mut h = self.horizon;
+        // Longest horizon (within a factor 2) whose bound spread is at most SPREAD and that
+        // covers about CANDIDATES_PER_HORIZON candidates at the last rate.
+        let cap = if self.last_rate > 0.0 { (CANDIDATES_PER_HORIZON / self.last_rate).min(HORIZON_MAX) } else { HORIZON_MAX };
+        let mut h = self.horizon.min(cap);
         let mut b = traj.bounds(h);
         for _ in 0..64 {
             if self.a * (b.1 - b.0) <= SPREAD || h < 1e-300 {
@@ -182,7 +190,7 @@ impl RuptureModel for WeakRupture {
             h *= 0.5;
             b = traj.bounds(h);
         }
-        while h < HORIZON_MAX {
+        while 2.0 * h <= cap {
             let b2 = traj.bounds(2.0 * h);
             if self.a * (b2.1 - b2.0) > SPREAD {
                 break;
@@ -194,7 +202,8 @@ impl RuptureModel for WeakRupture {
         self.y_lo = b.0;
         self.y_hi = b.1;
         let (m, p) = self.terms();
-        Plan { rate: self.k0 * (m + p), horizon: h }
+        self.last_rate = self.k0 * (m + p);
+        Plan { rate: self.last_rate, horizon: h }
     }
     #[inline]
     fn pick(&mut self, rng: &mut Pcg64, traj: &Trajectory, s: f64, attached: &[Attached]) -> Option<usize> {
