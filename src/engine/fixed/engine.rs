@@ -387,3 +387,57 @@ impl<L: Law, B: Rupture, R: Generator, F: Flip> Engine for FixedEngine<L, B, R, 
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::fixed::LinearFlip;
+    use crate::observe::Recorder;
+    use crate::physics::{Linear, Strong};
+    use crate::rng::ParkMiller;
+    use crate::testkit;
+
+    #[test]
+    fn masks_select_bit_exactly() {
+        assert_eq!((mask(1), mask(0)), (!0, 0));
+        assert_eq!(select(mask(1), -0.0, 1.0).to_bits(), (-0.0f64).to_bits());
+        assert_eq!(select(mask(0), f64::NAN, 2.5), 2.5);
+        assert!(select(mask(1), f64::NAN, 2.5).is_nan());
+    }
+
+    #[test]
+    fn pending_update_is_applied_on_every_read() {
+        let s = testkit::fig1_with(&[
+            "run.engine=fixed",
+            "junctions.force_law=linear",
+            "fixed.dt=0.5",
+        ]);
+        let (law, bond) = (Linear::from_scene(&s), Strong::from_scene(&s));
+        let mut e = FixedEngine::new(&s, law, bond, ParkMiller::new(4).unwrap(), LinearFlip);
+        e.advance(10.0, &mut crate::observe::Nothing).unwrap();
+        let read = |e: &FixedEngine<_, _, _, _>| -> Vec<(bool, f64)> {
+            (0..e.len())
+                .map(|i| (e.is_attached(i), e.extension(i)))
+                .collect()
+        };
+        let before = read(&e);
+        let x_before = e.sample().x;
+        let sum: f64 = before.iter().filter(|j| j.0).fold(0.0, |a, j| a + j.1);
+        assert_eq!(e.sample().bond_force, law.force_x(sum));
+        let mut rec = Recorder::default();
+        e.advance(10.5, &mut rec).unwrap();
+        let dx = e.sample().x - x_before;
+        let relax = 1.0 - s.junctions.lambda * s.fixed.dt;
+        let flipped: Vec<u32> = rec.events.iter().map(|ev| ev.junction).collect();
+        assert!(!flipped.is_empty());
+        for (i, (now, old)) in read(&e).iter().zip(&before).enumerate() {
+            if flipped.contains(&(i as u32)) {
+                assert_ne!(now.0, old.0);
+            } else {
+                assert_eq!(now.0, old.0);
+                let want = if old.0 { old.1 + dx } else { old.1 * relax };
+                assert_eq!(now.1, want, "junction {i}");
+            }
+        }
+    }
+}
