@@ -42,3 +42,23 @@ pub fn fig1_with(overrides: &[&str]) -> Scene {
 pub fn fig1() -> Scene {
     fig1_with(&[])
 }
+
+/// Fig. 1 physics at `n` junctions with the `linear` law and the exact engine: extensive
+/// plate parameters scale with `n` (`K = n/2`, `M = eta = n/4`) so that per-junction forces,
+/// rates and the time unit `M/eta` are the letter's at every size. Used by benches and tests.
+pub fn scaled_linear(n: usize, bond: &str) -> Scene {
+    let n_s = n.to_string();
+    let k = (0.5 * n as f64).to_string();
+    let m = (0.25 * n as f64).to_string();
+    fig1_with(&[
+        "run.engine=exact",
+        "junctions.force_law=linear",
+        &format!("junctions.bond={bond}"),
+        &format!("junctions.n={n_s}"),
+        &format!("plate.k={k}"),
+        &format!("plate.mass={m}"),
+        &format!("plate.eta={m}"),
+        "junctions.initial=stationary",
+        "output.trace=false",
+    ])
+}

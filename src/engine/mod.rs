@@ -47,6 +47,13 @@ pub enum EngineError {
     /// The adaptive integrator could not meet its tolerance.
     #[error("the adaptive plate integrator failed at t = {t}: step size {h} too small for exact.rtol = {rtol}")]
     StepSizeUnderflow { t: f64, h: f64, rtol: f64 },
+    /// The adaptive integrator failed for another reason.
+    #[error("the adaptive plate integrator failed at t = {t}: {source}")]
+    Integrator {
+        t: f64,
+        #[source]
+        source: crate::ode::OdeError,
+    },
     /// The engine cannot run this scene.
     #[error("the {engine} engine cannot run this scene: {reason}")]
     Unsupported { engine: &'static str, reason: &'static str },

@@ -12,6 +12,8 @@ use crate::observe::{JunctionEvent, Observer, Sample};
 /// Appends the shortest round-trip representation of `v`.
 #[inline]
 pub fn push_f64(line: &mut String, v: f64) {
+    // -0.0 is written as 0.0.
+    let v = if v == 0.0 { 0.0 } else { v };
     let mut buf = ryu::Buffer::new();
     line.push_str(buf.format(v));
 }

@@ -1,1 +1,820 @@
-//! Closed-form propagator of the linear-law plate between events (being built).
+//! Closed-form propagator of the linear-law plate between junction events.
+//!
+//! Between two events of the exact engine with the `linear` force law, the plate obeys, in
+//! local time `tau >= 0` since the last event and in coordinates re-based by the caller,
+//!
+//! ```text
+//!     M y'' + eta y' + k y = a + b tau,      y(0) = y0,  y'(0) = v0,
+//! ```
+//!
+//! with `M >= 0`, `eta >= 0`, `k >= 0` (`k = K + kappa n_attached`), not both `M = 0` and
+//! `eta = 0`. For `M = 0` the equation is first order, `v0` is **ignored** and the initial
+//! velocity is `(a - k y0) / eta`.
+//!
+//! [`LinearPlate::new`] classifies the plate once; [`LinearPlate::trajectory`] fixes the
+//! initial state and the forcing; [`Trajectory::at`], [`Trajectory::integrals`] and
+//! [`Trajectory::bounds`] evaluate it. Every evaluation works with the displacement
+//! `u = y - y0`, which solves the same equation with forcing `f0 + b tau`,
+//! `f0 = a - k y0`, and `u(0) = 0`. Per evaluation time one of three representations is
+//! used, each free of the cancellations of the textbook `A e^{r1 t} + B e^{r2 t}` form:
+//!
+//! * **Taylor** (`M > 0` and `rho tau <= 1`, `rho` the largest root modulus): the series of
+//!   `u` from the recurrence `M u^(n+2) + eta u^(n+1) + k u^(n) = 0` (`n >= 2`); no
+//!   transcendental call, exact to round-off, and the hot path of the engine at large N.
+//! * **Slow + fast** (`M = 0`, or real roots with `|r_slow| <= |r_fast| / 2`, i.e.
+//!   `eta^2 - 4 M k >= eta^2 / 9`, including `k = 0` and very stiff plates):
+//!   `u = S(tau) + c_f e^{r_f tau}`, where `S' = r_s S + g0 + g1 tau` is the slow first-order
+//!   motion, written with the `phi` functions `phi_j(z) = (e^z - sum_{i<j} z^i/i!) / z^j`
+//!   (series for `|z| <= 1`). `r_s = -k/mu`, `r_f = -mu/M`, `mu = (eta + sqrt(disc))/2`:
+//!   the slow root is never formed by cancellation, and `g0, g1, c_f` are divided by
+//!   `mu >= eta/2` and `sqrt(disc) >= eta/3` only.
+//! * **Clustered** (complex roots, critical and near-critical real roots, `eta = 0`):
+//!   particular solution `c0 + c1 tau` plus a homogeneous part in the basis
+//!   `u1 = e^{m tau} ch(tau)`, `u2 = e^{m tau} sh(tau)`, `m = -eta/(2M)`, `q = disc/(4M^2)`,
+//!   `ch = cosh(sqrt(q) tau)` or `cos(sqrt(-q) tau)`, `sh = sinh(sqrt q tau)/sqrt q` or
+//!   `sin(sqrt(-q) tau)/sqrt(-q)`: both are entire functions of `q`, so nothing blows up
+//!   at critical damping (`q = 0`: `ch = 1`, `sh = tau`). For real roots they are
+//!   evaluated as `e^{r_s tau}(1 + X/2)` and `-e^{r_s tau} X/(2 sqrt q)`,
+//!   `X = expm1(-2 sqrt(q) tau)`, which neither overflows nor cancels.
+//!
+//! See `docs/propagator.md` for the derivations, the integrals, the proof of
+//! [`Trajectory::bounds`] and the measured accuracy.
+
+use serde::{Deserialize, Serialize};
+
+/// Largest `rho tau` handled by the Taylor series (`rho` = largest root modulus).
+const TAYLOR_MAX: f64 = 1.0;
+/// Largest `|z|` for which the `phi` functions are summed as series.
+const PHI_SERIES_MAX: f64 = 1.0;
+/// Maximum number of Taylor terms (at `rho tau = 1` about 22 are used).
+const NT: usize = 40;
+/// Relative size of the neglected Taylor tail.
+const TAIL: f64 = 1.0 / 72_057_594_037_927_936.0; // 2^-56
+/// Relative widening of [`Trajectory::bounds`] that covers round-off (far above it).
+const BOUND_REL_MARGIN: f64 = 1e-12;
+
+/// `1/n` for `n = 0..2 NT + 2` (entry 0 unused).
+const RECIP: [f64; 2 * NT + 3] = {
+    let mut t = [0.0; 2 * NT + 3];
+    let mut n = 1;
+    while n < 2 * NT + 3 {
+        t[n] = 1.0 / n as f64;
+        n += 1;
+    }
+    t
+};
+
+/// `1/(n (n-1))` for `n = 2..NT` (entries 0, 1 unused).
+const RECIP2: [f64; NT + 1] = {
+    let mut t = [0.0; NT + 1];
+    let mut n = 2;
+    while n <= NT {
+        t[n] = 1.0 / (n * (n - 1)) as f64;
+        n += 1;
+    }
+    t
+};
+
+/// `1/(n+3)!` for `n = 0..PHI_TERMS`, the Taylor coefficients of `phi_3`.
+const PHI_TERMS: usize = 18;
+const PHI3_COEF: [f64; PHI_TERMS] = {
+    let mut t = [0.0; PHI_TERMS];
+    let mut f = 6.0; // 3!
+    let mut n = 0;
+    while n < PHI_TERMS {
+        t[n] = 1.0 / f;
+        f *= (n + 4) as f64;
+        n += 1;
+    }
+    t
+};
+
+/// How the plate's characteristic polynomial `M r^2 + eta r + k` is handled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Branch {
+    /// `M = 0`: first order, one root `-k/eta`.
+    FirstOrder,
+    /// Real roots with `|r_slow| <= |r_fast| / 2` (includes `k = 0` and stiff plates).
+    Separated,
+    /// Complex, critical or near-critical real roots (`eta^2 - 4 M k < eta^2 / 9`), and `eta = 0`.
+    Clustered,
+}
+
+/// Coefficients of `M y'' + eta y' + k y = a + b tau`, with the solution branch chosen once.
+///
+/// Fields not used by the branch are zero.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LinearPlate {
+    mass: f64,
+    eta: f64,
+    k: f64,
+    branch: Branch,
+    /// Largest root modulus (`M > 0`), `k/eta` for `M = 0`.
+    rho: f64,
+    /// `1/M`, `eta/M`, `k/M` (`M > 0`).
+    inv_m: f64,
+    eta_m: f64,
+    k_m: f64,
+    /// Slow root (`FirstOrder`, `Separated`; also used by `Clustered` with real roots).
+    r_s: f64,
+    /// Fast root (`Separated`).
+    r_f: f64,
+    /// `1/mu` (`Separated`: `mu = (eta + sqrt disc)/2 = M |r_f|`; `FirstOrder`: `1/eta`).
+    inv_mu: f64,
+    /// `M / sqrt(disc)` (`Separated`).
+    m_over_sq: f64,
+    /// `m = -eta/(2M)`, `q = disc/(4 M^2)`, `w = sqrt|q|` (`Clustered`).
+    m: f64,
+    q: f64,
+    w: f64,
+    /// `1/k` (`Clustered`, and wherever `k > 0` for the bounds).
+    inv_k: f64,
+}
+
+/// The trajectory from `(y0, v0)` under forcing `a + b tau` (see [`LinearPlate::trajectory`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Trajectory {
+    plate: LinearPlate,
+    y0: f64,
+    /// Initial velocity actually used (`(a - k y0)/eta` when `M = 0`).
+    v0: f64,
+    /// `f0 = a - k y0`: the forcing seen by `u = y - y0`.
+    f0: f64,
+    b: f64,
+    /// Branch coefficients.
+    /// Slow + fast: `[sigma, g0, g1, c_f]` with `u = S + c_f e^{r_f tau}`,
+    /// `S = sigma phi0 + g0 tau phi1 + g1 tau^2 phi2`.
+    /// Clustered: `[c0, c1, e1, e2]` with `u = c0 + c1 tau + e1 u1 + e2 u2`.
+    c: [f64; 4],
+    /// Derived: slow + fast: `[S'(0), r_f c_f]`; clustered: `[e1 m + e2, e1 q + e2 m]`
+    /// (so that `u' = c1 + d0 u1 + d1 u2`).
+    d: [f64; 2],
+}
+
+/// Integrals over `[0, h]`: `i1 = int (y - y0)`, `i2 = int (y - y0 - s tau)^2`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Integrals {
+    pub i1: f64,
+    pub i2: f64,
+}
+
+/// `(phi0, phi1, phi2, phi3)(z)` for `z <= 0` (any finite `z`; `-inf` gives the limits).
+#[inline]
+fn phis(z: f64) -> (f64, f64, f64, f64) {
+    if z.abs() <= PHI_SERIES_MAX {
+        let mut p3 = PHI3_COEF[PHI_TERMS - 1];
+        let mut n = PHI_TERMS - 1;
+        while n > 0 {
+            n -= 1;
+            p3 = p3 * z + PHI3_COEF[n];
+        }
+        let p2 = 0.5 + z * p3;
+        let p1 = 1.0 + z * p2;
+        let p0 = 1.0 + z * p1;
+        (p0, p1, p2, p3)
+    } else {
+        let iz = 1.0 / z;
+        let p0 = z.exp();
+        let p1 = (p0 - 1.0) * iz;
+        let p2 = (p1 - 1.0) * iz;
+        let p3 = (p2 - 0.5) * iz;
+        (p0, p1, p2, p3)
+    }
+}
+
+/// `h * sum_{i,j} a_i a_j / (i + j + 1)` for `a[0..n]`: `int_0^h (sum a_i (t/h)^i)^2 dt`.
+#[inline]
+fn hilbert_square(a: &[f64], h: f64) -> f64 {
+    let n = a.len();
+    let mut acc = 0.0;
+    for i in 0..n {
+        let mut cross = 0.0;
+        for j in (i + 1)..n {
+            cross += a[j] * RECIP[i + j + 1];
+        }
+        acc += a[i] * (a[i] * RECIP[2 * i + 1] + 2.0 * cross);
+    }
+    (acc * h).max(0.0)
+}
+
+impl LinearPlate {
+    /// Classifies `M y'' + eta y' + k y = forcing`.
+    ///
+    /// Panics unless `mass, eta, k` are finite and non-negative with `mass + eta > 0`.
+    pub fn new(mass: f64, eta: f64, k: f64) -> LinearPlate {
+        assert!(
+            mass.is_finite()
+                && eta.is_finite()
+                && k.is_finite()
+                && mass >= 0.0
+                && eta >= 0.0
+                && k >= 0.0,
+            "LinearPlate: mass, eta, k must be finite and >= 0 (got {mass}, {eta}, {k})"
+        );
+        assert!(
+            mass > 0.0 || eta > 0.0,
+            "LinearPlate: mass and eta are both zero"
+        );
+        let mut p = LinearPlate {
+            mass,
+            eta,
+            k,
+            branch: Branch::FirstOrder,
+            rho: 0.0,
+            inv_m: 0.0,
+            eta_m: 0.0,
+            k_m: 0.0,
+            r_s: 0.0,
+            r_f: 0.0,
+            inv_mu: 0.0,
+            m_over_sq: 0.0,
+            m: 0.0,
+            q: 0.0,
+            w: 0.0,
+            inv_k: if k > 0.0 { 1.0 / k } else { 0.0 },
+        };
+        if mass == 0.0 {
+            p.inv_mu = 1.0 / eta;
+            p.r_s = -k * p.inv_mu;
+            p.rho = -p.r_s;
+            return p;
+        }
+        p.inv_m = 1.0 / mass;
+        p.eta_m = eta * p.inv_m;
+        p.k_m = k * p.inv_m;
+        // disc = eta^2 - 4 M k with the product 4 M k carried exactly (compensated).
+        let pm = 4.0 * mass * k;
+        let pe = (4.0 * mass).mul_add(k, -pm);
+        let disc = eta.mul_add(eta, -pm) - pe;
+        let eta2 = eta * eta;
+        if disc >= eta2 / 9.0 && eta > 0.0 {
+            let sq = disc.sqrt();
+            let mu = 0.5 * (eta + sq);
+            p.branch = Branch::Separated;
+            p.inv_mu = 1.0 / mu;
+            p.r_s = -k * p.inv_mu;
+            p.r_f = -mu * p.inv_m;
+            p.rho = -p.r_f;
+            p.m_over_sq = mass / sq;
+        } else {
+            p.branch = Branch::Clustered;
+            p.m = -0.5 * p.eta_m;
+            p.q = disc * (0.25 * p.inv_m * p.inv_m);
+            p.w = p.q.abs().sqrt();
+            if p.q > 0.0 {
+                let sq = disc.sqrt();
+                p.r_s = -2.0 * k / (eta + sq);
+                p.rho = p.w - p.m;
+            } else {
+                p.rho = p.k_m.sqrt();
+            }
+        }
+        p
+    }
+
+    /// The branch chosen for this plate.
+    pub fn branch(&self) -> Branch {
+        self.branch
+    }
+
+    /// `(M, eta, k)`.
+    pub fn coefficients(&self) -> (f64, f64, f64) {
+        (self.mass, self.eta, self.k)
+    }
+
+    /// Largest root modulus of `M r^2 + eta r + k` (`k/eta` for `M = 0`): `1/rho` is the
+    /// shortest time scale of the plate.
+    pub fn rho(&self) -> f64 {
+        self.rho
+    }
+
+    /// The trajectory from `(y0, v0)` under forcing `a + b tau`.
+    /// For `M = 0`, `v0` is ignored (the velocity is `(a + b tau - k y)/eta`).
+    #[inline]
+    pub fn trajectory(&self, y0: f64, v0: f64, a: f64, b: f64) -> Trajectory {
+        let p = *self;
+        let f0 = a - p.k * y0;
+        let mut t = Trajectory {
+            plate: p,
+            y0,
+            v0,
+            f0,
+            b,
+            c: [0.0; 4],
+            d: [0.0; 2],
+        };
+        match p.branch {
+            Branch::FirstOrder => {
+                let g0 = f0 * p.inv_mu;
+                let g1 = b * p.inv_mu;
+                t.v0 = g0;
+                t.c = [0.0, g0, g1, 0.0];
+                t.d = [g0, 0.0];
+            }
+            Branch::Separated => {
+                // (D - r_s) u = g0 + g1 tau + (v0 - g0) e^{r_f tau}.
+                let g1 = b * p.inv_mu;
+                let g0 = (f0 - p.mass * g1) * p.inv_mu;
+                let cf = -(v0 - g0) * p.m_over_sq;
+                let sigma = -cf;
+                t.c = [sigma, g0, g1, cf];
+                t.d = [p.r_s * sigma + g0, p.r_f * cf];
+            }
+            Branch::Clustered => {
+                let c1 = b * p.inv_k;
+                let c0 = (f0 - p.eta * c1) * p.inv_k;
+                let e1 = -c0;
+                let e2 = (v0 - c1) - p.m * e1;
+                t.c = [c0, c1, e1, e2];
+                t.d = [e1 * p.m + e2, e1 * p.q + e2 * p.m];
+            }
+        }
+        t
+    }
+}
+
+/// Taylor terms `t_n = u^(n)(0) tau^n / n!`, `n = 0..len` (`t_0 = 0`). The buffer is left
+/// uninitialised beyond `len` (zero-filling all `NT` entries cost a tenth of an event at
+/// large N); only the written prefix is ever read.
+struct Series {
+    t: [std::mem::MaybeUninit<f64>; NT],
+    len: usize,
+}
+
+impl Series {
+    fn new() -> Series {
+        Series { t: [const { std::mem::MaybeUninit::uninit() }; NT], len: 0 }
+    }
+    /// Writes term `n`; terms must be written in order `0, 1, 2, ...`.
+    #[inline]
+    fn push(&mut self, n: usize, v: f64) {
+        debug_assert_eq!(n, self.len);
+        self.t[n] = std::mem::MaybeUninit::new(v);
+        self.len = n + 1;
+    }
+    /// The written terms `t_0 .. t_{len-1}`.
+    #[inline]
+    fn terms(&self) -> &[f64] {
+        // SAFETY: `push` writes entries in order and `len` counts them, so `0..len` are initialised.
+        unsafe { std::slice::from_raw_parts(self.t.as_ptr().cast::<f64>(), self.len) }
+    }
+    #[inline]
+    fn terms_mut(&mut self) -> &mut [f64] {
+        // SAFETY: as in `terms`.
+        unsafe { std::slice::from_raw_parts_mut(self.t.as_mut_ptr().cast::<f64>(), self.len) }
+    }
+}
+
+impl Trajectory {
+    /// The plate this trajectory belongs to.
+    pub fn plate(&self) -> &LinearPlate {
+        &self.plate
+    }
+
+    /// `y(0)`.
+    pub fn y0(&self) -> f64 {
+        self.y0
+    }
+
+    /// `y'(0)` as used (`(a - k y0)/eta` when `M = 0`).
+    pub fn v0(&self) -> f64 {
+        self.v0
+    }
+
+    #[inline]
+    fn use_taylor(&self, tau: f64) -> bool {
+        self.plate.mass > 0.0 && self.plate.rho * tau <= TAYLOR_MAX
+    }
+
+    /// Taylor terms of `u` at `tau` (requires `M > 0`, `rho tau <= 1`).
+    #[inline]
+    fn series(&self, tau: f64) -> Series {
+        let p = &self.plate;
+        let mut s = Series::new();
+        let aa = p.eta_m * tau;
+        let bb = p.k_m * tau * tau;
+        let t1 = self.v0 * tau;
+        let t2 = (self.f0 - p.eta * self.v0) * p.inv_m * (0.5 * tau * tau);
+        let t3 = self.b * p.inv_m * (tau * tau * tau * RECIP[6])
+            - (aa * t2 * RECIP[3] + bb * t1 * RECIP[6]);
+        s.push(0, 0.0);
+        s.push(1, t1);
+        s.push(2, t2);
+        s.push(3, t3);
+        let mut dabs = 2.0 * t2.abs() + 3.0 * t3.abs();
+        let (mut tm1, mut tm2) = (t3, t2);
+        let mut n = 4;
+        while n < NT {
+            let tn = -(aa * tm1 * RECIP[n] + bb * tm2 * RECIP2[n]);
+            s.push(n, tn);
+            let nf = n as f64;
+            dabs += nf * tn.abs();
+            n += 1;
+            if (tn.abs() + tm1.abs()) * nf <= TAIL * dabs {
+                break;
+            }
+            tm2 = tm1;
+            tm1 = tn;
+        }
+        s
+    }
+
+    /// `(u, u')` at `tau > 0` from the Taylor series (same terms and stopping rule as
+    /// [`Self::series`], summed on the fly).
+    #[inline]
+    fn taylor_at(&self, tau: f64) -> (f64, f64) {
+        let p = &self.plate;
+        let aa = p.eta_m * tau;
+        let bb = p.k_m * tau * tau;
+        let t1 = self.v0 * tau;
+        let t2 = (self.f0 - p.eta * self.v0) * p.inv_m * (0.5 * tau * tau);
+        let t3 = self.b * p.inv_m * (tau * tau * tau * RECIP[6])
+            - (aa * t2 * RECIP[3] + bb * t1 * RECIP[6]);
+        let mut dabs = 2.0 * t2.abs() + 3.0 * t3.abs();
+        let mut u = t2 + t3;
+        let mut du = 2.0 * t2 + 3.0 * t3;
+        let (mut tm1, mut tm2) = (t3, t2);
+        let mut n = 4;
+        while n < NT {
+            let tn = -(aa * tm1 * RECIP[n] + bb * tm2 * RECIP2[n]);
+            let nf = n as f64;
+            u += tn;
+            du += nf * tn;
+            dabs += nf * tn.abs();
+            n += 1;
+            if (tn.abs() + tm1.abs()) * nf <= TAIL * dabs {
+                break;
+            }
+            tm2 = tm1;
+            tm1 = tn;
+        }
+        (t1 + u, self.v0 + du / tau)
+    }
+
+    /// `(y(tau), y'(tau))` for `tau >= 0`.
+    #[inline]
+    pub fn at(&self, tau: f64) -> (f64, f64) {
+        debug_assert!(tau >= 0.0, "Trajectory::at: tau must be >= 0");
+        if tau <= 0.0 {
+            return (self.y0, self.v0);
+        }
+        if self.use_taylor(tau) {
+            let (u, du) = self.taylor_at(tau);
+            return (self.y0 + u, du);
+        }
+        let (u, up) = match self.plate.branch {
+            Branch::FirstOrder | Branch::Separated => self.slow_fast_at(tau),
+            Branch::Clustered => {
+                let (u1, u2, _) = self.clustered_basis(tau);
+                self.clustered_at(tau, u1, u2)
+            }
+        };
+        (self.y0 + u, up)
+    }
+
+    #[inline]
+    fn slow_fast_at(&self, tau: f64) -> (f64, f64) {
+        let p = &self.plate;
+        let [sigma, g0, g1, cf] = self.c;
+        let (f0, f1, f2, _) = phis(p.r_s * tau);
+        let mut u = sigma * f0 + tau * (g0 * f1 + g1 * tau * f2);
+        let mut up = self.d[0] * f0 + g1 * tau * f1;
+        if p.branch == Branch::Separated {
+            let ef = (p.r_f * tau).exp();
+            u += cf * ef;
+            up += self.d[1] * ef;
+        }
+        (u, up)
+    }
+
+    /// `(u1, u2, e^{2 m tau})`: `u1 = e^{m tau} ch`, `u2 = e^{m tau} sh`.
+    #[inline]
+    fn clustered_basis(&self, tau: f64) -> (f64, f64, f64) {
+        let p = &self.plate;
+        if p.q > 0.0 {
+            let es = (p.r_s * tau).exp();
+            let x = (-2.0 * p.w * tau).exp_m1();
+            (
+                es * (1.0 + 0.5 * x),
+                -es * x / (2.0 * p.w),
+                es * es * (1.0 + x),
+            )
+        } else if p.q < 0.0 {
+            let e = (p.m * tau).exp();
+            let (sn, cs) = (p.w * tau).sin_cos();
+            (e * cs, e * sn / p.w, e * e)
+        } else {
+            let e = (p.m * tau).exp();
+            (e, e * tau, e * e)
+        }
+    }
+
+    #[inline]
+    fn clustered_at(&self, tau: f64, u1: f64, u2: f64) -> (f64, f64) {
+        let [c0, c1, e1, e2] = self.c;
+        let u = c0 + c1 * tau + (e1 * u1 + e2 * u2);
+        let up = c1 + (self.d[0] * u1 + self.d[1] * u2);
+        (u, up)
+    }
+
+    /// `at(h)` and `integrals(h, s)` in one call, with identical results: on the
+    /// short-interval (Taylor) path, which is where large-N engines spend their time, the
+    /// series is built once instead of twice.
+    pub fn at_with_integrals(&self, h: f64, s: f64) -> (f64, f64, Integrals) {
+        if h > 0.0 && self.use_taylor(h) {
+            let mut ser = self.series(h);
+            let len = ser.len;
+            let t = ser.terms();
+            // Summed in the order of `taylor_at`, so `(y, y')` equal `at(h)` bit for bit.
+            let mut u = t[2] + t[3];
+            let mut du = 2.0 * t[2] + 3.0 * t[3];
+            for (n, &tn) in t.iter().enumerate().take(len).skip(4) {
+                u += tn;
+                du += n as f64 * tn;
+            }
+            let (y, v) = (self.y0 + (t[1] + u), self.v0 + du / h);
+            let mut i1 = 0.0;
+            for n in (1..len).rev() {
+                i1 += t[n] * RECIP[n + 1];
+            }
+            ser.terms_mut()[1] -= s * h;
+            let i2 = hilbert_square(ser.terms(), h);
+            return (y, v, Integrals { i1: i1 * h, i2 });
+        }
+        let (y, v) = self.at(h);
+        (y, v, self.integrals(h, s))
+    }
+
+    /// Integrals over `[0, h]` used for exact time averages:
+    /// `i1 = int_0^h (y(tau) - y0) dtau`, `i2 = int_0^h (y(tau) - y0 - s tau)^2 dtau`.
+    ///
+    /// Both are accurate relative to the natural scale of their integrand (the sizes of the
+    /// separate contributions of `v0 - s`, `a - k y0 - eta s`, `b - k s` to `y - y0 - s tau`);
+    /// `i2 >= 0` always. Uses the same transcendental calls as `at(h)`.
+    pub fn integrals(&self, h: f64, s: f64) -> Integrals {
+        debug_assert!(h >= 0.0, "Trajectory::integrals: h must be >= 0");
+        if h <= 0.0 {
+            return Integrals { i1: 0.0, i2: 0.0 };
+        }
+        if self.use_taylor(h) {
+            let mut ser = self.series(h);
+            let mut i1 = 0.0;
+            for n in (1..ser.len).rev() {
+                i1 += ser.terms()[n] * RECIP[n + 1];
+            }
+            ser.terms_mut()[1] -= s * h;
+            let i2 = hilbert_square(ser.terms(), h);
+            return Integrals { i1: i1 * h, i2 };
+        }
+        match self.plate.branch {
+            Branch::FirstOrder | Branch::Separated => self.slow_fast_integrals(h, s),
+            Branch::Clustered => self.clustered_integrals(h, s),
+        }
+    }
+
+    fn slow_fast_integrals(&self, h: f64, s: f64) -> Integrals {
+        let p = &self.plate;
+        let [sigma, g0, g1, cf] = self.c;
+        let r = p.r_s;
+        let z = r * h;
+        let (f0, f1, f2, f3) = phis(z);
+        let mut i1 = h * (sigma * f1 + h * (g0 * f2 + g1 * h * f3));
+        // w = u - s tau = S_w + c_f e^{r_f tau}, S_w' = r S_w + g0w + g1w tau.
+        let g0w = g0 - s;
+        let g1w = g1 + r * s;
+        let iss = if z.abs() <= PHI_SERIES_MAX {
+            // Taylor coefficients of S_w in (tau/h): converge at least like 1/n!.
+            let mut a = [0.0; NT];
+            let s1 = r * sigma + g0w;
+            a[0] = sigma;
+            a[1] = s1 * h;
+            a[2] = (r * s1 + g1w) * (0.5 * h * h);
+            let mut sabs = a[0].abs() + a[1].abs() + a[2].abs();
+            let mut n = 3;
+            while n < NT {
+                a[n] = a[n - 1] * z * RECIP[n];
+                sabs += a[n].abs();
+                n += 1;
+                if a[n - 1].abs() <= TAIL * sabs {
+                    break;
+                }
+            }
+            hilbert_square(&a[..n], h)
+        } else {
+            // S_w = P + c e^{r tau}, P = p0 + p1 tau (well conditioned: |r h| > 1).
+            let ir = 1.0 / r;
+            let p1 = -g1w * ir;
+            let p0 = (p1 - g0w) * ir;
+            let c = sigma - p0;
+            let lam = -r;
+            let il = 1.0 / lam;
+            let x = lam * h;
+            let ex = f0;
+            let e0 = (1.0 - ex) * il;
+            let e1 = (1.0 - ex * (1.0 + x)) * il * il;
+            let e2 = 0.5 * (1.0 - ex * ex) * il;
+            let pm = p0 + 0.5 * p1 * h;
+            let pp = h * (pm * pm + p1 * p1 * h * h * RECIP[12]);
+            (pp + 2.0 * c * (p0 * e0 + p1 * e1) + c * c * e2).max(0.0)
+        };
+        let mut i2 = iss;
+        if p.branch == Branch::Separated {
+            let lf = -p.r_f;
+            let ilf = 1.0 / lf;
+            let xf = lf * h;
+            let ef = (p.r_f * h).exp();
+            let if0 = (1.0 - ef) * ilf;
+            let if1 = (1.0 - ef * (1.0 + xf)) * ilf * ilf;
+            let if2 = 0.5 * (1.0 - ef * ef) * ilf;
+            i1 += cf * if0;
+            let sw_h = sigma * f0 + h * (g0w * f1 + g1w * h * f2);
+            let isf = (sw_h * ef - sigma - g0w * if0 - g1w * if1) / (r + p.r_f);
+            i2 = (i2 + cf * (2.0 * isf + cf * if2)).max(0.0);
+        }
+        Integrals { i1, i2 }
+    }
+
+    fn clustered_integrals(&self, h: f64, s: f64) -> Integrals {
+        let p = &self.plate;
+        let [c0, c1, e1, e2] = self.c;
+        let (u1, u2, e2m) = self.clustered_basis(h);
+        let zh = e1 * u1 + e2 * u2;
+        let zph = self.d[0] * u1 + self.d[1] * u2;
+        let dz = zh - e1;
+        let dzp = zph - self.d[0];
+        // int z and int tau z from the homogeneous equation (well conditioned here: rho h > 1
+        // and k >= M rho^2 / 2).
+        let iz = -(p.mass * dzp + p.eta * dz) * p.inv_k;
+        let itz = (p.mass * (dz - h * zph) + p.eta * (iz - h * zh)) * p.inv_k;
+        let i1 = h * (c0 + 0.5 * c1 * h) + iz;
+        // int e^{2 m tau}.
+        let x2 = 2.0 * p.m * h;
+        let ie2 = if x2.abs() <= PHI_SERIES_MAX {
+            h * phis(x2).1
+        } else {
+            (e2m - 1.0) / (2.0 * p.m)
+        };
+        // Gram matrix of (u1, u2) from d/dtau (u1^2, u1 u2, u2^2) and u1^2 - q u2^2 = e^{2 m tau}.
+        let zz = u2 * u2;
+        let bb = u1 * u2;
+        let izz = (p.m * zz - bb + ie2) * (0.5 / p.k_m);
+        let ibb = 0.5 * (zz - 2.0 * p.m * izz);
+        let iaa = ie2 + p.q * izz;
+        let i_zsq = (e1 * e1 * iaa + 2.0 * e1 * e2 * ibb + e2 * e2 * izz).max(0.0);
+        let c1w = c1 - s;
+        let pm = c0 + 0.5 * c1w * h;
+        let ipp = h * (pm * pm + c1w * c1w * h * h * RECIP[12]);
+        let ipz = c0 * iz + c1w * itz;
+        Integrals {
+            i1,
+            i2: (ipp + 2.0 * ipz + i_zsq).max(0.0),
+        }
+    }
+
+    /// Proven bounds `lo <= y(tau) <= hi` for all `tau` in `[0, h]` (loose, never wrong).
+    ///
+    /// The enclosure is the intersection of two independent ones (see `docs/propagator.md`):
+    ///
+    /// * **Short horizon** (used when `k c2 <= 1/2`): write the equation as
+    ///   `M v' + eta v = F(tau) = f0 + b tau - k (y - y0)`. With the kernel
+    ///   `H(t) = (1 - e^{-eta t/M})/eta >= 0`, `H <= min(t/M, 1/eta)`,
+    ///   `y - y0 = v0 int_0^tau e^{-eta t/M} dt + int_0^tau H(tau - x) F(x) dx`, so
+    ///   `y - y0 ∈ hull(0, v0 cv) + hull(0, f0 c2) + hull(0, b c3) ± k c2 D` with
+    ///   `cv = min(h, M/eta)` (0 for `M = 0`), `c2 = min(h/eta, h^2/(2M))`,
+    ///   `c3 = min(h^2/(2 eta), h^3/(6 M))` and `D = sup |y - y0|`, which the same inequality
+    ///   bounds by `D <= (|v0| cv + |f0| c2 + |b| c3) / (1 - k c2)`.
+    /// * **Energy** (`k > 0`): `y = y0 + c0 + c1 tau + z` with `z` homogeneous. The energy
+    ///   `E = M z'^2/2 + k z^2/2` has `E' = -eta z'^2 <= 0`, so `|z| <= sqrt(z0^2 + M z0'^2/k)`.
+    ///   For `M = 0`, `z = z0 e^{r tau}` lies between 0 and `z0`; for separated real roots
+    ///   `z = sigma_z e^{r_s tau} + c_f e^{r_f tau}` lies in `hull(0, sigma_z) + hull(0, c_f)`.
+    ///
+    /// The result is widened by `1e-12` of the magnitudes involved (covers round-off with a
+    /// wide margin) plus `4 eps (|y0| + ...)` for the final additions.
+    pub fn bounds(&self, h: f64) -> (f64, f64) {
+        let p = &self.plate;
+        let h = h.max(0.0);
+        let (y0, v0, f0, b, k) = (self.y0, self.v0, self.f0, self.b, p.k);
+        let mut lo = f64::NEG_INFINITY;
+        let mut hi = f64::INFINITY;
+        // Short-horizon enclosure.
+        let cv = if p.mass > 0.0 {
+            h.min(p.mass / p.eta)
+        } else {
+            0.0
+        };
+        let c2 = (h / p.eta).min(h * h / (2.0 * p.mass));
+        let c3 = (h * h / (2.0 * p.eta)).min(h * h * h / (6.0 * p.mass));
+        let kc2 = k * c2;
+        if kc2 <= 0.5 {
+            let (tv, tf, tb) = (v0 * cv, f0 * c2, b * c3);
+            let mag = tv.abs() + tf.abs() + tb.abs();
+            let d = mag / (1.0 - kc2);
+            let kd = kc2 * d;
+            let dlo = tv.min(0.0) + tf.min(0.0) + tb.min(0.0) - kd;
+            let dhi = tv.max(0.0) + tf.max(0.0) + tb.max(0.0) + kd;
+            let margin = BOUND_REL_MARGIN * (mag + kd) + 4.0 * f64::EPSILON * (y0.abs() + mag + kd);
+            lo = y0 + dlo - margin;
+            hi = y0 + dhi + margin;
+        }
+        // Energy / decomposition enclosure.
+        if k > 0.0 {
+            let c1 = b * p.inv_k;
+            let c0 = (f0 - p.eta * c1) * p.inv_k;
+            let z0 = -c0;
+            let (zlo, zhi, zmag) = if p.mass == 0.0 {
+                (z0.min(0.0), z0.max(0.0), z0.abs())
+            } else {
+                let z0p = v0 - c1;
+                let r = (z0 * z0 + z0p * z0p * p.mass * p.inv_k).sqrt();
+                let (mut zl, mut zh) = (-r, r);
+                let mut mag = r + z0p.abs() * (p.mass * p.inv_k).sqrt();
+                if p.branch == Branch::Separated {
+                    let cf = self.c[3];
+                    let sz = z0 - cf;
+                    zl = zl.max(sz.min(0.0) + cf.min(0.0));
+                    zh = zh.min(sz.max(0.0) + cf.max(0.0));
+                    mag += sz.abs() + cf.abs();
+                }
+                (zl, zh, mag)
+            };
+            let plo = c0 + (c1 * h).min(0.0);
+            let phi = c0 + (c1 * h).max(0.0);
+            let mag = c0.abs()
+                + (c1 * h).abs()
+                + zmag
+                + (f0.abs() + p.eta * c1.abs()) * p.inv_k
+                + b.abs() * p.inv_k;
+            let margin = BOUND_REL_MARGIN * mag + 4.0 * f64::EPSILON * (y0.abs() + mag);
+            lo = lo.max(y0 + plo + zlo - margin);
+            hi = hi.min(y0 + phi + zhi + margin);
+        }
+        (lo, hi)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn phis_match_definitions() {
+        for &z in &[-1e-3, -0.3, -0.999, -1.001, -3.0, -40.0] {
+            let (p0, p1, p2, p3) = phis(z);
+            let e: f64 = z;
+            assert!((p0 - e.exp()).abs() < 1e-15);
+            assert!((p1 - e.exp_m1() / z).abs() < 1e-15);
+            let q2 = (e.exp_m1() - z) / (z * z);
+            let q3 = (e.exp_m1() - z - 0.5 * z * z) / (z * z * z);
+            if z.abs() > 0.2 {
+                assert!((p2 - q2).abs() < 1e-13, "{z}: {p2} {q2}");
+                assert!((p3 - q3).abs() < 1e-12, "{z}: {p3} {q3}");
+            }
+        }
+        assert_eq!(phis(0.0), (1.0, 1.0, 0.5, 1.0 / 6.0));
+        let (p0, p1, p2, p3) = phis(-1e300);
+        assert!(p0 == 0.0 && p1 > 0.0 && p2 > 0.0 && p3 > 0.0);
+    }
+
+    #[test]
+    fn branches() {
+        assert_eq!(LinearPlate::new(0.0, 1.0, 1.0).branch(), Branch::FirstOrder);
+        assert_eq!(LinearPlate::new(1.0, 10.0, 1.0).branch(), Branch::Separated);
+        assert_eq!(LinearPlate::new(1.0, 1.0, 0.0).branch(), Branch::Separated);
+        assert_eq!(LinearPlate::new(1.0, 2.0, 1.0).branch(), Branch::Clustered);
+        assert_eq!(LinearPlate::new(1.0, 0.0, 1.0).branch(), Branch::Clustered);
+        assert_eq!(LinearPlate::new(1.0, 0.0, 0.0).branch(), Branch::Clustered);
+    }
+
+    #[test]
+    fn initial_state() {
+        for &(m, e, k) in &[
+            (1.0, 10.0, 1.0),
+            (1.0, 2.0, 1.0),
+            (1.0, 0.0, 3.0),
+            (0.0, 2.0, 3.0),
+        ] {
+            let t = LinearPlate::new(m, e, k).trajectory(0.5, -0.25, 2.0, 1.0);
+            let (y, v) = t.at(0.0);
+            assert_eq!(y, 0.5);
+            if m > 0.0 {
+                assert_eq!(v, -0.25);
+            } else {
+                assert_eq!(v, (2.0 - k * 0.5) / e);
+            }
+        }
+    }
+
+    #[test]
+    fn fused_call_equals_separate_calls() {
+        for &(m, eta, k) in &[(75.0, 75.0, 180.0), (1.0, 0.0, 4.0), (1e-6, 1.0, 1e3), (0.0, 2.0, 3.0), (2.0, 4.0, 2.0)] {
+            let p = LinearPlate::new(m, eta, k);
+            let tr = p.trajectory(0.3, -0.7, 5.0, 1.5);
+            for &h in &[1e-9, 1e-5, 1e-3, 0.05, 0.7, 3.0, 40.0] {
+                let (y, v, i) = tr.at_with_integrals(h, 0.5);
+                let (y2, v2) = tr.at(h);
+                let j = tr.integrals(h, 0.5);
+                assert_eq!((y, v, i.i1, i.i2), (y2, v2, j.i1, j.i2), "m {m} eta {eta} k {k} h {h}");
+            }
+        }
+    }
+}

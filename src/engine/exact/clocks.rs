@@ -1,0 +1,168 @@
+//! Channel clocks and the queue of pending events.
+//!
+//! A *channel* is a Poisson stream whose rate is constant between events: all formation
+//! candidates (rate `kon0 N_detached`), all ruptures or rupture candidates, and the
+//! deterministic end of a thinning horizon. Each channel keeps the absolute (local) time
+//! of its next firing. When an event changes a channel's rate from `R` to `R'`, the
+//! pending time is rescaled, `t' = now + (t - now) R / R'` (Gibson & Bruck 2000): the
+//! residual unit-exponential hazard is memoryless, so this is exact and needs no new
+//! random number. A channel that fires draws a fresh `Exp(1) / R`.
+//!
+//! The queue orders the channels by next firing time (ties: lowest channel index). Two
+//! interchangeable implementations exist so that a bench can compare them:
+//! [`ArrayQueue`] (a linear scan of the few channels) and [`PqQueue`] (the
+//! `priority-queue` crate). See `benches/exact.rs` and `docs/performance.md`.
+
+use std::cmp::Reverse;
+
+use ordered_float::OrderedFloat;
+use priority_queue::PriorityQueue;
+use serde::{Deserialize, Serialize, de::DeserializeOwned};
+
+/// A channel's rate and next firing time (local time; `+inf` when the rate is 0).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Clock {
+    pub rate: f64,
+    pub next: f64,
+}
+
+impl Default for Clock {
+    fn default() -> Self {
+        Clock { rate: 0.0, next: f64::INFINITY }
+    }
+}
+
+impl Clock {
+    /// Next firing after `now` with a fresh unit exponential `e`: `now + e / rate`.
+    #[inline]
+    pub fn fire(&mut self, now: f64, e: f64) {
+        self.next = if self.rate > 0.0 { now + e / self.rate } else { f64::INFINITY };
+    }
+    /// Changes the rate at `now`, rescaling the pending time. Returns `true` when the
+    /// clock had no pending time and needs a fresh draw (`fire`).
+    #[inline]
+    pub fn set_rate(&mut self, now: f64, rate: f64) -> bool {
+        if rate == self.rate {
+            return false;
+        }
+        let old = self.rate;
+        self.rate = rate;
+        if rate <= 0.0 {
+            self.next = f64::INFINITY;
+            false
+        } else if old > 0.0 && self.next.is_finite() {
+            self.next = if rate.is_finite() { now + (self.next - now) * (old / rate) } else { now };
+            false
+        } else {
+            true
+        }
+    }
+}
+
+/// The queue of pending channel times.
+pub trait ChannelQueue: Clone + std::fmt::Debug + Serialize + DeserializeOwned {
+    fn new(channels: usize) -> Self;
+    /// Sets channel `ch`'s next time.
+    fn set(&mut self, ch: usize, time: f64);
+    /// The channel that fires first and its time.
+    fn first(&self) -> (usize, f64);
+    /// Subtracts `dt` from every pending time (re-basing).
+    fn shift(&mut self, dt: f64);
+}
+
+/// A linear scan over a handful of channels.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ArrayQueue {
+    times: Vec<f64>,
+}
+
+impl ChannelQueue for ArrayQueue {
+    fn new(channels: usize) -> Self {
+        ArrayQueue { times: vec![f64::INFINITY; channels] }
+    }
+    #[inline]
+    fn set(&mut self, ch: usize, time: f64) {
+        self.times[ch] = time;
+    }
+    #[inline]
+    fn first(&self) -> (usize, f64) {
+        let mut best = (0, self.times[0]);
+        for (i, &t) in self.times.iter().enumerate().skip(1) {
+            if t < best.1 {
+                best = (i, t);
+            }
+        }
+        best
+    }
+    fn shift(&mut self, dt: f64) {
+        self.times.iter_mut().for_each(|t| *t -= dt);
+    }
+}
+
+/// The `priority-queue` crate's indexed heap, keyed by channel.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PqQueue {
+    pq: PriorityQueue<usize, Reverse<(OrderedFloat<f64>, usize)>>,
+}
+
+impl ChannelQueue for PqQueue {
+    fn new(channels: usize) -> Self {
+        let mut pq = PriorityQueue::with_capacity(channels);
+        for ch in 0..channels {
+            pq.push(ch, Reverse((OrderedFloat(f64::INFINITY), ch)));
+        }
+        PqQueue { pq }
+    }
+    #[inline]
+    fn set(&mut self, ch: usize, time: f64) {
+        self.pq.change_priority(&ch, Reverse((OrderedFloat(time), ch)));
+    }
+    #[inline]
+    fn first(&self) -> (usize, f64) {
+        let (&ch, p) = self.pq.peek().expect("channels are never removed");
+        (ch, (p.0).0.0)
+    }
+    fn shift(&mut self, dt: f64) {
+        let items: Vec<(usize, f64)> = self.pq.iter().map(|(&c, p)| (c, (p.0).0.0)).collect();
+        for (c, t) in items {
+            self.set(c, t - dt);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check<Q: ChannelQueue>() {
+        let mut q = Q::new(3);
+        assert_eq!(q.first().1, f64::INFINITY);
+        q.set(1, 2.0);
+        q.set(2, 1.0);
+        assert_eq!(q.first(), (2, 1.0));
+        q.set(0, 1.0);
+        assert_eq!(q.first(), (0, 1.0), "ties go to the lowest channel");
+        q.set(0, 5.0);
+        q.set(2, 7.0);
+        assert_eq!(q.first(), (1, 2.0));
+        q.shift(1.5);
+        assert_eq!(q.first(), (1, 0.5));
+    }
+
+    #[test]
+    fn both_queues_order_channels() {
+        check::<ArrayQueue>();
+        check::<PqQueue>();
+    }
+
+    #[test]
+    fn rescaling_keeps_the_residual_hazard() {
+        let mut c = Clock { rate: 2.0, next: 0.0 };
+        c.fire(1.0, 1.0); // fires at 1.5: residual hazard at t=1.2 is 2*(0.3) = 0.6
+        assert!(!c.set_rate(1.2, 4.0));
+        assert!((c.next - (1.2 + 0.6 / 4.0)).abs() < 1e-15);
+        assert!(!c.set_rate(1.2, 0.0));
+        assert_eq!(c.next, f64::INFINITY);
+        assert!(c.set_rate(1.3, 1.0), "a clock coming back from rate 0 needs a fresh draw");
+    }
+}

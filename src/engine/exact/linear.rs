@@ -1,0 +1,430 @@
+//! The exact engine for the `linear` force law.
+//!
+//! With `f^x = kappa x` and attached junctions moving with the plate (`x_i = y - c_i`),
+//! the bond force is `F_b = kappa (N_att y - C)`, `C = sum c_i`, so between events the plate
+//! obeys the linear ODE `M y'' + eta y' + (K + kappa N_att) y = a + b s` and moves in closed
+//! form ([`crate::propagator`]). Events:
+//! - formation candidates at rate `kon0 N_det`, accepted with probability `g(|y'|)` at the
+//!   candidate time (thinning: exact because `g <= 1`), then a uniform detached junction;
+//! - ruptures as chosen by the [`RuptureModel`] (strong: rate `k0 N_att`; weak: thinning);
+//! - the end of a thinning horizon (weak bonds), and the runner's stop time.
+//!
+//! The trajectory restarts (a new closed-form solution from the current state) at every
+//! event, horizon end and stop; each restart reports the exact time integrals of the
+//! observables over the finished piece as a [`Segment`].
+
+use rand_distr::{Distribution, Exp1};
+use serde::{Deserialize, Serialize};
+
+use super::bags::Bags;
+use super::clocks::{ChannelQueue, Clock};
+use super::frame::Frame;
+use super::pick::Pick;
+use super::rupture::RuptureModel;
+use crate::engine::{Counters, Engine, EngineError};
+use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
+use crate::physics::{Formation, Plate};
+use crate::propagator::{Integrals, LinearPlate, Trajectory};
+use crate::rng::{Pcg64, UniformSource, pcg};
+use crate::scene::{EngineKind, Initial, Reattach, Scene};
+
+/// Channel of formation candidates.
+const FORMATION: usize = 0;
+/// Channel of ruptures (strong) or rupture candidates (weak).
+const RUPTURE: usize = 1;
+/// End of the current thinning horizon.
+const HORIZON: usize = 2;
+const CHANNELS: usize = 3;
+
+/// Soft re-basing limits: positions and times beyond these are moved back to the origin
+/// once enough events have passed to pay for the O(N) shift.
+const SOFT_Y: f64 = 4096.0;
+const SOFT_TAU: f64 = 1048576.0;
+/// Hard limits: re-base whatever the cost.
+const HARD_Y: f64 = 1.0737418e9;
+const HARD_TAU: f64 = 4.2949673e9;
+
+/// The current closed-form piece of the plate trajectory.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Piece {
+    /// Local start time.
+    tau0: f64,
+    /// State at the start.
+    y0: f64,
+    v0: f64,
+    traj: Trajectory,
+}
+
+/// Exact event-driven engine, linear force law, rupture kinetics `R`, event queue `Q`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(bound = "")]
+pub struct ExactLinear<R: RuptureModel, Q: ChannelQueue> {
+    n: usize,
+    plate: Plate,
+    kappa: f64,
+    lambda: f64,
+    reattach: Reattach,
+    formation: Formation,
+    frame: Frame,
+    /// Current local time and plate state at it.
+    tau: f64,
+    y: f64,
+    yd: f64,
+    piece: Piece,
+    bags: Bags,
+    rupture: R,
+    clocks: [Clock; CHANNELS],
+    queue: Q,
+    rng: Pcg64,
+    /// The next uniform pick of a detached junction.
+    next_formation: Pick,
+    counters: Counters,
+    events_since_rebase: u64,
+    #[serde(skip)]
+    plates: PlateCache,
+}
+
+/// Classified plates `M y'' + eta y' + (K + kappa n) y` for recent attached counts `n`: the
+/// count moves by one per event, so a small direct-mapped cache saves the classification
+/// (a square root and several divisions) on almost every event.
+#[derive(Clone, Debug, Default)]
+struct PlateCache {
+    entries: Vec<Option<(usize, LinearPlate)>>,
+}
+
+impl PlateCache {
+    const SLOTS: usize = 64;
+    #[inline]
+    fn get(&mut self, p: &Plate, kappa: f64, n_att: usize) -> LinearPlate {
+        if self.entries.is_empty() {
+            self.entries = vec![None; Self::SLOTS];
+        }
+        let slot = n_att % Self::SLOTS;
+        match self.entries[slot] {
+            Some((n, plate)) if n == n_att => plate,
+            _ => {
+                let plate = LinearPlate::new(p.mass, p.eta, p.k + kappa * n_att as f64);
+                self.entries[slot] = Some((n_att, plate));
+                plate
+            }
+        }
+    }
+}
+
+impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
+    /// The engine at `t = 0` for `scene`, with rupture kinetics made by `rupture` (after the
+    /// initial state has been drawn from the generator).
+    pub fn new(scene: &Scene, rupture: impl FnOnce(&mut Pcg64) -> R) -> Self {
+        let j = &scene.junctions;
+        let mut rng = pcg(scene.run.seed);
+        let mut bags = Bags::with_capacity(j.n);
+        let p_att = j.kon0 / (j.kon0 + j.k0);
+        for id in 0..j.n as u32 {
+            let attached = match j.initial {
+                Initial::Detached => false,
+                Initial::Attached => true,
+                Initial::Stationary => rng.uniform() < p_att,
+            };
+            if attached {
+                bags.attach(0.0, id);
+            } else {
+                bags.detached.push(super::bags::Detached { x: 0.0, t: 0.0, id });
+            }
+        }
+        let plate = Plate::from_scene(scene);
+        let rupture = rupture(&mut rng);
+        let next_formation = Pick::draw(&mut rng);
+        let mut e = ExactLinear {
+            n: j.n,
+            plate,
+            kappa: j.kappa,
+            lambda: j.lambda,
+            reattach: j.reattach,
+            formation: Formation::from_scene(scene),
+            frame: Frame::new(plate.v),
+            tau: 0.0,
+            y: 0.0,
+            yd: 0.0,
+            piece: Piece { tau0: 0.0, y0: 0.0, v0: 0.0, traj: LinearPlate::new(1.0, 1.0, 1.0).trajectory(0.0, 0.0, 0.0, 0.0) },
+            bags,
+            rupture,
+            clocks: [Clock::default(); CHANNELS],
+            queue: Q::new(CHANNELS),
+            rng,
+            next_formation,
+            counters: Counters {
+                events: Some(0),
+                candidates: Some(0),
+                rebases: Some(0),
+                ..Default::default()
+            },
+            events_since_rebase: 0,
+            plates: PlateCache::default(),
+        };
+        let attached = std::mem::take(&mut e.bags.attached);
+        for (slot, a) in attached.iter().enumerate() {
+            e.rupture.attached(slot, a.c, 0.0);
+        }
+        e.bags.attached = attached;
+        e.open_piece();
+        // At rest at t = 0; for M = 0 the velocity follows from the forces.
+        e.yd = e.piece.traj.at(0.0).1;
+        e.refresh_clocks(None);
+        e
+    }
+
+    /// Starts a new closed-form piece at the current time and state.
+    fn open_piece(&mut self) {
+        let p = &self.plate;
+        // M y'' + eta y' + k y = K (V (tau + s) - lag_ref) + kappa C.
+        let a = p.k * (p.v * self.tau - self.frame.lag_ref) + self.kappa * self.bags.anchor_sum();
+        let b = p.k * p.v;
+        let traj = self.plates.get(p, self.kappa, self.bags.n_attached()).trajectory(self.y, self.yd, a, b);
+        self.piece = Piece { tau0: self.tau, y0: self.y, v0: self.yd, traj };
+    }
+
+    /// Moves along the piece to local time `tau1` and reports `[piece.tau0, tau1]` as a
+    /// segment. Returns the plate state at `tau1`.
+    fn close_piece<O: Observer>(&mut self, tau1: f64, obs: &mut O) -> (f64, f64) {
+        let h = (tau1 - self.piece.tau0).max(0.0);
+        let (y1, v1, ints) = self.piece.traj.at_with_integrals(h, self.plate.v);
+        self.report_piece(tau1, y1, v1, ints, obs);
+        (y1, v1)
+    }
+
+    /// Reports `[piece.tau0, tau1]` given the state and integrals at `tau1`, and moves there.
+    fn report_piece<O: Observer>(&mut self, tau1: f64, y1: f64, v1: f64, ints: Integrals, obs: &mut O) {
+        let pc = &self.piece;
+        let h = tau1 - pc.tau0;
+        if h > 0.0 {
+            let p = &self.plate;
+            // Lag w.r.t. the driver: lag(s) = lag0 + (y(s) - y0 - V s).
+            let lag0 = self.frame.lag(pc.y0, pc.tau0);
+            let w1 = ints.i1 - 0.5 * p.v * h * h;
+            let mean_lag = lag0 + w1 / h;
+            let m2 = (ints.i2 - w1 * w1 / h).max(0.0);
+            let n_att = self.bags.n_attached();
+            let bond = self.kappa * (n_att as f64 * (pc.y0 + ints.i1 / h) - self.bags.anchor_sum());
+            obs.segment(&Segment {
+                t0: self.frame.time(pc.tau0),
+                t1: self.frame.time(tau1),
+                friction: -p.k * mean_lag,
+                friction_m2: p.k * p.k * m2,
+                bond_force: bond,
+                viscous: p.eta * (y1 - pc.y0) / h,
+                attached: n_att as u64,
+            });
+        }
+        self.tau = tau1;
+        self.y = y1;
+        self.yd = v1;
+    }
+
+    /// Sets every channel's rate after a change of state; channel `fired` draws afresh.
+    fn refresh_clocks(&mut self, fired: Option<usize>) {
+        let now = self.tau;
+        let plan = self.rupture.plan(&self.piece.traj, self.bags.n_attached());
+        let rates = [self.formation.kon0 * self.bags.n_detached() as f64, plan.rate];
+        for (ch, &rate) in rates.iter().enumerate() {
+            let fresh = self.clocks[ch].set_rate(now, rate);
+            if fresh || fired == Some(ch) {
+                let e: f64 = Exp1.sample(&mut self.rng);
+                self.clocks[ch].fire(now, e);
+            }
+            self.queue.set(ch, self.clocks[ch].next);
+        }
+        let horizon = if R::WEAK { now + plan.horizon } else { f64::INFINITY };
+        self.clocks[HORIZON].next = horizon;
+        self.queue.set(HORIZON, horizon);
+    }
+
+    /// Draws a fresh time after `now` for channel `ch` (a rejected candidate at `now`).
+    fn redraw(&mut self, ch: usize, now: f64) {
+        let e: f64 = Exp1.sample(&mut self.rng);
+        self.clocks[ch].fire(now, e);
+        self.queue.set(ch, self.clocks[ch].next);
+    }
+
+    fn emit<O: Observer>(&self, obs: &mut O, kind: EventKind, id: u32, x: f64) {
+        if O::EVENTS {
+            obs.event(&JunctionEvent {
+                t: self.frame.time(self.tau),
+                junction: id,
+                kind,
+                extension: x,
+                tension: self.kappa * x.abs(),
+            });
+        }
+    }
+
+    /// Ruptures the attached junction in `slot` now.
+    fn rupture_slot<O: Observer>(&mut self, slot: usize, obs: &mut O) {
+        let last = self.bags.n_attached() - 1;
+        let a = self.bags.take_attached(slot);
+        let moved = (slot != last).then(|| self.bags.attached[slot].c);
+        self.rupture.detached(slot, last, moved);
+        let x = self.y - a.c;
+        self.bags.detached.push(super::bags::Detached { x, t: self.tau, id: a.id });
+        self.counters.ruptures += 1;
+        self.emit(obs, EventKind::Rupture, a.id, x);
+    }
+
+    /// Attaches a uniformly chosen detached junction now; if its rupture rate overflows
+    /// (weak bonds), it ruptures at once.
+    fn form_one<O: Observer>(&mut self, obs: &mut O) {
+        let slot = self.next_formation.take(self.bags.n_detached(), &mut self.rng);
+        let d = self.bags.take_detached(slot);
+        let x = match self.reattach {
+            Reattach::Residual => d.x * (-self.lambda * (self.tau - d.t)).exp(),
+            Reattach::Unstretched => 0.0,
+        };
+        let c = self.y - x;
+        self.bags.attach(c, d.id);
+        self.counters.formations += 1;
+        self.emit(obs, EventKind::Formation, d.id, x);
+        let slot = self.bags.n_attached() - 1;
+        if !self.rupture.attached(slot, c, self.y) {
+            self.rupture_slot(slot, obs);
+        }
+    }
+
+    /// Re-bases the frame if positions or times have grown (amortised O(1) per event).
+    fn maybe_rebase<O: Observer>(&mut self, obs: &mut O) {
+        let (ya, ta) = (self.y.abs(), self.tau.abs());
+        let hard = ya > HARD_Y || ta > HARD_TAU || self.rupture.needs_rebase(self.y);
+        let soft = (ya > SOFT_Y || ta > SOFT_TAU) && self.events_since_rebase >= (self.n as u64 / 4).max(1);
+        if !(hard || soft) {
+            return;
+        }
+        let (dtau, dy) = (self.tau, self.y);
+        self.frame.shift(dtau, dy);
+        self.bags.rebase(dtau, dy);
+        for c in self.clocks.iter_mut() {
+            c.next -= dtau;
+        }
+        self.queue.shift(dtau);
+        self.tau = 0.0;
+        self.y = 0.0;
+        self.piece.tau0 = 0.0;
+        self.piece.y0 = 0.0;
+        self.events_since_rebase = 0;
+        *self.counters.rebases.as_mut().expect("set at construction") += 1;
+        // Junctions whose rate overflowed in the new frame rupture at once (highest slot
+        // first, so swap_remove does not disturb the slots still to do).
+        let mut over = self.rupture.rebuild(&self.bags.attached);
+        over.sort_unstable_by(|a, b| b.cmp(a));
+        for slot in over {
+            self.rupture_slot(slot, obs);
+        }
+    }
+
+    /// After an event at the current time: new piece, new rates.
+    fn after_event<O: Observer>(&mut self, fired: Option<usize>, obs: &mut O) {
+        self.events_since_rebase += 1;
+        *self.counters.events.as_mut().expect("set at construction") =
+            self.counters.ruptures + self.counters.formations;
+        self.maybe_rebase(obs);
+        self.open_piece();
+        self.refresh_clocks(fired);
+        self.next_formation.prefetch(&self.bags.detached);
+        self.rupture.prefetch(&self.bags.attached);
+    }
+
+    #[inline]
+    fn count_candidate(&mut self) {
+        *self.counters.candidates.as_mut().expect("set at construction") += 1;
+    }
+}
+
+impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
+    const KIND: EngineKind = EngineKind::Exact;
+
+    fn time(&self) -> f64 {
+        self.frame.time(self.tau)
+    }
+
+    fn time_step(&self) -> Option<f64> {
+        None
+    }
+
+    fn advance<O: Observer>(&mut self, t_stop: f64, obs: &mut O) -> Result<(), EngineError> {
+        loop {
+            // In the local frame, which a re-basing inside this loop moves.
+            let tau_stop = self.frame.local(t_stop).max(self.tau);
+            let (ch, t_next) = self.queue.first();
+            if !(t_next <= tau_stop) {
+                let (y, v) = self.close_piece(tau_stop, obs);
+                self.check(y, v)?;
+                self.maybe_rebase(obs);
+                self.open_piece();
+                self.refresh_clocks(None);
+                return Ok(());
+            }
+            self.count_candidate();
+            match ch {
+                FORMATION => {
+                    // The state (and, if accepted, the piece's integrals) at the candidate.
+                    let h = t_next - self.piece.tau0;
+                    let (y, v, ints) = self.piece.traj.at_with_integrals(h, self.plate.v);
+                    let g = self.formation.g(v);
+                    if g >= 1.0 || self.rng.uniform() < g {
+                        self.report_piece(t_next, y, v, ints, obs);
+                        self.check(y, v)?;
+                        self.form_one(obs);
+                        self.after_event(Some(FORMATION), obs);
+                    } else {
+                        self.redraw(FORMATION, t_next);
+                    }
+                }
+                RUPTURE => match self.rupture.pick(&mut self.rng, &self.piece.traj, t_next - self.piece.tau0, &self.bags.attached) {
+                    Some(slot) => {
+                        let (y, v) = self.close_piece(t_next, obs);
+                        self.check(y, v)?;
+                        self.rupture_slot(slot, obs);
+                        self.after_event(Some(RUPTURE), obs);
+                    }
+                    None => self.redraw(RUPTURE, t_next),
+                },
+                _ => {
+                    // End of a thinning horizon: restart the piece, recompute the bound.
+                    let (y, v) = self.close_piece(t_next, obs);
+                    self.check(y, v)?;
+                    self.maybe_rebase(obs);
+                    self.open_piece();
+                    self.refresh_clocks(None);
+                }
+            }
+        }
+    }
+
+    fn sample(&self) -> Sample {
+        let n_att = self.bags.n_attached();
+        Sample {
+            t: self.time(),
+            x: self.frame.position(self.y),
+            v: self.yd,
+            friction: -self.plate.k * self.frame.lag(self.y, self.tau),
+            bond_force: self.kappa * (n_att as f64 * self.y - self.bags.anchor_sum()),
+            attached: n_att as u64,
+            n: self.n as u64,
+        }
+    }
+
+    fn counters(&self) -> Counters {
+        self.counters.clone()
+    }
+}
+
+impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
+    /// Non-finite plate state is an error, never an output.
+    #[inline]
+    fn check(&self, y: f64, v: f64) -> Result<(), EngineError> {
+        if !y.is_finite() {
+            return Err(EngineError::NonFinite { t: self.time(), quantity: "X", value: y });
+        }
+        if !v.is_finite() {
+            return Err(EngineError::NonFinite { t: self.time(), quantity: "Xd", value: v });
+        }
+        Ok(())
+    }
+}

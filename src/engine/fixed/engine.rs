@@ -1,0 +1,443 @@
+//! The fixed-step engine's state and its step (MODEL.md, "The fixed-step compatibility
+//! scheme"; docs/engines.md, "The fixed-step engine").
+//!
+//! State is stored as structure of arrays (`q: Vec<u8>`, `x: Vec<f64>`). Step `n`'s
+//! junction update (4) is not applied at the end of step `n` but recorded as a pending
+//! `(dX, 1 - lambda dt)` and applied, junction by junction, at the top of step `n + 1`'s
+//! single pass over the junctions (flips, rates and `F_b` in the same pass). The values are
+//! bit for bit those of the eager scheme; every read of `x_i` between steps
+//! ([`FixedEngine::extension`], [`Engine::sample`]) applies the pending update on the fly.
+
+use std::marker::PhantomData;
+
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+
+use super::flip::Flip;
+use super::integrator::{Integrator, PlateState};
+use crate::engine::{Counters, Engine, EngineError};
+use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
+use crate::physics::{Bond, ForceLaw, Formation, Plate};
+use crate::rng::UniformSource;
+use crate::scene::{EngineKind, Initial, Reattach, Scene};
+
+/// A force law the engine can be built with (and checkpointed).
+pub trait Law: ForceLaw + Serialize + DeserializeOwned {}
+impl<T: ForceLaw + Serialize + DeserializeOwned> Law for T {}
+
+/// A bond kind the engine can be built with (and checkpointed).
+pub trait Rupture: Bond + Serialize + DeserializeOwned {}
+impl<T: Bond + Serialize + DeserializeOwned> Rupture for T {}
+
+/// A uniform generator the engine can be built with (and checkpointed).
+pub trait Generator:
+    UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned
+{
+}
+impl<T: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned> Generator for T {}
+
+/// Magnitude beyond which the plate is declared diverged.
+pub const DIVERGENCE_LIMIT: f64 = 1e100;
+
+/// The fixed-step engine, specialised to a force law `L`, bond kind `B`, generator `R`
+/// and flip rule `F`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct FixedEngine<L, B, R, F> {
+    law: L,
+    bond: B,
+    flip: PhantomData<F>,
+    formation: Formation,
+    plate: Plate,
+    integrator: Integrator,
+    rng: R,
+    /// Time step `dt`.
+    dt: f64,
+    /// `1 - lambda dt`, the relaxation factor of a detached junction over one step.
+    relax: f64,
+    /// `reattach = "unstretched"`: a forming junction starts at `x_i = 0`.
+    unstretched: bool,
+    /// `F::threshold(k0 dt)`: the rupture threshold of strong bonds, the same every step.
+    strong_off_threshold: f64,
+    /// Steps taken, `n`; the time is `t_n = n dt`.
+    steps: u64,
+    /// Plate position `X_n`.
+    plate_x: f64,
+    /// Plate velocity `Xd_n`.
+    plate_v: f64,
+    /// Junction states `q_i` (0 or 1).
+    q: Vec<u8>,
+    /// Junction extensions `x_i`, up to the pending update below.
+    x: Vec<f64>,
+    /// Pending update (4) of the last step: attached `x_i += pending_dx`, detached
+    /// `x_i *= pending_relax`. The identity `(0, 1)` before the first step.
+    pending_dx: f64,
+    pending_relax: f64,
+    /// `sum_i q_i`.
+    attached: u64,
+    ruptures: u64,
+    formations: u64,
+}
+
+/// The mask of a junction state byte: `!0` for `q = 1`, `0` for `q = 0`.
+#[inline(always)]
+fn mask(q: u8) -> u64 {
+    u64::from(q).wrapping_neg()
+}
+
+/// `if mask == !0 { a } else { b }` on the bits, for a mask from [`mask`]: branch-free.
+#[inline(always)]
+fn select(mask: u64, a: f64, b: f64) -> f64 {
+    f64::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
+}
+
+/// What one pass over the junctions found.
+#[derive(Clone, Copy, Debug)]
+struct Pass {
+    /// `F_b = sum_i q_i f^x(x_i)` with the new `q`.
+    bond_force: f64,
+    /// Linear law only: `sum_i q_i x_i` with the new `q` (`F_b = kappa * sum`).
+    attached_extension: f64,
+}
+
+impl<L: Law, B: Rupture, R: Generator, F: Flip> FixedEngine<L, B, R, F> {
+    /// Builds the engine at `t = 0`: plate at rest at `X = 0`, junctions per
+    /// `junctions.initial`, all with `x_i = 0`.
+    ///
+    /// `initial = "stationary"` draws one uniform `xi_i` per junction, in index order, from
+    /// `rng` here (before the first step): junction `i` starts attached iff
+    /// `xi_i < kon0 / (kon0 + k0)`.
+    pub fn new(scene: &Scene, law: L, bond: B, mut rng: R, _flip: F) -> Self {
+        let j = &scene.junctions;
+        let n = j.n;
+        let q: Vec<u8> = match j.initial {
+            Initial::Detached => vec![0; n],
+            Initial::Attached => vec![1; n],
+            Initial::Stationary => {
+                let p = j.kon0 / (j.kon0 + j.k0);
+                (0..n).map(|_| u8::from(rng.uniform() < p)).collect()
+            }
+        };
+        let attached = q.iter().map(|&b| u64::from(b)).sum();
+        let dt = scene.fixed.dt;
+        FixedEngine {
+            law,
+            bond,
+            flip: PhantomData,
+            formation: Formation::from_scene(scene),
+            plate: Plate::from_scene(scene),
+            integrator: Integrator::new(scene.fixed.integrator, scene.plate.mass),
+            rng,
+            dt,
+            relax: 1.0 - j.lambda * dt,
+            unstretched: j.reattach == Reattach::Unstretched,
+            strong_off_threshold: F::threshold(j.k0 * dt),
+            steps: 0,
+            plate_x: 0.0,
+            plate_v: 0.0,
+            q,
+            x: vec![0.0; n],
+            pending_dx: 0.0,
+            pending_relax: 1.0,
+            attached,
+            ruptures: 0,
+            formations: 0,
+        }
+    }
+
+    /// Number of junctions `N`.
+    pub fn len(&self) -> usize {
+        self.q.len()
+    }
+
+    /// Always `false` (a scene has `N >= 1`).
+    pub fn is_empty(&self) -> bool {
+        self.q.is_empty()
+    }
+
+    /// `q_i` at `t_n`.
+    pub fn is_attached(&self, i: usize) -> bool {
+        self.q[i] != 0
+    }
+
+    /// `x_i` at `t_n` (with the pending update applied).
+    pub fn extension(&self, i: usize) -> f64 {
+        if self.q[i] != 0 {
+            self.x[i] + self.pending_dx
+        } else {
+            self.x[i] * self.pending_relax
+        }
+    }
+
+    /// Steps taken so far.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// The integrator in use (`Overdamped` when `M = 0`).
+    pub fn integrator(&self) -> Integrator {
+        self.integrator
+    }
+
+    /// Steps 1 and 2 in one pass over the junctions, after applying the previous step's
+    /// pending update (4) to each `x_i`:
+    /// `xi_i ~ U(0,1)`, one per junction in index order; `k = q_i ? k_off(f(x_i)) : k_on`;
+    /// flip per `F`; re-attachment rule; `F_b = sum_i q_i f^x(x_i)` with the new `q`.
+    #[inline(always)]
+    fn junction_pass<O: Observer>(&mut self, t: f64, on_threshold: f64, obs: &mut O) -> Pass {
+        let (dx, relax) = (self.pending_dx, self.pending_relax);
+        let (law, bond, dt) = (self.law, self.bond, self.dt);
+        let off_threshold = self.strong_off_threshold;
+        let unstretched = self.unstretched;
+        let rng = &mut self.rng;
+        let mut sum = 0.0;
+        let mut ruptures = 0u64;
+        let mut formations = 0u64;
+        // `q_i` is random, so a branch on it would be mispredicted about half the time.
+        // Every choice that depends on it is a bitwise select under a mask computed from
+        // the stored byte (`0` or `!0`), which the compiler cannot turn back into a branch.
+        let keep_formed = if unstretched { 0 } else { !0u64 };
+        for (i, (qi, xi)) in self.q.iter_mut().zip(self.x.iter_mut()).enumerate() {
+            let q_old = *qi;
+            let was = mask(q_old);
+            // Step n-1's update (4): x_i(t_n).
+            let x_n = select(was, *xi + dx, *xi * relax);
+            // Rates from the state at t_n; strong-bond thresholds are hoisted.
+            let threshold = if B::IS_WEAK {
+                if q_old != 0 {
+                    F::threshold(bond.k_off(law.tension(x_n)) * dt)
+                } else {
+                    on_threshold
+                }
+            } else {
+                select(was, off_threshold, on_threshold)
+            };
+            let flip = F::flips(rng.uniform(), threshold);
+            let q_new = q_old ^ u8::from(flip);
+            let now = mask(q_new);
+            let formed = now & !was;
+            // Re-attachment: `x_i = 0` for a formation when `reattach = "unstretched"`.
+            let x_new = f64::from_bits(x_n.to_bits() & (keep_formed | !formed));
+            *xi = x_new;
+            *qi = q_new;
+            ruptures += u64::from(q_old & !q_new);
+            formations += u64::from(q_new & !q_old);
+            if L::IS_LINEAR {
+                sum += select(now, x_new, 0.0);
+            } else if q_new != 0 {
+                sum += law.force_x(x_new);
+            }
+            if O::EVENTS && flip {
+                obs.event(&JunctionEvent {
+                    t,
+                    junction: i as u32,
+                    kind: if q_old != 0 {
+                        EventKind::Rupture
+                    } else {
+                        EventKind::Formation
+                    },
+                    extension: x_new,
+                    tension: law.tension(x_new),
+                });
+            }
+        }
+        self.pending_dx = 0.0;
+        self.pending_relax = 1.0;
+        self.ruptures += ruptures;
+        self.formations += formations;
+        self.attached = self.attached + formations - ruptures;
+        if L::IS_LINEAR {
+            // f^x(x) = kappa x is linear, so sum_i q_i f^x(x_i) = f^x(sum_i q_i x_i).
+            Pass {
+                bond_force: law.force_x(sum),
+                attached_extension: sum,
+            }
+        } else {
+            Pass {
+                bond_force: sum,
+                attached_extension: f64::NAN,
+            }
+        }
+    }
+
+    /// `F_b` with the current `q` and every attached junction moved by `dx` (the `F_b'` of
+    /// velocity Verlet). Read-only: the move itself stays pending.
+    fn bond_force_moved(&self, dx: f64, pass: Pass) -> f64 {
+        if L::IS_LINEAR {
+            self.law
+                .force_x(pass.attached_extension + self.attached as f64 * dx)
+        } else {
+            let law = self.law;
+            self.q
+                .iter()
+                .zip(&self.x)
+                .filter(|(q, _)| **q != 0)
+                .fold(0.0, |s, (_, &x)| s + law.force_x(x + dx))
+        }
+    }
+
+    /// `F_b` at `t_n` from `(q, x)` before step `n`'s flips.
+    fn bond_force_now(&self) -> f64 {
+        let dx = self.pending_dx;
+        let attached = self
+            .q
+            .iter()
+            .zip(&self.x)
+            .filter(|(q, _)| **q != 0)
+            .map(|(_, &x)| x + dx);
+        if L::IS_LINEAR {
+            self.law.force_x(attached.fold(0.0, |s, x| s + x))
+        } else {
+            let law = self.law;
+            attached.fold(0.0, |s, x| s + law.force_x(x))
+        }
+    }
+
+    /// The friction (driving-spring) force `F = K (V t_n - X_n)`.
+    #[inline]
+    fn friction(&self, t: f64) -> f64 {
+        self.plate.k * (self.plate.v * t - self.plate_x)
+    }
+
+    /// One step from `t_n` to `t_{n+1}`: flips, `F_b`, plate, pending junction update.
+    #[inline]
+    fn step<O: Observer>(&mut self, obs: &mut O) -> Result<(), EngineError> {
+        let t = self.steps as f64 * self.dt;
+        let t_next = (self.steps + 1) as f64 * self.dt;
+        let on_threshold = F::threshold(self.formation.k_on(self.plate_v) * self.dt);
+        let pass = self.junction_pass(t, on_threshold, obs);
+        let state = PlateState {
+            t,
+            t_next,
+            x: self.plate_x,
+            v: self.plate_v,
+            bond_force: pass.bond_force,
+        };
+        let next = self.integrator.step(&self.plate, self.dt, state, |dx| {
+            self.bond_force_moved(dx, pass)
+        });
+        for (quantity, value) in [("X", next.x), ("Xd", next.v)] {
+            if !value.is_finite() || value.abs() > DIVERGENCE_LIMIT {
+                return Err(EngineError::Diverged {
+                    step: self.steps + 1,
+                    t: t_next,
+                    quantity,
+                    value,
+                });
+            }
+        }
+        obs.segment(&Segment {
+            t0: t,
+            t1: t_next,
+            friction: self.friction(t),
+            friction_m2: 0.0,
+            bond_force: pass.bond_force,
+            viscous: self.plate.eta * next.viscous_v,
+            attached: self.attached,
+        });
+        self.pending_dx = next.x - self.plate_x;
+        self.pending_relax = self.relax;
+        self.plate_x = next.x;
+        self.plate_v = next.v;
+        self.steps += 1;
+        Ok(())
+    }
+}
+
+impl<L: Law, B: Rupture, R: Generator, F: Flip> Engine for FixedEngine<L, B, R, F> {
+    const KIND: EngineKind = EngineKind::Fixed;
+
+    /// `t_n = n dt`, from the integer step count.
+    fn time(&self) -> f64 {
+        self.steps as f64 * self.dt
+    }
+
+    fn time_step(&self) -> Option<f64> {
+        Some(self.dt)
+    }
+
+    /// Takes steps while `n dt < t_stop - 1e-9 dt`.
+    fn advance<O: Observer>(&mut self, t_stop: f64, obs: &mut O) -> Result<(), EngineError> {
+        let limit = t_stop - 1e-9 * self.dt;
+        while (self.steps as f64) * self.dt < limit {
+            self.step(obs)?;
+        }
+        Ok(())
+    }
+
+    /// The state at `t_n`, before step `n`'s flips.
+    fn sample(&self) -> Sample {
+        let t = self.time();
+        Sample {
+            t,
+            x: self.plate_x,
+            v: self.plate_v,
+            friction: self.friction(t),
+            bond_force: self.bond_force_now(),
+            attached: self.attached,
+            n: self.q.len() as u64,
+        }
+    }
+
+    fn counters(&self) -> Counters {
+        Counters {
+            ruptures: self.ruptures,
+            formations: self.formations,
+            steps: Some(self.steps),
+            ..Counters::default()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::fixed::LinearFlip;
+    use crate::observe::Recorder;
+    use crate::physics::{Linear, Strong};
+    use crate::rng::ParkMiller;
+    use crate::testkit;
+
+    #[test]
+    fn masks_select_bit_exactly() {
+        assert_eq!((mask(1), mask(0)), (!0, 0));
+        assert_eq!(select(mask(1), -0.0, 1.0).to_bits(), (-0.0f64).to_bits());
+        assert_eq!(select(mask(0), f64::NAN, 2.5), 2.5);
+        assert!(select(mask(1), f64::NAN, 2.5).is_nan());
+    }
+
+    #[test]
+    fn pending_update_is_applied_on_every_read() {
+        let s = testkit::fig1_with(&[
+            "run.engine=fixed",
+            "junctions.force_law=linear",
+            "fixed.dt=0.5",
+        ]);
+        let (law, bond) = (Linear::from_scene(&s), Strong::from_scene(&s));
+        let mut e = FixedEngine::new(&s, law, bond, ParkMiller::new(4).unwrap(), LinearFlip);
+        e.advance(10.0, &mut crate::observe::Nothing).unwrap();
+        let read = |e: &FixedEngine<_, _, _, _>| -> Vec<(bool, f64)> {
+            (0..e.len())
+                .map(|i| (e.is_attached(i), e.extension(i)))
+                .collect()
+        };
+        let before = read(&e);
+        let x_before = e.sample().x;
+        let sum: f64 = before.iter().filter(|j| j.0).fold(0.0, |a, j| a + j.1);
+        assert_eq!(e.sample().bond_force, law.force_x(sum));
+        let mut rec = Recorder::default();
+        e.advance(10.5, &mut rec).unwrap();
+        let dx = e.sample().x - x_before;
+        let relax = 1.0 - s.junctions.lambda * s.fixed.dt;
+        let flipped: Vec<u32> = rec.events.iter().map(|ev| ev.junction).collect();
+        assert!(!flipped.is_empty());
+        for (i, (now, old)) in read(&e).iter().zip(&before).enumerate() {
+            if flipped.contains(&(i as u32)) {
+                assert_ne!(now.0, old.0);
+            } else {
+                assert_eq!(now.0, old.0);
+                let want = if old.0 { old.1 + dx } else { old.1 * relax };
+                assert_eq!(now.1, want, "junction {i}");
+            }
+        }
+    }
+}

@@ -1,0 +1,99 @@
+//! Statistics shared by the statistical tests: every tolerance comes from here, derived
+//! from a distribution (KS, chi-square, Student t), never hand-tuned.
+#![allow(dead_code)]
+
+use statrs::distribution::{ChiSquared, ContinuousCDF, StudentsT};
+use stickslip::Scene;
+use stickslip::engine::{Engine, EngineVisitor, with_engine};
+use stickslip::observe::{EventKind, JunctionEvent, Observer};
+use stickslip::runner::{OutputGrid, drive};
+
+/// Significance level of every statistical test in the suite.
+pub const ALPHA: f64 = 1e-3;
+
+/// Kolmogorov–Smirnov statistic `D = sup |F_n - F|` of `samples` against the cdf `f`.
+pub fn ks_statistic(samples: &mut [f64], cdf: impl Fn(f64) -> f64) -> f64 {
+    samples.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    let n = samples.len() as f64;
+    samples.iter().enumerate().fold(0.0f64, |d, (i, &x)| {
+        let f = cdf(x);
+        d.max((i as f64 + 1.0) / n - f).max(f - i as f64 / n)
+    })
+}
+
+/// Asymptotic KS critical value at level `alpha` for `n` samples: `sqrt(ln(2/alpha)/2)/sqrt(n)`.
+pub fn ks_critical(n: usize, alpha: f64) -> f64 {
+    ((2.0 / alpha).ln() / 2.0).sqrt() / (n as f64).sqrt()
+}
+
+/// Upper `1 - alpha` quantile of chi-square with `df` degrees of freedom.
+pub fn chi2_critical(df: usize, alpha: f64) -> f64 {
+    ChiSquared::new(df as f64).unwrap().inverse_cdf(1.0 - alpha)
+}
+
+/// Pearson chi-square of `observed` counts against `expected` counts, merging adjacent bins
+/// from both ends until each expected count is at least 5. Returns (statistic, df).
+pub fn chi_square(observed: &[f64], expected: &[f64]) -> (f64, usize) {
+    let mut bins: Vec<(f64, f64)> = Vec::new();
+    let (mut o, mut e) = (0.0, 0.0);
+    for (&oi, &ei) in observed.iter().zip(expected) {
+        o += oi;
+        e += ei;
+        if e >= 5.0 {
+            bins.push((o, e));
+            o = 0.0;
+            e = 0.0;
+        }
+    }
+    if let Some(last) = bins.last_mut() {
+        last.0 += o;
+        last.1 += e;
+    }
+    let stat = bins.iter().map(|(o, e)| (o - e) * (o - e) / e).sum();
+    (stat, bins.len() - 1)
+}
+
+/// Mean of `x` and the half-width of its two-sided `1 - alpha` Student-t confidence interval.
+pub fn mean_ci(x: &[f64], alpha: f64) -> (f64, f64) {
+    let n = x.len() as f64;
+    let m = x.iter().sum::<f64>() / n;
+    let var = x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / (n - 1.0);
+    let t = StudentsT::new(0.0, 1.0, n - 1.0).unwrap().inverse_cdf(1.0 - alpha / 2.0);
+    (m, t * (var / n).sqrt())
+}
+
+/// Records junction events.
+#[derive(Default)]
+pub struct Events(pub Vec<JunctionEvent>);
+impl Observer for Events {
+    const EVENTS: bool = true;
+    fn event(&mut self, e: &JunctionEvent) {
+        self.0.push(*e);
+    }
+}
+
+/// Runs `scene` (its own engine) to `t_end` and returns its events.
+pub fn events_of(scene: &Scene) -> Vec<JunctionEvent> {
+    struct V<'a>(&'a Scene);
+    impl EngineVisitor for V<'_> {
+        type Output = Vec<JunctionEvent>;
+        fn visit<E: Engine>(self, mut e: E) -> Vec<JunctionEvent> {
+            let mut obs = Events::default();
+            let grid = OutputGrid { sample_dt: self.0.run.t_end, t_warmup: 0.0, t_end: self.0.run.t_end };
+            drive(&mut e, &grid, &mut obs).expect("run");
+            obs.0
+        }
+    }
+    with_engine(scene, V(scene)).expect("engine")
+}
+
+/// The time of the first rupture, if any.
+pub fn first_rupture(events: &[JunctionEvent]) -> Option<f64> {
+    events.iter().find(|e| e.kind == EventKind::Rupture).map(|e| e.t)
+}
+
+/// A scene from TOML text with overrides.
+pub fn scene(text: &str, overrides: &[&str]) -> Scene {
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    Scene::from_toml_str(text, "test", "test", &o).unwrap_or_else(|e| panic!("{e}"))
+}
