@@ -176,3 +176,19 @@ fn serde_json_text_roundtrip_is_close() {
     let mut b: Dop853 = serde_json::from_str(&json).unwrap();
     run_pair(&mut a, &mut b, t, y, false);
 }
+
+/// A corrupt checkpoint is a deserialisation error, not a panic later.
+#[test]
+fn corrupt_checkpoint_is_rejected() {
+    let (a, _, _) = midway();
+    let mut v = serde_json::to_value(&a).unwrap();
+    v["cont"].as_array_mut().unwrap().pop();
+    let e = serde_json::from_value::<Dop853>(v).unwrap_err().to_string();
+    assert!(e.contains("vector lengths"), "{e}");
+    let mut v = serde_json::to_value(&a).unwrap();
+    v["h_prop"] = serde_json::json!(-1.0);
+    assert!(serde_json::from_value::<Dop853>(v).is_err());
+    let mut v = serde_json::to_value(&a).unwrap();
+    v["cfg"]["atol"] = serde_json::json!(0.0);
+    assert!(serde_json::from_value::<Dop853>(v).is_err());
+}
