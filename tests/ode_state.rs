@@ -192,3 +192,24 @@ fn corrupt_checkpoint_is_rejected() {
     v["cfg"]["atol"] = serde_json::json!(0.0);
     assert!(serde_json::from_value::<Dop853>(v).is_err());
 }
+
+/// `h_max` bounds every step, whatever the proposal (initial, set by hand, or grown).
+#[test]
+fn h_max_bounds_every_step() {
+    let cfg = stickslip::ode::Dop853Config {
+        h_max: Some(0.05),
+        h_init: Some(1.0),
+        ..Default::default()
+    };
+    let mut ode = Dop853::with_config(3, cfg).unwrap();
+    let sys = Driven::PLATE;
+    let (mut t, mut y) = (0.0, sys.y0());
+    for k in 0..200 {
+        if k == 100 {
+            ode.set_h_proposal(10.0);
+        }
+        ode.step(&mut sys.clone(), &mut t, &mut y, 1e3).unwrap();
+        let (a, b) = ode.last_step().unwrap();
+        assert!(b - a <= 0.05 * (1.0 + 1e-12), "step {k}: {}", b - a);
+    }
+}

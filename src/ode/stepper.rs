@@ -625,6 +625,9 @@ impl Dop853 {
             None => self.initial_step(sys, t0, y, remaining),
         };
         let cfg = self.cfg.clone();
+        if let Some(h_max) = cfg.h_max {
+            h_prop = h_prop.min(h_max);
+        }
         let expo1 = 1.0 / 8.0 - cfg.beta * 0.2;
         let h_min = 10.0 * f64::EPSILON * t0.abs();
         let mut rejections = 0u32;
