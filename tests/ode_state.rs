@@ -176,3 +176,40 @@ fn serde_json_text_roundtrip_is_close() {
     let mut b: Dop853 = serde_json::from_str(&json).unwrap();
     run_pair(&mut a, &mut b, t, y, false);
 }
+
+/// A corrupt checkpoint is a deserialisation error, not a panic later.
+#[test]
+fn corrupt_checkpoint_is_rejected() {
+    let (a, _, _) = midway();
+    let mut v = serde_json::to_value(&a).unwrap();
+    v["cont"].as_array_mut().unwrap().pop();
+    let e = serde_json::from_value::<Dop853>(v).unwrap_err().to_string();
+    assert!(e.contains("vector lengths"), "{e}");
+    let mut v = serde_json::to_value(&a).unwrap();
+    v["h_prop"] = serde_json::json!(-1.0);
+    assert!(serde_json::from_value::<Dop853>(v).is_err());
+    let mut v = serde_json::to_value(&a).unwrap();
+    v["cfg"]["atol"] = serde_json::json!(0.0);
+    assert!(serde_json::from_value::<Dop853>(v).is_err());
+}
+
+/// `h_max` bounds every step, whatever the proposal (initial, set by hand, or grown).
+#[test]
+fn h_max_bounds_every_step() {
+    let cfg = stickslip::ode::Dop853Config {
+        h_max: Some(0.05),
+        h_init: Some(1.0),
+        ..Default::default()
+    };
+    let mut ode = Dop853::with_config(3, cfg).unwrap();
+    let sys = Driven::PLATE;
+    let (mut t, mut y) = (0.0, sys.y0());
+    for k in 0..200 {
+        if k == 100 {
+            ode.set_h_proposal(10.0);
+        }
+        ode.step(&mut sys.clone(), &mut t, &mut y, 1e3).unwrap();
+        let (a, b) = ode.last_step().unwrap();
+        assert!(b - a <= 0.05 * (1.0 + 1e-12), "step {k}: {}", b - a);
+    }
+}

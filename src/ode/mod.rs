@@ -116,6 +116,9 @@ pub enum OdeError {
     /// Dense output was asked for outside the last accepted step.
     #[error("dense output asked at t = {t}, outside the last step [{t_old}, {t_new}]")]
     OutsideDenseInterval { t: f64, t_old: f64, t_new: f64 },
+    /// A deserialised integrator state is inconsistent (corrupt checkpoint).
+    #[error("invalid ODE integrator state: {what}")]
+    InvalidState { what: &'static str },
     /// An event function returned NaN or an infinity.
     #[error("non-finite event function value {value} at t = {t}")]
     NonFiniteEvent { t: f64, value: f64 },

@@ -137,6 +137,7 @@ enum Trial {
 /// output) is `Serialize + Deserialize` for checkpoints; scratch buffers are not (they are
 /// re-allocated on first use). No allocation happens per step.
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(try_from = "Dop853Data")]
 pub struct Dop853 {
     dim: usize,
     cfg: Dop853Config,
@@ -162,6 +163,87 @@ pub struct Dop853 {
     pub(super) y_end: Vec<f64>,
     #[serde(skip)]
     pub(super) work: Work,
+}
+
+/// The serialised form of [`Dop853`], checked by `TryFrom` on deserialisation so that a
+/// corrupt checkpoint is an error rather than a panic (wrong lengths) or a NaN later.
+#[derive(Deserialize)]
+struct Dop853Data {
+    dim: usize,
+    cfg: Dop853Config,
+    stats: OdeStats,
+    h_prop: Option<f64>,
+    facold: f64,
+    f0_valid: bool,
+    t_cur: f64,
+    y_cur: Vec<f64>,
+    f0: Vec<f64>,
+    dense_valid: bool,
+    t_old: f64,
+    t_new: f64,
+    h_step: f64,
+    cont: Vec<f64>,
+    y_end: Vec<f64>,
+}
+
+impl TryFrom<Dop853Data> for Dop853 {
+    type Error = OdeError;
+
+    fn try_from(d: Dop853Data) -> Result<Self, OdeError> {
+        d.cfg.validate()?;
+        let n = d.dim;
+        let bad = |what: &'static str| Err(OdeError::InvalidState { what });
+        if n == 0
+            || d.y_cur.len() != n
+            || d.f0.len() != n
+            || d.y_end.len() != n
+            || d.cont.len() != 8 * n
+        {
+            return bad("vector lengths do not match the dimension");
+        }
+        if let Some(h) = d.h_prop {
+            if !(h > 0.0 && h.is_finite()) {
+                return bad("step-size proposal");
+            }
+        }
+        if !(d.facold > 0.0 && d.facold.is_finite()) {
+            return bad("facold");
+        }
+        if d.f0_valid && !(d.t_cur.is_finite() && all_finite(&d.y_cur) && all_finite(&d.f0)) {
+            return bad("non-finite current point");
+        }
+        if d.dense_valid
+            && !(d.t_old.is_finite()
+                && d.t_new.is_finite()
+                && d.t_old < d.t_new
+                && d.h_step > 0.0
+                && d.h_step.is_finite()
+                && all_finite(&d.cont)
+                && all_finite(&d.y_end))
+        {
+            return bad("invalid last step");
+        }
+        let mut s = Self {
+            dim: n,
+            cfg: d.cfg,
+            stats: d.stats,
+            h_prop: d.h_prop,
+            facold: d.facold,
+            f0_valid: d.f0_valid,
+            t_cur: d.t_cur,
+            y_cur: d.y_cur,
+            f0: d.f0,
+            dense_valid: d.dense_valid,
+            t_old: d.t_old,
+            t_new: d.t_new,
+            h_step: d.h_step,
+            cont: d.cont,
+            y_end: d.y_end,
+            work: Work::default(),
+        };
+        s.ensure_work();
+        Ok(s)
+    }
 }
 
 #[inline]
@@ -543,6 +625,9 @@ impl Dop853 {
             None => self.initial_step(sys, t0, y, remaining),
         };
         let cfg = self.cfg.clone();
+        if let Some(h_max) = cfg.h_max {
+            h_prop = h_prop.min(h_max);
+        }
         let expo1 = 1.0 / 8.0 - cfg.beta * 0.2;
         let h_min = 10.0 * f64::EPSILON * t0.abs();
         let mut rejections = 0u32;
