@@ -37,6 +37,15 @@ fn step(c: &mut Criterion) {
             });
         }
         let tau = 0.05 / rho;
+        c.bench_function(&format!("new/{name}"), |bn| {
+            bn.iter(|| LinearPlate::new(black_box(m), black_box(eta), black_box(k)))
+        });
+        for (label, tau) in [("short", 0.05 / rho), ("long", 5.0 / rho)] {
+            c.bench_function(&format!("at/{name}/{label}"), |bn| {
+                let t = LinearPlate::new(m, eta, k).trajectory(0.1, 0.3, 2.0, 0.5);
+                bn.iter(|| t.at(black_box(tau)))
+            });
+        }
         c.bench_function(&format!("integrals/{name}/short"), |bn| {
             let t = LinearPlate::new(m, eta, k).trajectory(0.1, 0.3, 2.0, 0.5);
             bn.iter(|| t.integrals(black_box(tau), black_box(0.2)))
