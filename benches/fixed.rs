@@ -34,12 +34,7 @@ impl EngineVisitor for Bench<'_, '_> {
 }
 
 fn junction_steps(c: &mut Criterion) {
-    for (law, bond) in [
-        ("linear", "strong"),
-        ("tilted", "strong"),
-        ("linear", "weak"),
-        ("tilted", "weak"),
-    ] {
+    for (law, bond) in [("linear", "strong"), ("tilted", "strong"), ("linear", "weak"), ("tilted", "weak")] {
         let mut group = c.benchmark_group(format!("fixed/{law}/{bond}"));
         group.sample_size(10);
         for n in [1_000usize, 100_000, 1_000_000] {

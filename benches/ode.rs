@@ -47,15 +47,7 @@ impl Junctions {
                 -2.0 + 4.0 * (s >> 11) as f64 / (1u64 << 53) as f64
             })
             .collect();
-        Self {
-            c,
-            kappa: 0.1,
-            l0: 1.0,
-            m: 75.0,
-            eta: 75.0,
-            k: 150.0,
-            v: 0.5,
-        }
+        Self { c, kappa: 0.1, l0: 1.0, m: 75.0, eta: 75.0, k: 150.0, v: 0.5 }
     }
 }
 
@@ -138,10 +130,7 @@ fn bench_junctions(c: &mut Criterion) {
 }
 
 fn config() -> Criterion {
-    Criterion::default()
-        .sample_size(50)
-        .warm_up_time(Duration::from_secs(1))
-        .measurement_time(Duration::from_secs(3))
+    Criterion::default().sample_size(50).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(3))
 }
 
 criterion_group! { name = benches; config = config(); targets = bench_osc, bench_junctions }

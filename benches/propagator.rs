@@ -24,12 +24,7 @@ fn step(c: &mut Criterion) {
                 let mut y0 = 0.1;
                 bn.iter(|| {
                     let p = LinearPlate::new(black_box(m), black_box(eta), black_box(k));
-                    let t = p.trajectory(
-                        black_box(y0),
-                        black_box(0.3),
-                        black_box(2.0),
-                        black_box(0.5),
-                    );
+                    let t = p.trajectory(black_box(y0), black_box(0.3), black_box(2.0), black_box(0.5));
                     let (y, v) = t.at(black_box(tau));
                     y0 = 0.1 + 1e-3 * (y - y0);
                     v

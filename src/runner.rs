@@ -197,7 +197,9 @@ impl EngineVisitor for RunVisitor<'_> {
     fn visit<E: Engine>(self, engine: E) -> Self::Output {
         let (scene, out) = (self.scene, self.out);
         let events = match out {
-            Some(dir) if scene.output.events => Some(EventWriter::create(dir).map_err(output_error(dir, "events.csv"))?),
+            Some(dir) if scene.output.events => {
+                Some(EventWriter::create(dir).map_err(output_error(dir, "events.csv"))?)
+            }
             _ => None,
         };
         let weak = scene.junctions.bond == BondKind::Weak;
@@ -253,7 +255,12 @@ impl Extra for (EventWriter, RuptureForces) {
     }
 }
 
-fn run_with<E: Engine, X: Extra>(mut engine: E, scene: &Scene, out: Option<&Path>, extra: X) -> Result<(Summary, X), RunError> {
+fn run_with<E: Engine, X: Extra>(
+    mut engine: E,
+    scene: &Scene,
+    out: Option<&Path>,
+    extra: X,
+) -> Result<(Summary, X), RunError> {
     let started = Instant::now();
     let trace = match out {
         Some(dir) if scene.output.trace => Some(TraceWriter::create(dir).map_err(output_error(dir, "trace.csv"))?),

@@ -48,47 +48,21 @@ fn tree(root: &Path) -> Vec<PathBuf> {
 /// Runs the binary in `dir` and checks the bad-input contract; returns the stderr line.
 fn expect_bad_input_in(dir: &Path, args: &[&str], mentions: &[&str]) -> String {
     let before = tree(dir);
-    let out: Output = Command::new(BIN)
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the binary runs");
+    let out: Output = Command::new(BIN).args(args).current_dir(dir).output().expect("the binary runs");
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
-    assert_eq!(
-        out.status.code(),
-        Some(2),
-        "{args:?}: exit status {:?}, stderr {stderr:?}",
-        out.status
-    );
+    assert_eq!(out.status.code(), Some(2), "{args:?}: exit status {:?}, stderr {stderr:?}", out.status);
     let lines: Vec<&str> = stderr.lines().collect();
-    assert_eq!(
-        lines.len(),
-        1,
-        "{args:?}: stderr must be exactly one line, got {stderr:?}"
-    );
-    assert!(
-        stderr.ends_with('\n'),
-        "{args:?}: stderr line is not terminated: {stderr:?}"
-    );
+    assert_eq!(lines.len(), 1, "{args:?}: stderr must be exactly one line, got {stderr:?}");
+    assert!(stderr.ends_with('\n'), "{args:?}: stderr line is not terminated: {stderr:?}");
     let line = lines[0];
     assert!(line.starts_with("error: "), "{args:?}: {line:?}");
     for m in mentions {
-        assert!(
-            line.contains(m),
-            "{args:?}: the message {line:?} does not mention {m:?}"
-        );
+        assert!(line.contains(m), "{args:?}: the message {line:?} does not mention {m:?}");
     }
-    assert!(
-        stdout.is_empty(),
-        "{args:?}: nothing may be printed on stdout, got {stdout:?}"
-    );
-    assert_eq!(
-        tree(dir),
-        before,
-        "{args:?}: files or directories were created or removed"
-    );
+    assert!(stdout.is_empty(), "{args:?}: nothing may be printed on stdout, got {stdout:?}");
+    assert_eq!(tree(dir), before, "{args:?}: files or directories were created or removed");
     line.to_string()
 }
 
@@ -102,11 +76,7 @@ fn expect_bad_scene(text: &str, mentions: &[&str]) -> String {
     assert_eq!(line, line2, "run and validate report the same error");
     // With an explicit output directory too.
     let out = dir.path().join("results");
-    expect_bad_input_in(
-        dir.path(),
-        &["run", "scene.toml", "--out", out.to_str().unwrap()],
-        mentions,
-    );
+    expect_bad_input_in(dir.path(), &["run", "scene.toml", "--out", out.to_str().unwrap()], mentions);
     assert!(!out.exists());
     line
 }
@@ -135,16 +105,8 @@ fn expect_bad_args(extra: &[&str], mentions: &[&str]) -> String {
 fn the_good_scene_is_valid() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("scene.toml"), GOOD).unwrap();
-    let out = Command::new(BIN)
-        .args(["validate", "scene.toml"])
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = Command::new(BIN).args(["validate", "scene.toml"]).current_dir(dir.path()).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(out.stderr.is_empty());
 }
 
@@ -152,40 +114,22 @@ fn the_good_scene_is_valid() {
 
 #[test]
 fn toml_syntax_error_names_the_file_position() {
-    let line = expect_bad_scene(
-        "[junctions]\nn = [\n",
-        &["scene.toml:2:", "TOML syntax error"],
-    );
+    let line = expect_bad_scene("[junctions]\nn = [\n", &["scene.toml:2:", "TOML syntax error"]);
     assert!(line.contains("scene.toml:2:"), "{line}");
     expect_bad_scene("[plate\nk = 1\n", &["scene.toml:1:", "TOML syntax error"]);
-    expect_bad_scene(
-        "[plate]\nk = 1\nk = 2\n",
-        &["scene.toml:3:", "TOML syntax error"],
-    );
-    expect_bad_scene(
-        "[junctions]\nbond = strong\n",
-        &["scene.toml:2:", "TOML syntax error"],
-    );
+    expect_bad_scene("[plate]\nk = 1\nk = 2\n", &["scene.toml:3:", "TOML syntax error"]);
+    expect_bad_scene("[junctions]\nbond = strong\n", &["scene.toml:2:", "TOML syntax error"]);
 }
 
 #[test]
 fn unknown_key() {
-    expect_bad_scene(
-        &good_with("junctions", "kapa = 0.1"),
-        &["junctions.kapa", "unknown field"],
-    );
-    expect_bad_scene(
-        &good_with("output", "svg = true"),
-        &["output.svg", "unknown field"],
-    );
+    expect_bad_scene(&good_with("junctions", "kapa = 0.1"), &["junctions.kapa", "unknown field"]);
+    expect_bad_scene(&good_with("output", "svg = true"), &["output.svg", "unknown field"]);
 }
 
 #[test]
 fn unknown_section() {
-    expect_bad_scene(
-        &format!("{GOOD}\n[junction]\nn = 3\n"),
-        &["junction", "unknown field"],
-    );
+    expect_bad_scene(&format!("{GOOD}\n[junction]\nn = 3\n"), &["junction", "unknown field"]);
     expect_bad_scene("[plate.extra]\nk = 1\n", &["plate.extra", "unknown field"]);
 }
 
@@ -217,68 +161,39 @@ fn nan_and_infinity() {
 
 #[test]
 fn zero_junctions() {
-    expect_bad_scene(
-        &good_with("junctions", "").replace("n = 30", "n = 0"),
-        &["junctions.n", "0"],
-    );
+    expect_bad_scene(&good_with("junctions", "").replace("n = 30", "n = 0"), &["junctions.n", "0"]);
 }
 
 #[test]
 fn park_miller_seed_out_of_range_with_the_fixed_engine() {
-    expect_bad_scene(
-        &GOOD.replace("seed = 1", "seed = 0"),
-        &["run.seed = 0", "Park-Miller"],
-    );
-    expect_bad_scene(
-        &GOOD.replace("seed = 1", "seed = 2147483647"),
-        &["run.seed = 2147483647", "Park-Miller"],
-    );
+    expect_bad_scene(&GOOD.replace("seed = 1", "seed = 0"), &["run.seed = 0", "Park-Miller"]);
+    expect_bad_scene(&GOOD.replace("seed = 1", "seed = 2147483647"), &["run.seed = 2147483647", "Park-Miller"]);
 }
 
 #[test]
 fn warmup_not_before_the_end() {
-    expect_bad_scene(
-        &good_with("run", "t_warmup = 10.0"),
-        &["run.t_warmup", "10", "run.t_end"],
-    );
-    expect_bad_scene(
-        &good_with("run", "t_warmup = 50.0"),
-        &["run.t_warmup", "50"],
-    );
+    expect_bad_scene(&good_with("run", "t_warmup = 10.0"), &["run.t_warmup", "10", "run.t_end"]);
+    expect_bad_scene(&good_with("run", "t_warmup = 50.0"), &["run.t_warmup", "50"]);
 }
 
 #[test]
 fn massless_plate_without_damping() {
-    let text = GOOD
-        .replace("mass = 75.0", "mass = 0.0")
-        .replace("eta = 75.0", "eta = 0.0");
+    let text = GOOD.replace("mass = 75.0", "mass = 0.0").replace("eta = 75.0", "eta = 0.0");
     expect_bad_scene(&text, &["plate.eta", "0", "plate.mass"]);
 }
 
 #[test]
 fn unknown_enum_words() {
-    expect_bad_scene(
-        &GOOD.replace("bond = \"strong\"", "bond = \"medium\""),
-        &["junctions.bond", "medium"],
-    );
-    expect_bad_scene(
-        &good_with("fixed", "flip = \"sometimes\""),
-        &["fixed.flip", "sometimes"],
-    );
-    expect_bad_scene(
-        &GOOD.replace("engine = \"fixed\"", "engine = \"turbo\""),
-        &["run.engine", "turbo"],
-    );
+    expect_bad_scene(&GOOD.replace("bond = \"strong\"", "bond = \"medium\""), &["junctions.bond", "medium"]);
+    expect_bad_scene(&good_with("fixed", "flip = \"sometimes\""), &["fixed.flip", "sometimes"]);
+    expect_bad_scene(&GOOD.replace("engine = \"fixed\"", "engine = \"turbo\""), &["run.engine", "turbo"]);
 }
 
 #[test]
 fn other_ranges() {
     expect_bad_scene("[fixed]\ndt = 0.0\n", &["fixed.dt", "0"]);
     expect_bad_scene("[output]\nsample_dt = 0.0\n", &["output.sample_dt", "0"]);
-    expect_bad_scene(
-        "[junctions]\ntemperature = 0.0\n",
-        &["junctions.temperature", "0"],
-    );
+    expect_bad_scene("[junctions]\ntemperature = 0.0\n", &["junctions.temperature", "0"]);
     expect_bad_scene("[junctions]\nl0 = 0.0\n", &["junctions.l0", "0"]);
     expect_bad_scene("[junctions]\ntau0 = 0.0\n", &["junctions.tau0", "0"]);
     expect_bad_scene("[exact]\nrtol = 0.5\n", &["exact.rtol", "0.5"]);
@@ -287,22 +202,13 @@ fn other_ranges() {
         "[junctions]\ninitial = \"stationary\"\nk0 = 0.0\nkon0 = 0.0\n",
         &["junctions.initial", "stationary"],
     );
-    expect_bad_scene(
-        "[run]\nengine = \"fixed\"\nt_end = 1e16\n[fixed]\ndt = 1.0\n",
-        &["fixed.dt", "steps"],
-    );
-    expect_bad_scene(
-        "[run]\nt_end = 1e12\n[output]\nsample_dt = 1.0\n",
-        &["output.sample_dt", "samples"],
-    );
+    expect_bad_scene("[run]\nengine = \"fixed\"\nt_end = 1e16\n[fixed]\ndt = 1.0\n", &["fixed.dt", "steps"]);
+    expect_bad_scene("[run]\nt_end = 1e12\n[output]\nsample_dt = 1.0\n", &["output.sample_dt", "samples"]);
 }
 
 #[test]
 fn a_key_with_a_line_break_still_gives_one_line() {
-    expect_bad_scene(
-        "[junctions]\n\"ka\\nppa\" = 1.0\n",
-        &["junctions.ka\\nppa", "unknown field"],
-    );
+    expect_bad_scene("[junctions]\n\"ka\\nppa\" = 1.0\n", &["junctions.ka\\nppa", "unknown field"]);
 }
 
 // ---- files and directories ---------------------------------------------------------------
@@ -310,16 +216,8 @@ fn a_key_with_a_line_break_still_gives_one_line() {
 #[test]
 fn missing_scene_file() {
     let dir = tempfile::tempdir().unwrap();
-    expect_bad_input_in(
-        dir.path(),
-        &["run", "nope.toml"],
-        &["nope.toml", "cannot read"],
-    );
-    expect_bad_input_in(
-        dir.path(),
-        &["validate", "nope.toml"],
-        &["nope.toml", "cannot read"],
-    );
+    expect_bad_input_in(dir.path(), &["run", "nope.toml"], &["nope.toml", "cannot read"]);
+    expect_bad_input_in(dir.path(), &["validate", "nope.toml"], &["nope.toml", "cannot read"]);
 }
 
 #[test]
@@ -334,30 +232,16 @@ fn output_directory_under_a_regular_file() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("scene.toml"), GOOD).unwrap();
     std::fs::write(dir.path().join("plain-file"), b"keep me").unwrap();
-    expect_bad_input_in(
-        dir.path(),
-        &["run", "scene.toml", "--out", "plain-file/results"],
-        &["plain-file/results"],
-    );
-    expect_bad_input_in(
-        dir.path(),
-        &["run", "scene.toml", "--out", "plain-file"],
-        &["plain-file"],
-    );
-    assert_eq!(
-        std::fs::read(dir.path().join("plain-file")).unwrap(),
-        b"keep me"
-    );
+    expect_bad_input_in(dir.path(), &["run", "scene.toml", "--out", "plain-file/results"], &["plain-file/results"]);
+    expect_bad_input_in(dir.path(), &["run", "scene.toml", "--out", "plain-file"], &["plain-file"]);
+    assert_eq!(std::fs::read(dir.path().join("plain-file")).unwrap(), b"keep me");
 }
 
 // ---- overrides and arguments -------------------------------------------------------------
 
 #[test]
 fn malformed_set() {
-    expect_bad_args(
-        &["--set", "plate.v"],
-        &["--set plate.v", "section.key=value"],
-    );
+    expect_bad_args(&["--set", "plate.v"], &["--set plate.v", "section.key=value"]);
     expect_bad_args(&["--set", "v=0.1"], &["--set v=0.1", "section.key=value"]);
     expect_bad_args(&["--set", "plate.v="], &["--set plate.v=", "empty"]);
     expect_bad_args(&["--set", "junctions=5"], &["--set junctions=5"]);
@@ -366,10 +250,7 @@ fn malformed_set() {
 
 #[test]
 fn set_with_unknown_key_or_section() {
-    expect_bad_args(
-        &["--set", "plate.speed=0.1"],
-        &["plate.speed", "unknown field"],
-    );
+    expect_bad_args(&["--set", "plate.speed=0.1"], &["plate.speed", "unknown field"]);
     expect_bad_args(&["--set", "platter.v=0.1"], &["platter", "unknown field"]);
 }
 
@@ -379,26 +260,17 @@ fn set_with_bad_value() {
     expect_bad_args(&["--set", "plate.v=-0.5"], &["plate.v", "-0.5"]);
     expect_bad_args(&["--set", "plate.v=nan"], &["plate.v", "NaN"]);
     expect_bad_args(&["--set", "junctions.n=0"], &["junctions.n", "0"]);
-    expect_bad_args(
-        &["--set", "junctions.bond=medium"],
-        &["junctions.bond", "medium"],
-    );
+    expect_bad_args(&["--set", "junctions.bond=medium"], &["junctions.bond", "medium"]);
     expect_bad_args(&["--set", "run.seed=0"], &["run.seed", "0"]);
     // A later override is checked too, and the first bad one is reported.
-    expect_bad_args(
-        &["--set", "plate.v=0.1", "--set", "plate.k=-1"],
-        &["plate.k", "-1"],
-    );
+    expect_bad_args(&["--set", "plate.v=0.1", "--set", "plate.k=-1"], &["plate.k", "-1"]);
 }
 
 #[test]
 fn seed_flag() {
     expect_bad_args(&["--seed", "abc"], &["--seed", "abc"]);
     expect_bad_args(&["--seed", "-1"], &["-1"]);
-    expect_bad_args(
-        &["--seed", "99999999999999999999"],
-        &["--seed", "99999999999999999999"],
-    );
+    expect_bad_args(&["--seed", "99999999999999999999"], &["--seed", "99999999999999999999"]);
     // A number, but not a Park-Miller seed: checked like the scene field it overrides.
     expect_bad_args(&["--seed", "0"], &["run.seed", "0"]);
     expect_bad_args(&["--seed", "2147483647"], &["run.seed", "2147483647"]);
@@ -406,10 +278,7 @@ fn seed_flag() {
 
 #[test]
 fn engine_flag() {
-    expect_bad_args(
-        &["--engine", "turbo"],
-        &["--engine", "turbo", "exact", "fixed"],
-    );
+    expect_bad_args(&["--engine", "turbo"], &["--engine", "turbo", "exact", "fixed"]);
 }
 
 #[test]

@@ -50,14 +50,17 @@ fn fixed_step_bias_shrinks_in_proportion_to_dt() {
     let inv = invert(&cov);
     let x: Vec<f64> = bias.iter().map(|b| b.0).collect();
     let y: Vec<f64> = bias.iter().map(|b| b.1).collect();
-    let quad = |a: &[f64], b: &[f64]| -> f64 { (0..k).map(|i| (0..k).map(|j| a[i] * inv[i][j] * b[j]).sum::<f64>()).sum() };
+    let quad =
+        |a: &[f64], b: &[f64]| -> f64 { (0..k).map(|i| (0..k).map(|j| a[i] * inv[i][j] * b[j]).sum::<f64>()).sum() };
     let c = quad(&x, &y) / quad(&x, &x);
     let se_c = (1.0 / quad(&x, &x)).sqrt();
     let r: Vec<f64> = (0..k).map(|i| y[i] - c * x[i]).collect();
     let chi2 = quad(&r, &r);
     let crit = chi2_critical(k - 1, ALPHA);
     let z = Normal::new(0.0, 1.0).unwrap().inverse_cdf(1.0 - ALPHA / 2.0);
-    let report = format!("exact {exact:.3} +- {se_exact:.3}; biases {bias:?}; c = {c:.3} +- {se_c:.3}; chi2 {chi2:.2} (crit {crit:.2})");
+    let report = format!(
+        "exact {exact:.3} +- {se_exact:.3}; biases {bias:?}; c = {c:.3} +- {se_c:.3}; chi2 {chi2:.2} (crit {crit:.2})"
+    );
     assert!(chi2 < crit, "bias not proportional to dt: {report}");
     assert!(c.abs() > z * se_c, "no detectable O(dt) bias at these dt (the test would be vacuous): {report}");
     eprintln!("{report}");
@@ -66,7 +69,7 @@ fn fixed_step_bias_shrinks_in_proportion_to_dt() {
 /// Inverse of a small symmetric positive-definite matrix (Gauss–Jordan).
 fn invert(a: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let n = a.len();
-    let mut m: Vec<Vec<f64>> = a.iter().cloned().collect();
+    let mut m: Vec<Vec<f64>> = a.to_vec();
     let mut inv: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect()).collect();
     for col in 0..n {
         let p = m[col][col];

@@ -3,8 +3,8 @@
 mod common;
 
 use common::*;
-use stickslip::observe::{EventKind, Recorder};
 use stickslip::engine::{Engine, EngineVisitor, with_engine};
+use stickslip::observe::{EventKind, Recorder};
 use stickslip::runner::{OutputGrid, drive};
 
 fn record(scene: &stickslip::Scene) -> Recorder {

@@ -7,8 +7,8 @@ mod common;
 use common::*;
 use stickslip::engine::{Engine, EngineVisitor, with_engine};
 use stickslip::observe::{EventKind, Observer, Sample};
-use stickslip::runner::{OutputGrid, drive};
 use stickslip::run_scene;
+use stickslip::runner::{OutputGrid, drive};
 
 /// One weak linear bond pulled by a plate that follows the driver (M = 0, K/eta = 1e9:
 /// lag behind the driver below 1e-5), no re-formation.
@@ -85,7 +85,13 @@ fn fixed_step_at_the_letters_dt_fails_the_single_bond_test() {
 fn many_weak_bonds_lifetimes_and_waiting_times() {
     let s = scene(
         SINGLE_WEAK_BOND,
-        &["junctions.n=200", "junctions.kon0=0.1", "junctions.reattach=unstretched", "junctions.initial=detached", "run.t_end=2500"],
+        &[
+            "junctions.n=200",
+            "junctions.kon0=0.1",
+            "junctions.reattach=unstretched",
+            "junctions.initial=detached",
+            "run.t_end=2500",
+        ],
     );
     let ev = events_of(&s);
     let t_end = s.run.t_end;

@@ -60,11 +60,8 @@ fn observed_orders(integrator: &str, mass: f64) -> Vec<f64> {
     let errors: Vec<f64> = [0.05, 0.025, 0.0125, 0.00625]
         .iter()
         .map(|dt| {
-            let (i, m, d) = (
-                format!("fixed.integrator={integrator}"),
-                format!("plate.mass={mass}"),
-                format!("fixed.dt={dt}"),
-            );
+            let (i, m, d) =
+                (format!("fixed.integrator={integrator}"), format!("plate.mass={mass}"), format!("fixed.dt={dt}"));
             let s = scene(&[
                 &i,
                 &m,

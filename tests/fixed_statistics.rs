@@ -27,9 +27,7 @@ const ALPHA: f64 = 1e-5;
 
 /// Two-sided normal critical value for `ALPHA` (about 4.42).
 fn z_crit() -> f64 {
-    Normal::new(0.0, 1.0)
-        .unwrap()
-        .inverse_cdf(1.0 - ALPHA / 2.0)
+    Normal::new(0.0, 1.0).unwrap().inverse_cdf(1.0 - ALPHA / 2.0)
 }
 
 /// Variance of the mean of `t` consecutive states of one stationary two-state chain.
@@ -74,11 +72,7 @@ impl EngineVisitor for ChainMean {
     fn visit<E: Engine>(self, mut e: E) -> (f64, f64) {
         let dt = e.time_step().unwrap();
         let n = e.sample().n;
-        let mut acc = Acc {
-            from: self.warmup as f64 * dt - 0.5 * dt,
-            sum: 0,
-            count: 0,
-        };
+        let mut acc = Acc { from: self.warmup as f64 * dt - 0.5 * dt, sum: 0, count: 0 };
         let mut vmax: f64 = 0.0;
         for k in 1..=self.warmup + self.steps {
             e.advance(k as f64 * dt, &mut acc).unwrap();
@@ -102,20 +96,11 @@ struct Case {
 fn run_case(c: &Case) {
     let (n, warmup, steps) = (2000u64, 100u64, 5000u64);
     let nn = format!("junctions.n={n}");
-    let mut o: Vec<&str> = vec![
-        &nn,
-        "junctions.kappa=0",
-        "fixed.dt=1",
-        "junctions.initial=detached",
-    ];
+    let mut o: Vec<&str> = vec![&nn, "junctions.kappa=0", "fixed.dt=1", "junctions.initial=detached"];
     o.extend(c.overrides.iter().map(String::as_str));
     let s: Scene = scene(&o);
     let (mean, vmax) = fixed::dispatch(&s, ChainMean { warmup, steps }).unwrap();
-    assert!(
-        vmax <= s.junctions.v0(),
-        "{}: the plate reached {vmax} > V0, so g < 1",
-        c.name
-    );
+    assert!(vmax <= s.junctions.v0(), "{}: the plate reached {vmax} > V0, so g < 1", c.name);
     let pi = c.a / (c.a + c.b);
     let rho = 1.0 - c.a - c.b;
     // The chain started detached: after `warmup` steps the bias is pi |rho|^warmup.
@@ -127,17 +112,8 @@ fn run_case(c: &Case) {
         "{}: mean {mean:.6}, pi {pi:.6}, sd {sd:.2e}, z {z:.2}, z against {:.4}: {z_wrong:.1}",
         c.name, c.pi_wrong
     );
-    assert!(
-        z.abs() < z_crit(),
-        "{}: mean {mean} vs pi {pi}: z = {z}",
-        c.name
-    );
-    assert!(
-        z_wrong.abs() > z_crit(),
-        "{}: no power against pi = {}: z = {z_wrong}",
-        c.name,
-        c.pi_wrong
-    );
+    assert!(z.abs() < z_crit(), "{}: mean {mean} vs pi {pi}: z = {z}", c.name);
+    assert!(z_wrong.abs() > z_crit(), "{}: no power against pi = {}: z = {z_wrong}", c.name, c.pi_wrong);
 }
 
 fn overrides(v: &[&str]) -> Vec<String> {
@@ -152,12 +128,7 @@ fn linear_rule_stationary_fraction() {
     let (ae, be) = (-(-a).exp_m1(), -(-b).exp_m1());
     run_case(&Case {
         name: "linear",
-        overrides: overrides(&[
-            "junctions.kon0=0.3",
-            "junctions.k0=0.2",
-            "plate.v=0.05",
-            "run.seed=11",
-        ]),
+        overrides: overrides(&["junctions.kon0=0.3", "junctions.k0=0.2", "plate.v=0.05", "run.seed=11"]),
         a,
         b,
         pi_wrong: ae / (ae + be),
@@ -216,8 +187,7 @@ impl EngineVisitor for Counts {
         let dt = e.time_step().unwrap();
         (1..=self.samples as u64)
             .map(|k| {
-                e.advance((k * self.spacing) as f64 * dt, &mut Nothing)
-                    .unwrap();
+                e.advance((k * self.spacing) as f64 * dt, &mut Nothing).unwrap();
                 e.sample().attached
             })
             .collect()
@@ -270,14 +240,7 @@ fn attached_count_is_binomial_with_the_rules_stationary_fraction() {
         "fixed.flip=exponential",
         "run.seed=2024",
     ]);
-    let counts = fixed::dispatch(
-        &s,
-        Counts {
-            samples: 5000,
-            spacing: 40,
-        },
-    )
-    .unwrap();
+    let counts = fixed::dispatch(&s, Counts { samples: 5000, spacing: 40 }).unwrap();
     let (stat, df) = chi_square(&counts, n, pi);
     let crit = ChiSquared::new(df).unwrap().inverse_cdf(1.0 - ALPHA);
     eprintln!("chi2 = {stat:.1}, df {df}, critical {crit:.1}");

@@ -30,16 +30,7 @@ struct Outcome {
 
 fn run(sys: Driven, rtol: f64, h_max: Option<f64>, mode: Mode) -> Outcome {
     let atol = rtol * 1e-2;
-    let mut ode = Dop853::with_config(
-        3,
-        Dop853Config {
-            rtol,
-            atol,
-            h_max,
-            ..Dop853Config::default()
-        },
-    )
-    .unwrap();
+    let mut ode = Dop853::with_config(3, Dop853Config { rtol, atol, h_max, ..Dop853Config::default() }).unwrap();
     let mut y = sys.y0();
     let mut t = 0.0;
     let mut scale = [0.0f64; 3];
@@ -78,20 +69,9 @@ fn run(sys: Driven, rtol: f64, h_max: Option<f64>, mode: Mode) -> Outcome {
         assert!(guard < 1_000_000);
     }
     assert_eq!(t, T_END);
-    let ratio = |errs: &[f64; 3]| {
-        (0..3)
-            .map(|i| errs[i] / (atol + rtol * scale[i]))
-            .fold(0.0, f64::max)
-    };
-    let rel = (0..3)
-        .map(|i| err_end[i].max(err_dense[i]) / scale[i])
-        .fold(0.0, f64::max);
-    Outcome {
-        end: ratio(&err_end),
-        dense: ratio(&err_dense),
-        rel,
-        stats: ode.stats(),
-    }
+    let ratio = |errs: &[f64; 3]| (0..3).map(|i| errs[i] / (atol + rtol * scale[i])).fold(0.0, f64::max);
+    let rel = (0..3).map(|i| err_end[i].max(err_dense[i]) / scale[i]).fold(0.0, f64::max);
+    Outcome { end: ratio(&err_end), dense: ratio(&err_dense), rel, stats: ode.stats() }
 }
 
 fn check(sys: Driven, name: &str, h_max: Option<f64>) {
@@ -104,11 +84,7 @@ fn check(sys: Driven, name: &str, h_max: Option<f64>) {
                 "{name} {mode:?} rtol {rtol:e}: error/tol at step ends {:.3}, dense {:.3}; relative {:.2e}; accepted {}, rejected {}, rhs {}",
                 o.end, o.dense, o.rel, st.accepted, st.rejected, st.rhs_evals
             );
-            assert!(
-                o.end < 3.0,
-                "{name} {mode:?} rtol {rtol:e}: global error {} x tolerance at step ends",
-                o.end
-            );
+            assert!(o.end < 3.0, "{name} {mode:?} rtol {rtol:e}: global error {} x tolerance at step ends", o.end);
             assert!(
                 o.dense < 5.0,
                 "{name} {mode:?} rtol {rtol:e}: global error {} x tolerance in dense output",
@@ -116,10 +92,7 @@ fn check(sys: Driven, name: &str, h_max: Option<f64>) {
             );
             // Decreases with rtol until round-off (Limited modes: steps of <= 0.03 are exact to
             // round-off at every tolerance).
-            assert!(
-                o.rel <= (0.1 * prev_rel).max(1e-13),
-                "{name} {mode:?}: error does not decrease with rtol"
-            );
+            assert!(o.rel <= (0.1 * prev_rel).max(1e-13), "{name} {mode:?}: error does not decrease with rtol");
             prev_rel = o.rel;
         }
     }
@@ -168,16 +141,10 @@ fn restart_after_discontinuities() {
                     let t_j = f64::from(j) * dt;
                     let t_next = f64::from(j + 1) * dt;
                     // Segment dynamics: forcing a_j + b t = (a_j + b t_j) + b s in local time s.
-                    let seg = Driven {
-                        a: forcing(j) + base.b * t_j,
-                        x0: exact[0],
-                        v0: exact[1],
-                        ..base
-                    };
+                    let seg = Driven { a: forcing(j) + base.b * t_j, x0: exact[0], v0: exact[1], ..base };
                     let mut rhs = |tt: f64, yy: &[f64], d: &mut [f64]| {
                         d[0] = yy[1];
-                        d[1] =
-                            (forcing(j) + base.b * tt - base.eta * yy[1] - base.k * yy[0]) / base.m;
+                        d[1] = (forcing(j) + base.b * tt - base.eta * yy[1] - base.k * yy[0]) / base.m;
                         d[2] = yy[0];
                     };
                     if do_reset {
@@ -189,9 +156,7 @@ fn restart_after_discontinuities() {
                     assert_eq!(t, t_next);
                     let e = seg.exact(t_next - t_j);
                     exact = [e[0], e[1], exact[2] + e[2]];
-                    worst = worst
-                        .max((y[0] - exact[0]).abs())
-                        .max((y[1] - exact[1]).abs());
+                    worst = worst.max((y[0] - exact[0]).abs()).max((y[1] - exact[1]).abs());
                 }
                 let st = ode.stats();
                 eprintln!(
@@ -202,10 +167,7 @@ fn restart_after_discontinuities() {
                     assert!(worst < 3.0 * rtol, "rtol {rtol:e}: {worst:e}");
                     assert_eq!(st.restarts, u64::from(segments));
                 } else {
-                    assert!(
-                        worst > 10.0 * rtol,
-                        "stale derivative went unnoticed: {worst:e}"
-                    );
+                    assert!(worst > 10.0 * rtol, "stale derivative went unnoticed: {worst:e}");
                 }
             }
         }

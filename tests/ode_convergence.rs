@@ -32,14 +32,8 @@ fn global_error_is_order_8() {
         errs.push(max_abs_diff(&y, &Mixed::exact(t_end)));
     }
     let p = slope(&hs, &errs);
-    eprintln!(
-        "global: h = {hs:?}\n        err = {}\n        slope = {p:.3}",
-        sci(&errs)
-    );
-    assert!(
-        errs.iter().all(|&e| e > 1e-14),
-        "errors reached round-off; choose larger h"
-    );
+    eprintln!("global: h = {hs:?}\n        err = {}\n        slope = {p:.3}", sci(&errs));
+    assert!(errs.iter().all(|&e| e > 1e-14), "errors reached round-off; choose larger h");
     assert!((7.6..=8.6).contains(&p), "global order {p}");
 }
 
@@ -56,10 +50,7 @@ fn global_error_is_order_8_for_linear_oscillator() {
         errs.push(max_abs_diff(&y, &sys.exact(t_end)));
     }
     let p = slope(&hs, &errs);
-    eprintln!(
-        "oscillator: h = {hs:?}\n        err = {}\n        slope = {p:.3}",
-        sci(&errs)
-    );
+    eprintln!("oscillator: h = {hs:?}\n        err = {}\n        slope = {p:.3}", sci(&errs));
     assert!(errs.iter().all(|&e| e > 1e-14));
     assert!((7.6..=8.6).contains(&p), "global order {p}");
 }
@@ -90,31 +81,19 @@ fn local_errors_dense_output_and_estimators() {
         for s in [0.17, 0.38, 0.5, 0.71, 0.9] {
             let ts = t0 + s * h;
             ode.dense(ts, &mut out).unwrap();
-            let diff: Vec<f64> = out
-                .iter()
-                .zip(Mixed::exact(ts))
-                .map(|(a, b)| a - b)
-                .collect();
+            let diff: Vec<f64> = out.iter().zip(Mixed::exact(ts)).map(|(a, b)| a - b).collect();
             worst = worst.max(maxc(&diff));
         }
         e_dense.push(worst);
     }
-    let (p_end, p_dense, p5, p3) = (
-        slope(&hs, &e_end),
-        slope(&hs, &e_dense),
-        slope(&hs, &e5s),
-        slope(&hs, &e3s),
-    );
+    let (p_end, p_dense, p5, p3) = (slope(&hs, &e_end), slope(&hs, &e_dense), slope(&hs, &e5s), slope(&hs, &e3s));
     eprintln!("local end: {} slope {p_end:.3}", sci(&e_end));
     eprintln!("dense:     {} slope {p_dense:.3}", sci(&e_dense));
     eprintln!("est5:      {} slope {p5:.3}", sci(&e5s));
     eprintln!("est3:      {} slope {p3:.3}", sci(&e3s));
     assert!(e_end.iter().all(|&e| e > 1e-13), "errors reached round-off");
     assert!((8.6..=9.4).contains(&p_end), "local order {p_end}");
-    assert!(
-        (7.6..=8.4).contains(&p_dense),
-        "dense local order {p_dense} (order 7 means h^8)"
-    );
+    assert!((7.6..=8.4).contains(&p_dense), "dense local order {p_dense} (order 7 means h^8)");
     assert!((5.6..=6.4).contains(&p5), "5th-order estimator slope {p5}");
     assert!((3.6..=4.4).contains(&p3), "3rd-order estimator slope {p3}");
 }
@@ -170,10 +149,7 @@ fn dense_output_exact_for_polynomials_up_to_degree_7() {
                 assert!(err < 1e-14, "q = {q}, s = {s}: {err:e}");
             } else if s > 0.0 && s < 1.0 {
                 // Degree 8: no longer exact inside the step.
-                assert!(
-                    err > 1e-9,
-                    "q = {q}, s = {s}: {err:e} (should not be exact)"
-                );
+                assert!(err > 1e-9, "q = {q}, s = {s}: {err:e} (should not be exact)");
             }
         }
     }

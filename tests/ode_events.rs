@@ -24,24 +24,13 @@ fn crossing_inside_a_free_step() {
         let a = ode.locate_component(0, 1.0).unwrap();
         let b = ode.locate(|_t, y| 0.5 - y[1]).unwrap();
         if let Some(ta) = a {
-            found = Some((
-                ta,
-                b.expect("both functions cross at ln 2"),
-                ode.last_step().unwrap(),
-            ));
+            found = Some((ta, b.expect("both functions cross at ln 2"), ode.last_step().unwrap()));
             break;
         }
-        assert_eq!(
-            b, None,
-            "the decay crossed in a step where the hazard did not"
-        );
+        assert_eq!(b, None, "the decay crossed in a step where the hazard did not");
     }
     let (ta, tb, (t_old, t_new)) = found.expect("crossing not found");
-    eprintln!(
-        "hazard: {:.3e}, decay: {:.3e}, step [{t_old}, {t_new}]",
-        ta - LN_2,
-        tb - LN_2
-    );
+    eprintln!("hazard: {:.3e}, decay: {:.3e}, step [{t_old}, {t_new}]", ta - LN_2, tb - LN_2);
     assert!(
         t_old < LN_2 && LN_2 < t_new && t_new - LN_2 > 1e-3 && LN_2 - t_old > 1e-3,
         "crossing should be inside the step"
@@ -127,10 +116,7 @@ fn non_monotone_crossing_inside_one_step() {
     let (mut t, mut y) = (t0, [t0.sin(), t0.cos()]);
     ode.step_fixed(&mut osc, &mut t, &mut y, 0.25).unwrap();
     assert!(y[0] < 0.999 && t0.sin() < 0.999);
-    let tc = ode
-        .locate_component(0, 0.999)
-        .unwrap()
-        .expect("crossing inside the step");
+    let tc = ode.locate_component(0, 0.999).unwrap().expect("crossing inside the step");
     let exact = 0.999f64.asin();
     eprintln!("non-monotone: {:.3e}", tc - exact);
     assert!((tc - exact).abs() < 1e-10, "{:e}", tc - exact);
@@ -150,23 +136,11 @@ fn locate_errors() {
     assert_eq!(ode.locate(|_, _| 1.0), Err(OdeError::NoDenseOutput));
     let (mut t, mut y) = (0.0, [0.0, 1.0]);
     ode.step(&mut hazard, &mut t, &mut y, 1.0).unwrap();
-    assert!(matches!(
-        ode.locate(|t, _| if t > 0.0 { f64::NAN } else { -1.0 }),
-        Err(OdeError::NonFiniteEvent { .. })
-    ));
-    assert!(matches!(
-        ode.locate_component(2, 1.0),
-        Err(OdeError::DimensionMismatch { .. })
-    ));
+    assert!(matches!(ode.locate(|t, _| if t > 0.0 { f64::NAN } else { -1.0 }), Err(OdeError::NonFiniteEvent { .. })));
+    assert!(matches!(ode.locate_component(2, 1.0), Err(OdeError::DimensionMismatch { .. })));
     let (t_old, t_new) = ode.last_step().unwrap();
-    assert!(matches!(
-        ode.dense_component(0, t_new + 1e-6),
-        Err(OdeError::OutsideDenseInterval { .. })
-    ));
-    assert!(matches!(
-        ode.dense_component(0, t_old - 1e-6),
-        Err(OdeError::OutsideDenseInterval { .. })
-    ));
+    assert!(matches!(ode.dense_component(0, t_new + 1e-6), Err(OdeError::OutsideDenseInterval { .. })));
+    assert!(matches!(ode.dense_component(0, t_old - 1e-6), Err(OdeError::OutsideDenseInterval { .. })));
     // Ends are exact.
     assert_eq!(ode.dense_component(0, t_new).unwrap(), y[0]);
     assert_eq!(ode.dense_component(0, t_old).unwrap(), 0.0);
@@ -187,8 +161,7 @@ fn dense_output_ends_are_the_accepted_states() {
     let mut out = [0.0; 3];
     for k in 1..=300 {
         let y_old = y;
-        ode.step(&mut sys, &mut t, &mut y, f64::from(k) * 0.37)
-            .unwrap();
+        ode.step(&mut sys, &mut t, &mut y, f64::from(k) * 0.37).unwrap();
         let (t_old, t_new) = ode.last_step().unwrap();
         ode.dense(t_new, &mut out).unwrap();
         assert_eq!(out.map(f64::to_bits), y.map(f64::to_bits), "step {k}");

@@ -56,10 +56,7 @@ fn rhs_evaluation_count_is_consistent() {
         ode.step(&mut counting, &mut t, &mut y, 1e3).unwrap();
     }
     let after = ode.stats();
-    let (acc, rej) = (
-        after.accepted - before.accepted,
-        after.rejected - before.rejected,
-    );
+    let (acc, rej) = (after.accepted - before.accepted, after.rejected - before.rejected);
     assert_eq!(after.rhs_evals - before.rhs_evals, 15 * acc + 11 * rej);
     assert_eq!(after.restarts, before.restarts);
 }
@@ -116,14 +113,8 @@ fn run_pair(a: &mut Dop853, b: &mut Dop853, t: f64, y: [f64; 3], exact: bool) {
             a.step(&mut sys.clone(), &mut ta, &mut ya, t_max).unwrap();
             if exact {
                 b.step(&mut sys.clone(), &mut tb, &mut yb, t_max).unwrap();
-                assert_eq!(
-                    (ta.to_bits(), ya.map(f64::to_bits)),
-                    (tb.to_bits(), yb.map(f64::to_bits))
-                );
-                assert_eq!(
-                    a.locate_component(0, 0.3).unwrap(),
-                    b.locate_component(0, 0.3).unwrap()
-                );
+                assert_eq!((ta.to_bits(), ya.map(f64::to_bits)), (tb.to_bits(), yb.map(f64::to_bits)));
+                assert_eq!(a.locate_component(0, 0.3).unwrap(), b.locate_component(0, 0.3).unwrap());
             }
         }
         while tb < t_max {
@@ -131,10 +122,7 @@ fn run_pair(a: &mut Dop853, b: &mut Dop853, t: f64, y: [f64; 3], exact: bool) {
         }
         assert_eq!(ta, tb);
         for i in 0..3 {
-            assert!(
-                (ya[i] - yb[i]).abs() <= 1e-9 * (1.0 + ya[i].abs()),
-                "{ya:?} vs {yb:?}"
-            );
+            assert!((ya[i] - yb[i]).abs() <= 1e-9 * (1.0 + ya[i].abs()), "{ya:?} vs {yb:?}");
         }
     }
     if exact {
@@ -147,8 +135,7 @@ fn midway() -> (Dop853, f64, [f64; 3]) {
     let mut a = Dop853::new(3, 1e-10, 1e-12).unwrap();
     let (mut t, mut y) = (0.0, sys.y0());
     for k in 1..=40 {
-        a.step(&mut sys.clone(), &mut t, &mut y, f64::from(k) * 0.37)
-            .unwrap();
+        a.step(&mut sys.clone(), &mut t, &mut y, f64::from(k) * 0.37).unwrap();
     }
     (a, t, y)
 }
@@ -196,11 +183,7 @@ fn corrupt_checkpoint_is_rejected() {
 /// `h_max` bounds every step, whatever the proposal (initial, set by hand, or grown).
 #[test]
 fn h_max_bounds_every_step() {
-    let cfg = stickslip::ode::Dop853Config {
-        h_max: Some(0.05),
-        h_init: Some(1.0),
-        ..Default::default()
-    };
+    let cfg = stickslip::ode::Dop853Config { h_max: Some(0.05), h_init: Some(1.0), ..Default::default() };
     let mut ode = Dop853::with_config(3, cfg).unwrap();
     let sys = Driven::PLATE;
     let (mut t, mut y) = (0.0, sys.y0());

@@ -37,10 +37,7 @@ struct Mat {
 
 impl Mat {
     fn zeros(n: usize) -> Mat {
-        Mat {
-            n,
-            a: vec![dd(0.0); n * n],
-        }
+        Mat { n, a: vec![dd(0.0); n * n] }
     }
     fn eye(n: usize) -> Mat {
         let mut m = Mat::zeros(n);
@@ -79,14 +76,10 @@ impl Mat {
         r
     }
     fn norm_inf(&self) -> f64 {
-        (0..self.n)
-            .map(|i| (0..self.n).map(|j| self.get(i, j).hi().abs()).sum::<f64>())
-            .fold(0.0, f64::max)
+        (0..self.n).map(|i| (0..self.n).map(|j| self.get(i, j).hi().abs()).sum::<f64>()).fold(0.0, f64::max)
     }
     fn apply(&self, x: &[D]) -> Vec<D> {
-        (0..self.n)
-            .map(|i| (0..self.n).fold(dd(0.0), |acc, j| acc + self.get(i, j) * x[j]))
-            .collect()
+        (0..self.n).map(|i| (0..self.n).fold(dd(0.0), |acc, j| acc + self.get(i, j) * x[j])).collect()
     }
 }
 
@@ -152,11 +145,7 @@ fn ref_system(c: &Case, horizon: f64) -> RefSystem {
     let (m, eta, k) = (dd(c.m), dd(c.eta), dd(c.k));
     if c.m > 0.0 {
         let disc = c.eta * c.eta - 4.0 * c.m * c.k;
-        let rho_f = if disc >= 0.0 {
-            (c.eta + disc.sqrt()) / (2.0 * c.m)
-        } else {
-            (c.k / c.m).sqrt()
-        };
+        let rho_f = if disc >= 0.0 { (c.eta + disc.sqrt()) / (2.0 * c.m) } else { (c.k / c.m).sqrt() };
         let rho = dd(rho_f.max(1.0 / horizon));
         let mut a = Mat::zeros(4);
         a.set(0, 1, dd(1.0));
@@ -164,26 +153,14 @@ fn ref_system(c: &Case, horizon: f64) -> RefSystem {
         a.set(1, 1, -(eta / (m * rho)));
         a.set(1, 2, dd(1.0));
         a.set(2, 3, dd(1.0));
-        RefSystem {
-            rho,
-            a,
-            in_scale: vec![
-                dd(1.0) / rho,
-                dd(1.0) / (m * rho * rho),
-                dd(1.0) / (m * rho * rho * rho),
-            ],
-        }
+        RefSystem { rho, a, in_scale: vec![dd(1.0) / rho, dd(1.0) / (m * rho * rho), dd(1.0) / (m * rho * rho * rho)] }
     } else {
         let rho = dd((c.k / c.eta).max(1.0 / horizon));
         let mut a = Mat::zeros(3);
         a.set(0, 0, -(k / (eta * rho)));
         a.set(0, 1, dd(1.0));
         a.set(1, 2, dd(1.0));
-        RefSystem {
-            rho,
-            a,
-            in_scale: vec![dd(1.0) / (eta * rho), dd(1.0) / (eta * rho * rho)],
-        }
+        RefSystem { rho, a, in_scale: vec![dd(1.0) / (eta * rho), dd(1.0) / (eta * rho * rho)] }
     }
 }
 
@@ -203,12 +180,7 @@ fn ref_point(c: &Case, sys: &RefSystem, tau: f64) -> RefPoint {
     let f0 = dd(c.a) - dd(c.k) * dd(c.y0);
     let rho = sys.rho;
     if c.m > 0.0 {
-        let x0 = [
-            dd(0.0),
-            dd(c.v0) * sys.in_scale[0],
-            f0 * sys.in_scale[1],
-            dd(c.b) * sys.in_scale[2],
-        ];
+        let x0 = [dd(0.0), dd(c.v0) * sys.in_scale[0], f0 * sys.in_scale[1], dd(c.b) * sys.in_scale[2]];
         let x = phi.apply(&x0);
         let u = x[0];
         let up = x[1] * rho;
@@ -216,13 +188,7 @@ fn ref_point(c: &Case, sys: &RefSystem, tau: f64) -> RefPoint {
         let upp = ((p - dd(c.k) * u - dd(c.eta) * up) / dd(c.m)).hi();
         let resp = [1, 2, 3].map(|j| (phi.get(0, j) * sys.in_scale[j - 1]).hi().abs());
         let dresp = [1, 2, 3].map(|j| (phi.get(1, j) * sys.in_scale[j - 1] * rho).hi().abs());
-        RefPoint {
-            u,
-            up,
-            upp,
-            resp,
-            dresp,
-        }
+        RefPoint { u, up, upp, resp, dresp }
     } else {
         let x0 = [dd(0.0), f0 * sys.in_scale[0], dd(c.b) * sys.in_scale[1]];
         let x = phi.apply(&x0);
@@ -236,13 +202,7 @@ fn ref_point(c: &Case, sys: &RefSystem, tau: f64) -> RefPoint {
         // Responses of u' to unit f0 (v(0) = 1/eta) and unit b (constant forcing b/eta).
         let dr_f = (phi.get(0, 0) / dd(c.eta)).hi().abs();
         let dr_b = (phi.get(0, 1) * sys.in_scale[0]).hi().abs();
-        RefPoint {
-            u,
-            up,
-            upp,
-            resp: [0.0, r(1), r(2)],
-            dresp: [0.0, dr_f, dr_b],
-        }
+        RefPoint { u, up, upp, resp: [0.0, r(1), r(2)], dresp: [0.0, dr_f, dr_b] }
     }
 }
 
@@ -298,12 +258,7 @@ fn ref_integrals(c: &Case, sys: &RefSystem, h: f64, s: f64) -> RefIntegrals {
     let f = dd(c.a) - k * dd(c.y0) - eta * dd(s);
     let bw = dd(c.b) - k * dd(s);
     let x0: Vec<D> = if c.m > 0.0 {
-        vec![
-            dd(0.0),
-            (dd(c.v0) - dd(s)) * sys.in_scale[0],
-            f * sys.in_scale[1],
-            bw * sys.in_scale[2],
-        ]
+        vec![dd(0.0), (dd(c.v0) - dd(s)) * sys.in_scale[0], f * sys.in_scale[1], bw * sys.in_scale[2]]
     } else {
         vec![dd(0.0), f * sys.in_scale[0], bw * sys.in_scale[1]]
     };
@@ -319,12 +274,7 @@ fn ref_integrals(c: &Case, sys: &RefSystem, h: f64, s: f64) -> RefIntegrals {
     // int u from the initial state of u itself (s = 0): no cancellation against s h^2/2.
     let fu = dd(c.a) - k * dd(c.y0);
     let xu: Vec<D> = if c.m > 0.0 {
-        vec![
-            dd(0.0),
-            dd(c.v0) * sys.in_scale[0],
-            fu * sys.in_scale[1],
-            dd(c.b) * sys.in_scale[2],
-        ]
+        vec![dd(0.0), dd(c.v0) * sys.in_scale[0], fu * sys.in_scale[1], dd(c.b) * sys.in_scale[2]]
     } else {
         vec![dd(0.0), fu * sys.in_scale[0], dd(c.b) * sys.in_scale[1]]
     };
@@ -336,12 +286,7 @@ fn ref_integrals(c: &Case, sys: &RefSystem, h: f64, s: f64) -> RefIntegrals {
         let slot = if c.m > 0.0 { slot } else { slot + 1 };
         resp_sq[slot] = (phi.get(i2, mono[j][j]) * sc * sc / rho).hi().abs();
     }
-    RefIntegrals {
-        i1: i1v,
-        i2: i2v,
-        resp_sq,
-        w_h: z[0].hi(),
-    }
+    RefIntegrals { i1: i1v, i2: i2v, resp_sq, w_h: z[0].hi() }
 }
 
 // ----------------------------------------------------------------------------------------
@@ -415,8 +360,7 @@ fn check_case(c: &Case, tau: f64, s: f64) -> Result<Worst, String> {
         let resc_v = t * r.upp.abs();
         let sy = c.y0.abs() + vmag * sup[0] + fmag * sup[1] + c.b.abs() * sup[2] + resc_y;
         let sv = vmag * dsup[0] + fmag * dsup[1] + c.b.abs() * dsup[2] + resc_v;
-        let sy_p =
-            c.y0.abs() + vmag * r.resp[0] + fmag * r.resp[1] + c.b.abs() * r.resp[2] + resc_y;
+        let sy_p = c.y0.abs() + vmag * r.resp[0] + fmag * r.resp[1] + c.b.abs() * r.resp[2] + resc_y;
         let sv_p = vmag * r.dresp[0] + fmag * r.dresp[1] + c.b.abs() * r.dresp[2] + resc_v;
         // Errors on values below the normal range (underflowed exponentials) are not counted.
         let rel = |e: f64, s: f64| if e == 0.0 || s < 1e-290 { 0.0 } else { e / s };
@@ -437,10 +381,7 @@ fn check_case(c: &Case, tau: f64, s: f64) -> Result<Worst, String> {
         }
         // Bounds: the reference must stay inside (no tolerance).
         if t <= tau && !(lo <= y_ref.hi() && y_ref.hi() <= hi) {
-            return Err(format!(
-                "bounds({tau:e}) = [{lo:e}, {hi:e}] miss y_ref({t:e}) = {:e}",
-                y_ref.hi()
-            ));
+            return Err(format!("bounds({tau:e}) = [{lo:e}, {hi:e}] miss y_ref({t:e}) = {:e}", y_ref.hi()));
         }
     }
     // Integrals.
@@ -506,19 +447,7 @@ fn make_case(kind: u8, u: [f64; 10], signs: [bool; 5]) -> (Case, f64, f64) {
             // Exactly critical: eta = 2^i, M = 2^j, k = eta^2/(4M) exactly.
             let e = 2f64.powi((u[0] * 8.0) as i32 - 4);
             let mm = 2f64.powi((u[1] * 16.0) as i32 - 12);
-            return finish(
-                Case {
-                    m: mm,
-                    eta: e,
-                    k: e * e / (4.0 * mm),
-                    y0: 0.0,
-                    v0: 0.0,
-                    a: 0.0,
-                    b: 0.0,
-                },
-                u,
-                signs,
-            );
+            return finish(Case { m: mm, eta: e, k: e * e / (4.0 * mm), y0: 0.0, v0: 0.0, a: 0.0, b: 0.0 }, u, signs);
         }
         3 | 4 => {
             // Near critical: relative discriminant +-10^(-16..-2).
@@ -536,19 +465,7 @@ fn make_case(kind: u8, u: [f64; 10], signs: [bool; 5]) -> (Case, f64, f64) {
         _ => eta * eta / m * pow10(-2.0 + 4.0 * u[2]),
     };
     let k = if kind % 8 == 0 { k.min(1e9) } else { k };
-    finish(
-        Case {
-            m,
-            eta,
-            k,
-            y0: 0.0,
-            v0: 0.0,
-            a: 0.0,
-            b: 0.0,
-        },
-        u,
-        signs,
-    )
+    finish(Case { m, eta, k, y0: 0.0, v0: 0.0, a: 0.0, b: 0.0 }, u, signs)
 }
 
 fn finish(mut c: Case, u: [f64; 10], signs: [bool; 5]) -> (Case, f64, f64) {
@@ -572,10 +489,7 @@ fn finish(mut c: Case, u: [f64; 10], signs: [bool; 5]) -> (Case, f64, f64) {
     let rho = plate.rho();
     let slow = slowest_time(&c);
     let tmin: f64 = 1e-9;
-    let tmax = (30.0 * slow)
-        .min(1e6)
-        .max(tmin * 10.0)
-        .max(if rho > 0.0 { 3.0 / rho } else { 1.0 });
+    let tmax = (30.0 * slow).min(1e6).max(tmin * 10.0).max(if rho > 0.0 { 3.0 / rho } else { 1.0 });
     let tau = tmin * (tmax / tmin).powf(u[9]);
     (c, tau, s)
 }
@@ -602,10 +516,7 @@ fn run_case(kind: u8, u: [f64; 10], signs: [bool; 5]) -> Result<Worst, TestCaseE
     let (c, tau, s) = make_case(kind, u, signs);
     check_case(&c, tau, s).map_err(|e| {
         let p = LinearPlate::new(c.m, c.eta, c.k);
-        TestCaseError::fail(format!(
-            "{c:?} tau={tau:e} s={s:e} branch={:?}: {e}",
-            p.branch()
-        ))
+        TestCaseError::fail(format!("{c:?} tau={tau:e} s={s:e} branch={:?}: {e}", p.branch()))
     })
 }
 
@@ -674,42 +585,10 @@ fn sweep_heavy() {
 #[test]
 fn reference_is_self_consistent() {
     let cases = [
-        Case {
-            m: 1e-12,
-            eta: 1.0,
-            k: 1e-3,
-            y0: 0.3,
-            v0: -2.0,
-            a: 1.0,
-            b: 0.5,
-        },
-        Case {
-            m: 1.0,
-            eta: 0.0,
-            k: 4.0,
-            y0: 0.3,
-            v0: -2.0,
-            a: 1.0,
-            b: 0.5,
-        },
-        Case {
-            m: 1.0,
-            eta: 2.0,
-            k: 1.0,
-            y0: 0.3,
-            v0: -2.0,
-            a: 1.0,
-            b: 0.5,
-        },
-        Case {
-            m: 0.0,
-            eta: 2.0,
-            k: 1e-4,
-            y0: 0.3,
-            v0: -2.0,
-            a: 1.0,
-            b: 0.5,
-        },
+        Case { m: 1e-12, eta: 1.0, k: 1e-3, y0: 0.3, v0: -2.0, a: 1.0, b: 0.5 },
+        Case { m: 1.0, eta: 0.0, k: 4.0, y0: 0.3, v0: -2.0, a: 1.0, b: 0.5 },
+        Case { m: 1.0, eta: 2.0, k: 1.0, y0: 0.3, v0: -2.0, a: 1.0, b: 0.5 },
+        Case { m: 0.0, eta: 2.0, k: 1e-4, y0: 0.3, v0: -2.0, a: 1.0, b: 0.5 },
     ];
     for c in &cases {
         for &tau in &[1e-6, 1.0, 1e3] {
@@ -718,23 +597,14 @@ fn reference_is_self_consistent() {
             let phi = expm(&sys.a, (dd(tau) * sys.rho).hi(), 0.01);
             let f0 = dd(c.a) - dd(c.k) * dd(c.y0);
             let x0: Vec<D> = if c.m > 0.0 {
-                vec![
-                    dd(0.0),
-                    dd(c.v0) * sys.in_scale[0],
-                    f0 * sys.in_scale[1],
-                    dd(c.b) * sys.in_scale[2],
-                ]
+                vec![dd(0.0), dd(c.v0) * sys.in_scale[0], f0 * sys.in_scale[1], dd(c.b) * sys.in_scale[2]]
             } else {
                 vec![dd(0.0), f0 * sys.in_scale[0], dd(c.b) * sys.in_scale[1]]
             };
             let u2 = phi.apply(&x0)[0];
-            let scale =
-                c.y0.abs() + a.u.hi().abs() + c.v0.abs() * tau + (c.a.abs() + c.b.abs()) * 1e-3;
+            let scale = c.y0.abs() + a.u.hi().abs() + c.v0.abs() * tau + (c.a.abs() + c.b.abs()) * 1e-3;
             let diff = (a.u - u2).hi().abs();
-            assert!(
-                diff <= 1e-18 * scale.max(1e-300) + 1e-280,
-                "{c:?} tau {tau}: {diff:e} vs {scale:e}"
-            );
+            assert!(diff <= 1e-18 * scale.max(1e-300) + 1e-280, "{c:?} tau {tau}: {diff:e} vs {scale:e}");
         }
     }
 }
@@ -758,10 +628,7 @@ fn small_mass_converges_to_overdamped() {
         let ratio = d / (m / eta);
         if let Some(p) = prev {
             // Linear convergence: d / (M/eta) settles to a constant.
-            assert!(
-                (ratio / p - 1.0).abs() < 0.05 || d < 1e-13,
-                "M={m}: ratio {ratio} vs {p}"
-            );
+            assert!((ratio / p - 1.0).abs() < 0.05 || d < 1e-13, "M={m}: ratio {ratio} vs {p}");
         }
         assert!(d <= 1.0 * (m / eta) + 1e-14, "M={m}: d={d}");
         prev = Some(ratio);
@@ -771,13 +638,7 @@ fn small_mass_converges_to_overdamped() {
 /// `b = 0`: `y -> a/k` exactly for every branch.
 #[test]
 fn steady_state() {
-    for &(m, eta, k) in &[
-        (1.0, 1.0, 1.0),
-        (1.0, 10.0, 1.0),
-        (1e-9, 1.0, 2.0),
-        (0.0, 1.0, 2.0),
-        (1.0, 2.0, 1.0),
-    ] {
+    for &(m, eta, k) in &[(1.0, 1.0, 1.0), (1.0, 10.0, 1.0), (1e-9, 1.0, 2.0), (0.0, 1.0, 2.0), (1.0, 2.0, 1.0)] {
         let t = LinearPlate::new(m, eta, k).trajectory(0.3, -1.0, 5.0, 0.0);
         let (y, v) = t.at(1e4);
         assert!((y - 5.0 / k).abs() <= 1e-15 * 5.0 / k, "{m} {eta} {k}: {y}");
@@ -798,14 +659,8 @@ fn undamped_oscillator() {
         let ye = c + (y0 - c) * th.cos() + v0 / 2.0 * th.sin();
         let ve = -2.0 * (y0 - c) * th.sin() + v0 * th.cos();
         let amp = ((y0 - c).powi(2) + (v0 / 2.0).powi(2)).sqrt();
-        assert!(
-            (y - ye).abs() <= 1e-13 * (1.0 + tau) * amp,
-            "{tau}: {y} {ye}"
-        );
-        assert!(
-            (v - ve).abs() <= 1e-13 * (1.0 + tau) * 2.0 * amp,
-            "{tau}: {v} {ve}"
-        );
+        assert!((y - ye).abs() <= 1e-13 * (1.0 + tau) * amp, "{tau}: {y} {ye}");
+        assert!((v - ve).abs() <= 1e-13 * (1.0 + tau) * 2.0 * amp, "{tau}: {v} {ve}");
         let (lo, hi) = t.bounds(tau);
         assert!(hi - lo <= 2.0 * amp * (1.0 + 1e-9) && lo <= y && y <= hi);
         if tau >= std::f64::consts::PI {
@@ -822,16 +677,11 @@ fn free_flight() {
         let (y, v) = t.at(tau);
         let ye = 1.0 - 0.5 * tau + 3.0 * tau * tau / 4.0 + 0.25 * tau.powi(3) / 12.0;
         let ve = -0.5 + 3.0 * tau / 2.0 + 0.25 * tau * tau / 4.0;
-        assert!(
-            (y - ye).abs() <= 1e-15 * (1.0 + 0.5 * tau + 0.75 * tau * tau + tau.powi(3) / 48.0)
-        );
+        assert!((y - ye).abs() <= 1e-15 * (1.0 + 0.5 * tau + 0.75 * tau * tau + tau.powi(3) / 48.0));
         assert!((v - ve).abs() <= 1e-15 * (0.5 + 1.5 * tau + tau * tau / 16.0));
         let i = t.integrals(tau, 0.0);
         let i1e = -0.25 * tau * tau + tau.powi(3) / 4.0 + tau.powi(4) / 192.0;
-        assert!(
-            (i.i1 - i1e).abs()
-                <= 1e-14 * (0.25 * tau * tau + tau.powi(3) / 4.0 + tau.powi(4) / 192.0)
-        );
+        assert!((i.i1 - i1e).abs() <= 1e-14 * (0.25 * tau * tau + tau.powi(3) / 4.0 + tau.powi(4) / 192.0));
     }
 }
 
@@ -848,29 +698,16 @@ fn never_nan() {
             }
             for &k in &ks {
                 for &crit in &[false, true] {
-                    let k = if crit && m > 0.0 && eta > 0.0 {
-                        eta * eta / (4.0 * m)
-                    } else {
-                        k
-                    };
+                    let k = if crit && m > 0.0 && eta > 0.0 { eta * eta / (4.0 * m) } else { k };
                     let p = LinearPlate::new(m, eta, k);
                     let t: Trajectory = p.trajectory(0.7, -3.0, 2.0, -1.0);
                     for &tau in &[0.0, 1e-12, 1e-6, 1.0, 1e6, 1e12] {
                         let (y, v) = t.at(tau);
                         let i = t.integrals(tau, 0.5);
                         let (lo, hi) = t.bounds(tau);
-                        assert!(
-                            y.is_finite() && v.is_finite(),
-                            "{m} {eta} {k} {tau}: {y} {v}"
-                        );
-                        assert!(
-                            i.i1.is_finite() && i.i2.is_finite() && i.i2 >= 0.0,
-                            "{m} {eta} {k} {tau}: {i:?}"
-                        );
-                        assert!(
-                            lo.is_finite() && hi.is_finite() && lo <= y && y <= hi,
-                            "{m} {eta} {k} {tau}"
-                        );
+                        assert!(y.is_finite() && v.is_finite(), "{m} {eta} {k} {tau}: {y} {v}");
+                        assert!(i.i1.is_finite() && i.i2.is_finite() && i.i2 >= 0.0, "{m} {eta} {k} {tau}: {i:?}");
+                        assert!(lo.is_finite() && hi.is_finite() && lo <= y && y <= hi, "{m} {eta} {k} {tau}");
                     }
                 }
             }
@@ -881,13 +718,7 @@ fn never_nan() {
 /// Bounds are tight for short horizons: width within a small factor of the true excursion.
 #[test]
 fn bounds_tight_for_short_horizons() {
-    for &(m, eta, k) in &[
-        (1.0, 1.0, 2.0),
-        (1e-6, 1.0, 10.0),
-        (0.0, 1.0, 3.0),
-        (1.0, 0.0, 1.0),
-        (1.0, 5.0, 0.0),
-    ] {
+    for &(m, eta, k) in &[(1.0, 1.0, 2.0), (1e-6, 1.0, 10.0), (0.0, 1.0, 3.0), (1.0, 0.0, 1.0), (1.0, 5.0, 0.0)] {
         // v0, f0 = a - k y0 and b of one sign: the contributions add up, no cancellation.
         let t = LinearPlate::new(m, eta, k).trajectory(0.2, 1.0, 0.2 * k + 1.0, 0.3);
         for &h in &[1e-6, 1e-3] {
@@ -899,10 +730,7 @@ fn bounds_tight_for_short_horizons() {
                 ymax = ymax.max(y);
             }
             let ex = ymax - ymin;
-            assert!(
-                hi - lo <= 3.0 * ex + 1e-12 * 0.2,
-                "{m} {eta} {k} h={h}: [{lo}, {hi}] vs excursion {ex}"
-            );
+            assert!(hi - lo <= 3.0 * ex + 1e-12 * 0.2, "{m} {eta} {k} h={h}: [{lo}, {hi}] vs excursion {ex}");
         }
     }
 }
@@ -911,14 +739,8 @@ fn bounds_tight_for_short_horizons() {
 fn branch_coverage_smoke() {
     // Every branch and the Taylor path are reached by the generator above; make sure the
     // classification itself behaves as documented.
-    assert_eq!(
-        LinearPlate::new(1e-12, 1.0, 1e9).branch(),
-        Branch::Separated
-    );
-    assert_eq!(
-        LinearPlate::new(1.0, 2.0, 1.0 - 1e-16).branch(),
-        Branch::Clustered
-    );
+    assert_eq!(LinearPlate::new(1e-12, 1.0, 1e9).branch(), Branch::Separated);
+    assert_eq!(LinearPlate::new(1.0, 2.0, 1.0 - 1e-16).branch(), Branch::Clustered);
 }
 
 /// Rare events: horizons up to 1e12 still match the reference (and stay finite).
@@ -935,15 +757,7 @@ fn long_horizons_match_reference() {
         (1.0, 1e-3, 0.0),
     ];
     for &(m, eta, k) in &plates {
-        let c = Case {
-            m,
-            eta,
-            k,
-            y0: 0.25,
-            v0: -1.5,
-            a: 0.75,
-            b: 1e-3,
-        };
+        let c = Case { m, eta, k, y0: 0.25, v0: -1.5, a: 0.75, b: 1e-3 };
         for &tau in &[1e9, 1e12] {
             check_case(&c, tau, 1e-3).unwrap_or_else(|e| panic!("{c:?} tau={tau:e}: {e}"));
         }

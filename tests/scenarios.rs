@@ -42,11 +42,7 @@ fn scenario_files() -> Vec<PathBuf> {
 fn brief(path: &Path) -> Scene {
     let full = Scene::from_file(path, &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let t_end = full.run.t_end.min(BRIEF_T_END);
-    let t_warmup = if full.run.t_warmup > 0.0 {
-        (t_end / 4.0).floor()
-    } else {
-        0.0
-    };
+    let t_warmup = if full.run.t_warmup > 0.0 { (t_end / 4.0).floor() } else { 0.0 };
     let n = full.junctions.n.min(BRIEF_N);
     full.with_overrides(&[
         format!("run.t_end={t_end:?}"),
@@ -63,15 +59,10 @@ fn read_trace(dir: &Path) -> Vec<Vec<f64>> {
     assert_eq!(lines.next(), Some(TraceWriter::HEADER));
     lines
         .map(|l| {
-            let row: Vec<f64> = l
-                .split(',')
-                .map(|v| v.parse().unwrap_or_else(|_| panic!("bad number in {l:?}")))
-                .collect();
+            let row: Vec<f64> =
+                l.split(',').map(|v| v.parse().unwrap_or_else(|_| panic!("bad number in {l:?}"))).collect();
             assert_eq!(row.len(), 6, "{l:?}");
-            assert!(
-                row.iter().all(|v| v.is_finite()),
-                "non-finite value in trace row {l:?}"
-            );
+            assert!(row.iter().all(|v| v.is_finite()), "non-finite value in trace row {l:?}");
             row
         })
         .collect()
@@ -90,41 +81,21 @@ fn check_summary(name: &str, scene: &Scene, s: &Summary) {
         assert!(v.is_finite(), "{name}: {what} = {v}");
     }
     assert!(s.friction_std >= 0.0, "{name}");
-    assert!(
-        (0.0..=1.0).contains(&s.attached_fraction_mean),
-        "{name}: {}",
-        s.attached_fraction_mean
-    );
+    assert!((0.0..=1.0).contains(&s.attached_fraction_mean), "{name}: {}", s.attached_fraction_mean);
     assert_eq!(
         (s.n, s.t_end, s.t_warmup, s.seed),
-        (
-            scene.junctions.n as u64,
-            scene.run.t_end,
-            scene.run.t_warmup,
-            scene.run.seed
-        )
+        (scene.junctions.n as u64, scene.run.t_end, scene.run.t_warmup, scene.run.seed)
     );
     assert_eq!(s.engine, scene.run.engine, "{name}");
     assert_eq!(&s.parameters, scene, "{name}: summary parameters");
     let rel = (s.friction_per_junction - s.friction_mean / s.n as f64).abs();
-    assert!(
-        rel <= 1e-12 * (1.0 + s.friction_per_junction.abs()),
-        "{name}"
-    );
+    assert!(rel <= 1e-12 * (1.0 + s.friction_per_junction.abs()), "{name}");
     match scene.run.engine {
         EngineKind::Fixed => {
-            assert_eq!(
-                s.counters.steps,
-                Some(scene.fixed.steps_for(scene.run.t_end)),
-                "{name}: steps"
-            );
+            assert_eq!(s.counters.steps, Some(scene.fixed.steps_for(scene.run.t_end)), "{name}: steps");
         }
         EngineKind::Exact => {
-            assert_eq!(
-                s.counters.events,
-                Some(s.counters.ruptures + s.counters.formations),
-                "{name}: events"
-            );
+            assert_eq!(s.counters.events, Some(s.counters.ruptures + s.counters.formations), "{name}: events");
         }
     }
 }
@@ -150,76 +121,38 @@ fn run_briefly(engine: EngineKind) {
             continue;
         }
         let dir = tempfile::tempdir().unwrap();
-        let summary = stickslip::run_scene(&scene, Some(dir.path()))
-            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let summary = stickslip::run_scene(&scene, Some(dir.path())).unwrap_or_else(|e| panic!("{name}: {e}"));
         check_summary(&name, &scene, &summary);
 
         // summary.json holds the same summary.
-        let json: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(dir.path().join("summary.json")).unwrap(),
-        )
-        .unwrap();
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).unwrap()).unwrap();
         assert_eq!(json["scene"], scene.name.as_str(), "{name}");
         assert_eq!(json["n"], scene.junctions.n as u64, "{name}");
-        for key in [
-            "friction_mean",
-            "friction_std",
-            "bond_force_mean",
-            "viscous_force_mean",
-            "attached_fraction_mean",
-        ] {
-            assert!(
-                json[key].as_f64().is_some_and(f64::is_finite),
-                "{name}: summary.json {key} = {}",
-                json[key]
-            );
+        for key in ["friction_mean", "friction_std", "bond_force_mean", "viscous_force_mean", "attached_fraction_mean"]
+        {
+            assert!(json[key].as_f64().is_some_and(f64::is_finite), "{name}: summary.json {key} = {}", json[key]);
         }
 
         // No temporary files are left; trace.csv and events.csv exist exactly as asked.
         for entry in std::fs::read_dir(dir.path()).unwrap() {
             let p = entry.unwrap().path();
-            assert!(
-                !p.to_string_lossy().ends_with(".part"),
-                "{name}: left {}",
-                p.display()
-            );
+            assert!(!p.to_string_lossy().ends_with(".part"), "{name}: left {}", p.display());
         }
-        assert_eq!(
-            dir.path().join("trace.csv").exists(),
-            scene.output.trace,
-            "{name}"
-        );
-        assert_eq!(
-            dir.path().join("events.csv").exists(),
-            scene.output.events,
-            "{name}"
-        );
+        assert_eq!(dir.path().join("trace.csv").exists(), scene.output.trace, "{name}");
+        assert_eq!(dir.path().join("events.csv").exists(), scene.output.events, "{name}");
         if scene.output.trace {
             let rows = read_trace(dir.path());
-            assert_eq!(
-                rows.first().map(|r| r[0]),
-                Some(0.0),
-                "{name}: trace starts at t = 0"
-            );
-            assert_eq!(
-                rows.last().map(|r| r[0]),
-                Some(scene.run.t_end),
-                "{name}: trace ends at t_end"
-            );
-            assert!(
-                rows.windows(2).all(|w| w[1][0] > w[0][0]),
-                "{name}: trace times increase"
-            );
+            assert_eq!(rows.first().map(|r| r[0]), Some(0.0), "{name}: trace starts at t = 0");
+            assert_eq!(rows.last().map(|r| r[0]), Some(scene.run.t_end), "{name}: trace ends at t_end");
+            assert!(rows.windows(2).all(|w| w[1][0] > w[0][0]), "{name}: trace times increase");
             for r in &rows {
                 let expected = scene.plate.k * (scene.plate.v * r[0] - r[1]);
                 assert!(
                     (r[3] - expected).abs() <= 1e-9 * (1.0 + expected.abs()),
                     "{name}: friction != K (V t - X) at {r:?}"
                 );
-                assert!(
-                    (0.0..=1.0).contains(&r[5]),
-                    "{name}: attached fraction {r:?}"
-                );
+                assert!((0.0..=1.0).contains(&r[5]), "{name}: attached fraction {r:?}");
             }
             // Exact engine: <F> = <F_b> + <eta Xd> + M (Xd(t_end) - Xd(t_warmup)) / (t_end - t_warmup).
             // (Checked when the trace has a row at t_warmup.)
@@ -232,10 +165,7 @@ fn run_briefly(engine: EngineKind) {
                 let window = scene.run.t_end - scene.run.t_warmup;
                 let inertia = scene.plate.mass * (end[2] - start[2]) / window;
                 let rhs = summary.bond_force_mean + summary.viscous_force_mean + inertia;
-                let scale = 1.0
-                    + summary.friction_mean.abs()
-                    + summary.bond_force_mean.abs()
-                    + inertia.abs();
+                let scale = 1.0 + summary.friction_mean.abs() + summary.bond_force_mean.abs() + inertia.abs();
                 assert!(
                     (summary.friction_mean - rhs).abs() <= 1e-6 * scale,
                     "{name}: <F> = {} but <F_b> + <eta Xd> + M dXd/T = {rhs}",
@@ -252,26 +182,14 @@ fn run_briefly(engine: EngineKind) {
 fn readme_command_runs_fig1() {
     let dir = tempfile::tempdir().unwrap();
     let scene = scenarios_dir().join("fig1.toml");
-    let out = Command::new(BIN)
-        .arg("run")
-        .arg(&scene)
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
+    let out = Command::new(BIN).arg("run").arg(&scene).current_dir(dir.path()).output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        out.status.success(),
-        "stickslip run scenarios/fig1.toml failed: {stderr}"
-    );
+    assert!(out.status.success(), "stickslip run scenarios/fig1.toml failed: {stderr}");
     // Default output directory: out/<scene file stem>/ under the working directory.
     let results = dir.path().join("out").join("fig1");
     assert!(results.join("summary.json").is_file());
     let rows = read_trace(&results);
-    assert_eq!(
-        rows.len(),
-        151,
-        "150 steps of dt = 1 sampled every step, plus t = 0"
-    );
+    assert_eq!(rows.len(), 151, "150 steps of dt = 1 sampled every step, plus t = 0");
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("150 steps"), "{stdout}");
 }

@@ -23,26 +23,13 @@ fn check(text: &str, overrides: &[String]) -> Result<(), TestCaseError> {
         Err(e) => {
             let msg = e.to_string();
             prop_assert!(!msg.is_empty());
-            prop_assert!(
-                !msg.contains(['\n', '\r']),
-                "error message is not one line: {msg:?}"
-            );
+            prop_assert!(!msg.contains(['\n', '\r']), "error message is not one line: {msg:?}");
         }
     }
     Ok(())
 }
 
-const SECTIONS: &[&str] = &[
-    "junctions",
-    "plate",
-    "run",
-    "fixed",
-    "exact",
-    "output",
-    "junction",
-    "",
-    "run.sub",
-];
+const SECTIONS: &[&str] = &["junctions", "plate", "run", "fixed", "exact", "output", "junction", "", "run.sub"];
 const KEYS: &[&str] = &[
     "n",
     "bond",
@@ -127,8 +114,7 @@ const VALUES: &[&str] = &[
 fn scene_like() -> impl Strategy<Value = String> {
     let line = prop_oneof![
         prop::sample::select(SECTIONS).prop_map(|s| format!("[{s}]")),
-        (prop::sample::select(KEYS), prop::sample::select(VALUES))
-            .prop_map(|(k, v)| format!("{k} = {v}")),
+        (prop::sample::select(KEYS), prop::sample::select(VALUES)).prop_map(|(k, v)| format!("{k} = {v}")),
         ".{0,20}",
     ];
     prop::collection::vec(line, 0..30).prop_map(|lines| lines.join("\n"))
@@ -143,11 +129,7 @@ enum Edit {
 }
 
 fn edit() -> impl Strategy<Value = Edit> {
-    let snippet = prop_oneof![
-        ".{0,6}",
-        prop::sample::select(VALUES).prop_map(str::to_string),
-        "[=\\[\\]\"#.\n-]{1,3}"
-    ];
+    let snippet = prop_oneof![".{0,6}", prop::sample::select(VALUES).prop_map(str::to_string), "[=\\[\\]\"#.\n-]{1,3}"];
     prop_oneof![
         (any::<usize>(), 0usize..8).prop_map(|(at, len)| Edit::Delete { at, len }),
         (any::<usize>(), snippet.clone()).prop_map(|(at, s)| Edit::Insert { at, s }),
@@ -160,11 +142,7 @@ fn mutate(text: &str, edits: &[Edit]) -> String {
     let mut chars: Vec<char> = text.chars().collect();
     for e in edits {
         let at = |a: usize| {
-            if chars.is_empty() {
-                0
-            } else {
-                a % (chars.len() + 1)
-            }
+            if chars.is_empty() { 0 } else { a % (chars.len() + 1) }
         };
         match e {
             Edit::Delete { at: a, len } => {
@@ -189,17 +167,9 @@ fn mutate(text: &str, edits: &[Edit]) -> String {
 /// A `--set` assignment, well-formed or not.
 fn assignment() -> impl Strategy<Value = String> {
     prop_oneof![
-        (
-            prop::sample::select(SECTIONS),
-            prop::sample::select(KEYS),
-            prop::sample::select(VALUES)
-        )
+        (prop::sample::select(SECTIONS), prop::sample::select(KEYS), prop::sample::select(VALUES))
             .prop_map(|(s, k, v)| format!("{s}.{k}={v}")),
-        (
-            prop::sample::select(SECTIONS),
-            prop::sample::select(KEYS),
-            "[a-z0-9.\\-]{0,8}"
-        )
+        (prop::sample::select(SECTIONS), prop::sample::select(KEYS), "[a-z0-9.\\-]{0,8}")
             .prop_map(|(s, k, v)| format!("{s}.{k}={v}")),
         ".{0,24}",
     ]

@@ -25,9 +25,7 @@ fn scenario_files() -> Vec<PathBuf> {
 }
 
 fn scenario(name: &str) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenarios")
-        .join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios").join(name);
     Scene::from_file(&path, &[]).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
@@ -35,42 +33,19 @@ fn scenario(name: &str) -> Scene {
 fn every_bundled_scene_validates_and_prints_its_resolved_parameters() {
     for path in scenario_files() {
         let stem = path.file_stem().unwrap().to_string_lossy().into_owned();
-        let out = Command::new(BIN)
-            .arg("validate")
-            .arg(&path)
-            .output()
-            .expect("the binary runs");
+        let out = Command::new(BIN).arg("validate").arg(&path).output().expect("the binary runs");
         let stdout = String::from_utf8_lossy(&out.stdout);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(out.status.success(), "{}: {stderr}", path.display());
         assert!(stderr.is_empty(), "{}: {stderr}", path.display());
-        assert!(
-            stdout.starts_with(&format!("# scene {stem} is valid")),
-            "{stdout}"
-        );
-        for section in [
-            "[junctions]",
-            "[plate]",
-            "[run]",
-            "[fixed]",
-            "[exact]",
-            "[output]",
-        ] {
-            assert!(
-                stdout.lines().any(|l| l == section),
-                "{}: no {section} in\n{stdout}",
-                path.display()
-            );
+        assert!(stdout.starts_with(&format!("# scene {stem} is valid")), "{stdout}");
+        for section in ["[junctions]", "[plate]", "[run]", "[fixed]", "[exact]", "[output]"] {
+            assert!(stdout.lines().any(|l| l == section), "{}: no {section} in\n{stdout}", path.display());
         }
         // The printed parameters are a complete scene file that reads back to the same scene.
         let from_file = Scene::from_file(&path, &[]).unwrap();
-        let printed =
-            Scene::from_toml_str(&stdout, "validate output", &stem, &[]).unwrap_or_else(|e| {
-                panic!(
-                    "{}: printed parameters do not read back: {e}",
-                    path.display()
-                )
-            });
+        let printed = Scene::from_toml_str(&stdout, "validate output", &stem, &[])
+            .unwrap_or_else(|e| panic!("{}: printed parameters do not read back: {e}", path.display()));
         assert_eq!(printed, from_file, "{}", path.display());
     }
 }
@@ -78,25 +53,15 @@ fn every_bundled_scene_validates_and_prints_its_resolved_parameters() {
 #[test]
 fn fig1_is_the_letters_figure_1() {
     let s = scenario("fig1.toml");
-    assert_eq!(
-        s,
-        testkit::fig1(),
-        "scenarios/fig1.toml differs from the test kit's Fig. 1"
-    );
+    assert_eq!(s, testkit::fig1(), "scenarios/fig1.toml differs from the test kit's Fig. 1");
     let (j, p) = (&s.junctions, &s.plate);
-    assert_eq!(
-        (j.n, j.kappa, j.lambda, j.l0, j.alpha, j.dx),
-        (300, 0.1, 0.1, 1.0, 1.0, 1.0)
-    );
+    assert_eq!((j.n, j.kappa, j.lambda, j.l0, j.alpha, j.dx), (300, 0.1, 0.1, 1.0, 1.0, 1.0));
     assert_eq!((j.k0, j.kon0, j.tau0), (0.1, 0.1, 2.0));
     assert_eq!((p.v, p.k, p.mass, p.eta), (0.5, 150.0, 75.0, 75.0));
     assert_eq!(j.force_law, ForceLawKind::Tilted);
     assert_eq!(s.run.engine, EngineKind::Fixed);
     assert_eq!((s.fixed.dt, s.fixed.steps_for(s.run.t_end)), (1.0, 150));
-    assert_eq!(
-        (s.run.seed, s.output.sample_dt, s.output.trace),
-        (1, 1.0, true)
-    );
+    assert_eq!((s.run.seed, s.output.sample_dt, s.output.trace), (1, 1.0, true));
 }
 
 #[test]
@@ -107,10 +72,7 @@ fn fig1_variants_differ_from_fig1_only_where_they_say() {
 
     let mut exact = scenario("fig1-exact.toml");
     exact.name = "fig1".into();
-    assert_eq!(
-        exact,
-        testkit::fig1_with(&["run.engine=exact", "run.t_end=1000", "run.t_warmup=100"])
-    );
+    assert_eq!(exact, testkit::fig1_with(&["run.engine=exact", "run.t_end=1000", "run.t_warmup=100"]));
 }
 
 /// The ```toml examples in the documentation are valid scenes.
@@ -123,9 +85,7 @@ fn documented_scene_examples_validate() {
         let mut rest = text.as_str();
         while let Some(start) = rest.find("```toml\n") {
             let body = &rest[start + "```toml\n".len()..];
-            let end = body
-                .find("```")
-                .unwrap_or_else(|| panic!("{doc}: unterminated ```toml block"));
+            let end = body.find("```").unwrap_or_else(|| panic!("{doc}: unterminated ```toml block"));
             Scene::from_toml_str(&body[..end], doc, "example", &[])
                 .unwrap_or_else(|e| panic!("{doc}: example scene refused: {e}\n{}", &body[..end]));
             checked += 1;

@@ -17,7 +17,11 @@ pub const EXIT_BAD_INPUT: u8 = 2;
 pub const EXIT_RUN_FAILED: u8 = 1;
 
 #[derive(Parser, Debug)]
-#[command(name = "stickslip", version, about = "Junction friction (FKU bond model): exact event-driven and fixed-step simulation")]
+#[command(
+    name = "stickslip",
+    version,
+    about = "Junction friction (FKU bond model): exact event-driven and fixed-step simulation"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,

@@ -39,7 +39,9 @@ pub struct Counters {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum EngineError {
     /// The fixed-step plate update blew up (typically `dt` beyond the stability limit).
-    #[error("the plate diverged at step {step} (t = {t}): {quantity} = {value}; the time step fixed.dt is probably beyond the integrator's stability limit")]
+    #[error(
+        "the plate diverged at step {step} (t = {t}): {quantity} = {value}; the time step fixed.dt is probably beyond the integrator's stability limit"
+    )]
     Diverged { step: u64, t: f64, quantity: &'static str, value: f64 },
     /// A quantity became NaN or infinite.
     #[error("numerical trouble at t = {t}: {quantity} = {value}")]

@@ -43,14 +43,8 @@ pub const C: [f64; 16] = [
 pub const A: [&[(usize, f64)]; 16] = [
     &[],
     &[(0, 5.26001519587677318785587544488e-2)],
-    &[
-        (0, 1.97250569845378994544595329183e-2),
-        (1, 5.91751709536136983633785987549e-2),
-    ],
-    &[
-        (0, 2.95875854768068491816892993775e-2),
-        (2, 8.87627564304205475450678981324e-2),
-    ],
+    &[(0, 1.97250569845378994544595329183e-2), (1, 5.91751709536136983633785987549e-2)],
+    &[(0, 2.95875854768068491816892993775e-2), (2, 8.87627564304205475450678981324e-2)],
     &[
         (0, 2.41365134159266685502369798665e-1),
         (2, -8.84549479328286085344864962717e-1),
@@ -334,9 +328,7 @@ mod tests {
     #[test]
     fn tree_counts() {
         let ts = trees(8);
-        let counts: Vec<usize> = (1..=8)
-            .map(|o| ts.iter().filter(|t| t.0 == o).count())
-            .collect();
+        let counts: Vec<usize> = (1..=8).map(|o| ts.iter().filter(|t| t.0 == o).count()).collect();
         assert_eq!(counts, vec![1, 1, 2, 4, 9, 20, 48, 115]);
     }
 
@@ -365,33 +357,20 @@ mod tests {
             let exact = 1.0 / gamma[k];
             let e8 = dot(&b, &phi[k]) - exact;
             worst = worst.max(e8.abs());
-            assert!(
-                e8.abs() < 1e-13,
-                "8th-order condition fails for tree {k} (order {order}): {e8:e}"
-            );
+            assert!(e8.abs() < 1e-13, "8th-order condition fails for tree {k} (order {order}): {e8:e}");
             if *order <= 5 {
                 // er = b - b5: the 5th-order weights satisfy the conditions up to order 5.
                 let e5 = dot(&er, &phi[k]);
-                assert!(
-                    e5.abs() < 1e-12,
-                    "5th-order estimator fails for tree {k} (order {order}): {e5:e}"
-                );
+                assert!(e5.abs() < 1e-12, "5th-order estimator fails for tree {k} (order {order}): {e5:e}");
             }
             if *order <= 3 {
                 let e3 = dot(&bhh, &phi[k]) - exact;
-                assert!(
-                    e3.abs() < 1e-12,
-                    "3rd-order estimator fails for tree {k} (order {order}): {e3:e}"
-                );
+                assert!(e3.abs() < 1e-12, "3rd-order estimator fails for tree {k} (order {order}): {e3:e}");
             }
         }
         // The estimators are not of higher order than claimed (they do estimate something).
-        let e5_order6: f64 = ts
-            .iter()
-            .enumerate()
-            .filter(|(_, t)| t.0 == 6)
-            .map(|(k, _)| dot(&er, &phi[k]).abs())
-            .fold(0.0, f64::max);
+        let e5_order6: f64 =
+            ts.iter().enumerate().filter(|(_, t)| t.0 == 6).map(|(k, _)| dot(&er, &phi[k]).abs()).fold(0.0, f64::max);
         assert!(e5_order6 > 1e-6, "{e5_order6:e}");
         assert!(worst < 1e-13, "{worst:e}");
     }

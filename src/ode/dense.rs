@@ -77,10 +77,7 @@ impl Dop853 {
     /// Component `i` of the state at `t` in the last accepted step.
     pub fn dense_component(&self, i: usize, t: f64) -> Result<f64, OdeError> {
         if i >= self.dim() {
-            return Err(OdeError::DimensionMismatch {
-                expected: self.dim(),
-                got: i,
-            });
+            return Err(OdeError::DimensionMismatch { expected: self.dim(), got: i });
         }
         let p = self.dense_point(t)?;
         Ok(self.dense_component_at(i, p))
@@ -97,10 +94,7 @@ impl Dop853 {
     /// crossings within one sampling sub-interval may be missed (see `docs/ode.md`).
     ///
     /// Errors: no step yet; `f` returned a non-finite value.
-    pub fn locate<F: FnMut(f64, &[f64]) -> f64>(
-        &mut self,
-        mut f: F,
-    ) -> Result<Option<f64>, OdeError> {
+    pub fn locate<F: FnMut(f64, &[f64]) -> f64>(&mut self, mut f: F) -> Result<Option<f64>, OdeError> {
         let (t_old, t_new, _) = self.dense_interval().ok_or(OdeError::NoDenseOutput)?;
         self.ensure_work();
         let mut buf = std::mem::take(&mut self.work.y_dense);
@@ -126,17 +120,12 @@ impl Dop853 {
     /// but cheaper (one component of the dense output per evaluation) and `&self`.
     pub fn locate_component(&self, i: usize, level: f64) -> Result<Option<f64>, OdeError> {
         if i >= self.dim() {
-            return Err(OdeError::DimensionMismatch {
-                expected: self.dim(),
-                got: i,
-            });
+            return Err(OdeError::DimensionMismatch { expected: self.dim(), got: i });
         }
         let (t_old, t_new, _) = self.dense_interval().ok_or(OdeError::NoDenseOutput)?;
-        first_crossing(t_old, t_new, self.config().event_samples, |t| {
-            match self.dense_point(t) {
-                Ok(p) => self.dense_component_at(i, p) - level,
-                Err(_) => f64::NAN,
-            }
+        first_crossing(t_old, t_new, self.config().event_samples, |t| match self.dense_point(t) {
+            Ok(p) => self.dense_component_at(i, p) - level,
+            Err(_) => f64::NAN,
         })
     }
 }

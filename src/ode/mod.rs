@@ -98,9 +98,7 @@ pub enum OdeError {
     NonFiniteRhs { t: f64 },
     /// Trial steps kept producing non-finite values; the step size was reduced to `h` (or
     /// `rejections` consecutive attempts failed) without success.
-    #[error(
-        "non-finite values in ODE trial steps at t = {t}: step size reduced to {h} after {rejections} rejections"
-    )]
+    #[error("non-finite values in ODE trial steps at t = {t}: step size reduced to {h} after {rejections} rejections")]
     NonFiniteStep { t: f64, h: f64, rejections: u32 },
     /// The step size needed to meet the tolerance fell below `10 eps |t|`: the tolerance is
     /// too tight for double precision, or the problem is singular or extremely stiff here.

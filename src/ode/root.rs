@@ -104,21 +104,13 @@ pub(super) fn first_crossing<G: FnMut(f64) -> f64>(
     mut g: G,
 ) -> Result<Option<f64>, OdeError> {
     let check = |t: f64, v: f64| {
-        if v.is_finite() {
-            Ok(v)
-        } else {
-            Err(OdeError::NonFiniteEvent { t, value: v })
-        }
+        if v.is_finite() { Ok(v) } else { Err(OdeError::NonFiniteEvent { t, value: v }) }
     };
     let n = n_sub.max(1);
     let mut a = t0;
     let mut ga = check(t0, g(t0))?;
     for j in 1..=n {
-        let b = if j == n {
-            t1
-        } else {
-            t0 + (t1 - t0) * (f64::from(j) / f64::from(n))
-        };
+        let b = if j == n { t1 } else { t0 + (t1 - t0) * (f64::from(j) / f64::from(n)) };
         let gb = check(b, g(b))?;
         if ga < 0.0 && gb >= 0.0 {
             let mut bad: Option<(f64, f64)> = None;
@@ -194,16 +186,12 @@ mod tests {
         let r = first_crossing(0.0, 1.0, 8, |t| t - 0.3).unwrap().unwrap();
         assert!((r - 0.3).abs() <= 1e-15);
         // Non-monotone: below at both ends, above in the middle.
-        let r = first_crossing(0.0, 1.0, 8, |t| 0.01 - (t - 0.5) * (t - 0.5))
-            .unwrap()
-            .unwrap();
+        let r = first_crossing(0.0, 1.0, 8, |t| 0.01 - (t - 0.5) * (t - 0.5)).unwrap().unwrap();
         assert!((r - 0.4).abs() <= 1e-14, "r = {r}");
         // Already >= 0 at the start and stays: no crossing.
         assert_eq!(first_crossing(0.0, 1.0, 8, |t| t).unwrap(), None);
         // Starts >= 0, dips below, comes back: the return crossing is found.
-        let r = first_crossing(0.0, 1.0, 8, |t| (t - 0.25) * (t - 0.75))
-            .unwrap()
-            .unwrap();
+        let r = first_crossing(0.0, 1.0, 8, |t| (t - 0.25) * (t - 0.75)).unwrap().unwrap();
         assert!((r - 0.75).abs() <= 1e-14, "r = {r}");
         // Exactly at the end.
         assert_eq!(first_crossing(0.0, 1.0, 8, |t| t - 1.0).unwrap(), Some(1.0));

@@ -193,12 +193,7 @@ impl TryFrom<Dop853Data> for Dop853 {
         d.cfg.validate()?;
         let n = d.dim;
         let bad = |what: &'static str| Err(OdeError::InvalidState { what });
-        if n == 0
-            || d.y_cur.len() != n
-            || d.f0.len() != n
-            || d.y_end.len() != n
-            || d.cont.len() != 8 * n
-        {
+        if n == 0 || d.y_cur.len() != n || d.f0.len() != n || d.y_end.len() != n || d.cont.len() != 8 * n {
             return bad("vector lengths do not match the dimension");
         }
         if let Some(h) = d.h_prop {
@@ -267,24 +262,14 @@ impl Dop853 {
     /// An integrator for systems of dimension `dim >= 1` with tolerances `rtol >= 0`,
     /// `atol > 0` and Hairer's other defaults.
     pub fn new(dim: usize, rtol: f64, atol: f64) -> Result<Self, OdeError> {
-        Self::with_config(
-            dim,
-            Dop853Config {
-                rtol,
-                atol,
-                ..Dop853Config::default()
-            },
-        )
+        Self::with_config(dim, Dop853Config { rtol, atol, ..Dop853Config::default() })
     }
 
     /// An integrator with explicit settings.
     pub fn with_config(dim: usize, cfg: Dop853Config) -> Result<Self, OdeError> {
         cfg.validate()?;
         if dim == 0 {
-            return Err(OdeError::DimensionMismatch {
-                expected: 1,
-                got: 0,
-            });
+            return Err(OdeError::DimensionMismatch { expected: 1, got: 0 });
         }
         let mut s = Self {
             dim,
@@ -346,13 +331,7 @@ impl Dop853 {
     /// Test hook: installs a last step by hand (dense coefficients of the cubic Hermite part
     /// only, from the given end states and derivatives).
     #[cfg(test)]
-    pub(super) fn set_last_step_for_test(
-        &mut self,
-        t_old: f64,
-        y_old: &[f64],
-        t_new: f64,
-        y_new: &[f64],
-    ) {
+    pub(super) fn set_last_step_for_test(&mut self, t_old: f64, y_old: &[f64], t_new: f64, y_new: &[f64]) {
         let n = self.dim;
         self.cont.fill(0.0);
         for i in 0..n {
@@ -367,8 +346,7 @@ impl Dop853 {
     }
 
     pub(super) fn dense_interval(&self) -> Option<(f64, f64, f64)> {
-        self.dense_valid
-            .then_some((self.t_old, self.t_new, self.h_step))
+        self.dense_valid.then_some((self.t_old, self.t_new, self.h_step))
     }
 
     /// Forget the FSAL derivative: call after the right-hand side changed discontinuously
@@ -380,35 +358,19 @@ impl Dop853 {
     }
 
     pub(super) fn check_len(&self, len: usize) -> Result<(), OdeError> {
-        if len == self.dim {
-            Ok(())
-        } else {
-            Err(OdeError::DimensionMismatch {
-                expected: self.dim,
-                got: len,
-            })
-        }
+        if len == self.dim { Ok(()) } else { Err(OdeError::DimensionMismatch { expected: self.dim, got: len }) }
     }
 
     pub(super) fn ensure_work(&mut self) {
         let n = self.dim;
         if self.work.k.len() != STAGES_EXT * n {
-            self.work = Work {
-                k: vec![0.0; STAGES_EXT * n],
-                ys: vec![0.0; n],
-                y_new: vec![0.0; n],
-                y_dense: vec![0.0; n],
-            };
+            self.work =
+                Work { k: vec![0.0; STAGES_EXT * n], ys: vec![0.0; n], y_new: vec![0.0; n], y_dense: vec![0.0; n] };
         }
     }
 
     /// Makes `f0 = f(t, y)` valid (FSAL reuse if `t`, `y` are those of the last step end).
-    fn prepare_start<S: OdeSystem + ?Sized>(
-        &mut self,
-        sys: &mut S,
-        t: f64,
-        y: &[f64],
-    ) -> Result<(), OdeError> {
+    fn prepare_start<S: OdeSystem + ?Sized>(&mut self, sys: &mut S, t: f64, y: &[f64]) -> Result<(), OdeError> {
         if self.f0_valid && self.t_cur == t && self.y_cur == y {
             return Ok(());
         }
@@ -431,13 +393,7 @@ impl Dop853 {
     /// Hairer's `HINIT` (order 8): `h` such that `h^8 max(|f0|, |f'|) = 0.01` in the error
     /// norm, at most `100` times the explicit-Euler guess. The Euler probe never goes beyond
     /// `remaining`.
-    fn initial_step<S: OdeSystem + ?Sized>(
-        &mut self,
-        sys: &mut S,
-        t: f64,
-        y: &[f64],
-        remaining: f64,
-    ) -> f64 {
+    fn initial_step<S: OdeSystem + ?Sized>(&mut self, sys: &mut S, t: f64, y: &[f64], remaining: f64) -> f64 {
         if let Some(h) = self.cfg.h_init {
             return h;
         }
@@ -450,11 +406,7 @@ impl Dop853 {
             dnf += (fi / sk).powi(2);
             dny += (yi / sk).powi(2);
         }
-        let mut h = if dnf <= 1e-10 || dny <= 1e-10 {
-            1e-6
-        } else {
-            (dny / dnf).sqrt() * 0.01
-        };
+        let mut h = if dnf <= 1e-10 || dny <= 1e-10 { 1e-6 } else { (dny / dnf).sqrt() * 0.01 };
         h = h.min(h_max).min(remaining);
         let (k, ys) = (&mut self.work.k, &mut self.work.ys);
         for i in 0..n {
@@ -470,17 +422,10 @@ impl Dop853 {
         }
         let der2 = der2.sqrt() / h;
         let der12 = der2.abs().max(dnf.sqrt());
-        let h1 = if der12 <= 1e-15 || !der12.is_finite() {
-            (h * 1e-3).max(1e-6)
-        } else {
-            (0.01 / der12).powf(1.0 / 8.0)
-        };
+        let h1 =
+            if der12 <= 1e-15 || !der12.is_finite() { (h * 1e-3).max(1e-6) } else { (0.01 / der12).powf(1.0 / 8.0) };
         let h = (100.0 * h).min(h1).min(h_max);
-        if h > 0.0 && h.is_finite() {
-            h
-        } else {
-            remaining
-        }
+        if h > 0.0 && h.is_finite() { h } else { remaining }
     }
 
     /// The eleven new stages of a step of size `h` from `(t, y)`, the candidate `y_new` and
@@ -519,23 +464,12 @@ impl Dop853 {
             deno = 1.0;
         }
         let err = h.abs() * err5 * (1.0 / (n as f64 * deno)).sqrt();
-        if err.is_finite() {
-            Trial::Error(err)
-        } else {
-            Trial::NonFinite
-        }
+        if err.is_finite() { Trial::Error(err) } else { Trial::NonFinite }
     }
 
     /// For an accepted trial: the FSAL stage at `(t_new, y_new)` and the three dense-output
     /// stages. `false` if any is non-finite (the trial must then be rejected).
-    fn extra_stages<S: OdeSystem + ?Sized>(
-        &mut self,
-        sys: &mut S,
-        t: f64,
-        y: &[f64],
-        h: f64,
-        t_new: f64,
-    ) -> bool {
+    fn extra_stages<S: OdeSystem + ?Sized>(&mut self, sys: &mut S, t: f64, y: &[f64], h: f64, t_new: f64) -> bool {
         let n = self.dim;
         let Work { k, ys, y_new, .. } = &mut self.work;
         {
@@ -633,18 +567,10 @@ impl Dop853 {
         let mut rejections = 0u32;
         let mut last_non_finite = false;
         loop {
-            let (h, clamped) = if 1.01 * h_prop >= remaining {
-                (remaining, true)
-            } else {
-                (h_prop, false)
-            };
+            let (h, clamped) = if 1.01 * h_prop >= remaining { (remaining, true) } else { (h_prop, false) };
             if !clamped && (h.is_nan() || h <= h_min) {
                 return Err(if last_non_finite {
-                    OdeError::NonFiniteStep {
-                        t: t0,
-                        h,
-                        rejections,
-                    }
+                    OdeError::NonFiniteStep { t: t0, h, rejections }
                 } else {
                     OdeError::StepSizeUnderflow { t: t0, h }
                 });
@@ -666,11 +592,7 @@ impl Dop853 {
                     self.stats.rejected += 1;
                     rejections += 1;
                     if rejections >= cfg.max_consecutive_rejections {
-                        return Err(OdeError::TooManyRejections {
-                            t: t0,
-                            h,
-                            rejections,
-                        });
+                        return Err(OdeError::TooManyRejections { t: t0, h, rejections });
                     }
                     continue;
                 }
@@ -684,19 +606,14 @@ impl Dop853 {
                 self.stats.rejected_non_finite += 1;
                 rejections += 1;
                 if rejections >= cfg.max_consecutive_rejections {
-                    return Err(OdeError::NonFiniteStep {
-                        t: t0,
-                        h,
-                        rejections,
-                    });
+                    return Err(OdeError::NonFiniteStep { t: t0, h, rejections });
                 }
                 continue;
             };
             // Accepted. New proposal (Hairer): h / clamp(err^expo1 / facold^beta / safety,
             // 1/fac_max, 1/fac_min), no growth right after a rejection, at most h_max.
             let fac11 = err.powf(expo1);
-            let fac = (fac11 / self.facold.powf(cfg.beta) / cfg.safety)
-                .clamp(1.0 / cfg.fac_max, 1.0 / cfg.fac_min);
+            let fac = (fac11 / self.facold.powf(cfg.beta) / cfg.safety).clamp(1.0 / cfg.fac_max, 1.0 / cfg.fac_min);
             let mut h_new = h / fac;
             if rejections > 0 {
                 h_new = h_new.min(h);
@@ -740,11 +657,7 @@ impl Dop853 {
         if !ok {
             self.stats.rejected += 1;
             self.stats.rejected_non_finite += 1;
-            return Err(OdeError::NonFiniteStep {
-                t: t0,
-                h,
-                rejections: 1,
-            });
+            return Err(OdeError::NonFiniteStep { t: t0, h, rejections: 1 });
         }
         self.commit(t, y, h, t_new);
         Ok(())
@@ -765,11 +678,7 @@ impl Dop853 {
         self.ensure_work();
         self.prepare_start(sys, t, y)?;
         if let Trial::NonFinite = self.trial(sys, t, y, h) {
-            return Err(OdeError::NonFiniteStep {
-                t,
-                h,
-                rejections: 1,
-            });
+            return Err(OdeError::NonFiniteStep { t, h, rejections: 1 });
         }
         let n = self.dim;
         let k = &self.work.k;

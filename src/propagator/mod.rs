@@ -213,18 +213,10 @@ impl LinearPlate {
     /// Panics unless `mass, eta, k` are finite and non-negative with `mass + eta > 0`.
     pub fn new(mass: f64, eta: f64, k: f64) -> LinearPlate {
         assert!(
-            mass.is_finite()
-                && eta.is_finite()
-                && k.is_finite()
-                && mass >= 0.0
-                && eta >= 0.0
-                && k >= 0.0,
+            mass.is_finite() && eta.is_finite() && k.is_finite() && mass >= 0.0 && eta >= 0.0 && k >= 0.0,
             "LinearPlate: mass, eta, k must be finite and >= 0 (got {mass}, {eta}, {k})"
         );
-        assert!(
-            mass > 0.0 || eta > 0.0,
-            "LinearPlate: mass and eta are both zero"
-        );
+        assert!(mass > 0.0 || eta > 0.0, "LinearPlate: mass and eta are both zero");
         let mut p = LinearPlate {
             mass,
             eta,
@@ -304,15 +296,7 @@ impl LinearPlate {
     pub fn trajectory(&self, y0: f64, v0: f64, a: f64, b: f64) -> Trajectory {
         let p = *self;
         let f0 = a - p.k * y0;
-        let mut t = Trajectory {
-            plate: p,
-            y0,
-            v0,
-            f0,
-            b,
-            c: [0.0; 4],
-            d: [0.0; 2],
-        };
+        let mut t = Trajectory { plate: p, y0, v0, f0, b, c: [0.0; 4], d: [0.0; 2] };
         match p.branch {
             Branch::FirstOrder => {
                 let g0 = f0 * p.inv_mu;
@@ -405,8 +389,7 @@ impl Trajectory {
         let bb = p.k_m * tau * tau;
         let t1 = self.v0 * tau;
         let t2 = (self.f0 - p.eta * self.v0) * p.inv_m * (0.5 * tau * tau);
-        let t3 = self.b * p.inv_m * (tau * tau * tau * RECIP[6])
-            - (aa * t2 * RECIP[3] + bb * t1 * RECIP[6]);
+        let t3 = self.b * p.inv_m * (tau * tau * tau * RECIP[6]) - (aa * t2 * RECIP[3] + bb * t1 * RECIP[6]);
         s.push(0, 0.0);
         s.push(1, t1);
         s.push(2, t2);
@@ -439,8 +422,7 @@ impl Trajectory {
         let bb = p.k_m * tau * tau;
         let t1 = self.v0 * tau;
         let t2 = (self.f0 - p.eta * self.v0) * p.inv_m * (0.5 * tau * tau);
-        let t3 = self.b * p.inv_m * (tau * tau * tau * RECIP[6])
-            - (aa * t2 * RECIP[3] + bb * t1 * RECIP[6]);
+        let t3 = self.b * p.inv_m * (tau * tau * tau * RECIP[6]) - (aa * t2 * RECIP[3] + bb * t1 * RECIP[6]);
         let mut dabs = 2.0 * t2.abs() + 3.0 * t3.abs();
         let mut u = t2 + t3;
         let mut du = 2.0 * t2 + 3.0 * t3;
@@ -510,11 +492,7 @@ impl Trajectory {
         if p.q > 0.0 {
             let es = (p.r_s * tau).exp();
             let x = (-2.0 * p.w * tau).exp_m1();
-            (
-                es * (1.0 + 0.5 * x),
-                -es * x / (2.0 * p.w),
-                es * es * (1.0 + x),
-            )
+            (es * (1.0 + 0.5 * x), -es * x / (2.0 * p.w), es * es * (1.0 + x))
         } else if p.q < 0.0 {
             let e = (p.m * tau).exp();
             let (sn, cs) = (p.w * tau).sin_cos();
@@ -656,11 +634,7 @@ impl Trajectory {
         let i1 = h * (c0 + 0.5 * c1 * h) + iz;
         // int e^{2 m tau}.
         let x2 = 2.0 * p.m * h;
-        let ie2 = if x2.abs() <= PHI_SERIES_MAX {
-            h * phis(x2).1
-        } else {
-            (e2m - 1.0) / (2.0 * p.m)
-        };
+        let ie2 = if x2.abs() <= PHI_SERIES_MAX { h * phis(x2).1 } else { (e2m - 1.0) / (2.0 * p.m) };
         // Gram matrix of (u1, u2) from d/dtau (u1^2, u1 u2, u2^2) and u1^2 - q u2^2 = e^{2 m tau}.
         let zz = u2 * u2;
         let bb = u1 * u2;
@@ -672,10 +646,7 @@ impl Trajectory {
         let pm = c0 + 0.5 * c1w * h;
         let ipp = h * (pm * pm + c1w * c1w * h * h * RECIP[12]);
         let ipz = c0 * iz + c1w * itz;
-        Integrals {
-            i1,
-            i2: (ipp + 2.0 * ipz + i_zsq).max(0.0),
-        }
+        Integrals { i1, i2: (ipp + 2.0 * ipz + i_zsq).max(0.0) }
     }
 
     /// Proven bounds `lo <= y(tau) <= hi` for all `tau` in `[0, h]` (loose, never wrong).
@@ -704,11 +675,7 @@ impl Trajectory {
         let mut lo = f64::NEG_INFINITY;
         let mut hi = f64::INFINITY;
         // Short-horizon enclosure.
-        let cv = if p.mass > 0.0 {
-            h.min(p.mass / p.eta)
-        } else {
-            0.0
-        };
+        let cv = if p.mass > 0.0 { h.min(p.mass / p.eta) } else { 0.0 };
         let c2 = (h / p.eta).min(h * h / (2.0 * p.mass));
         let c3 = (h * h / (2.0 * p.eta)).min(h * h * h / (6.0 * p.mass));
         let kc2 = k * c2;
@@ -746,11 +713,7 @@ impl Trajectory {
             };
             let plo = c0 + (c1 * h).min(0.0);
             let phi = c0 + (c1 * h).max(0.0);
-            let mag = c0.abs()
-                + (c1 * h).abs()
-                + zmag
-                + (f0.abs() + p.eta * c1.abs()) * p.inv_k
-                + b.abs() * p.inv_k;
+            let mag = c0.abs() + (c1 * h).abs() + zmag + (f0.abs() + p.eta * c1.abs()) * p.inv_k + b.abs() * p.inv_k;
             let margin = BOUND_REL_MARGIN * mag + 4.0 * f64::EPSILON * (y0.abs() + mag);
             lo = lo.max(y0 + plo + zlo - margin);
             hi = hi.min(y0 + phi + zhi + margin);
@@ -794,12 +757,7 @@ mod tests {
 
     #[test]
     fn initial_state() {
-        for &(m, e, k) in &[
-            (1.0, 10.0, 1.0),
-            (1.0, 2.0, 1.0),
-            (1.0, 0.0, 3.0),
-            (0.0, 2.0, 3.0),
-        ] {
+        for &(m, e, k) in &[(1.0, 10.0, 1.0), (1.0, 2.0, 1.0), (1.0, 0.0, 3.0), (0.0, 2.0, 3.0)] {
             let t = LinearPlate::new(m, e, k).trajectory(0.5, -0.25, 2.0, 1.0);
             let (y, v) = t.at(0.0);
             assert_eq!(y, 0.5);
@@ -813,7 +771,8 @@ mod tests {
 
     #[test]
     fn fused_call_equals_separate_calls() {
-        for &(m, eta, k) in &[(75.0, 75.0, 180.0), (1.0, 0.0, 4.0), (1e-6, 1.0, 1e3), (0.0, 2.0, 3.0), (2.0, 4.0, 2.0)] {
+        for &(m, eta, k) in &[(75.0, 75.0, 180.0), (1.0, 0.0, 4.0), (1e-6, 1.0, 1e3), (0.0, 2.0, 3.0), (2.0, 4.0, 2.0)]
+        {
             let p = LinearPlate::new(m, eta, k);
             let tr = p.trajectory(0.3, -0.7, 5.0, 1.5);
             for &h in &[1e-9, 1e-5, 1e-3, 0.05, 0.7, 3.0, 40.0] {

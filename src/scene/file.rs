@@ -6,9 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::params::{
-    BondKind, EngineKind, FlipRule, ForceLawKind, Initial, IntegratorKind, Reattach, RngKind,
-};
+use super::params::{BondKind, EngineKind, FlipRule, ForceLawKind, Initial, IntegratorKind, Reattach, RngKind};
 
 /// `[junctions]`.
 #[derive(Clone, Debug, Default, Deserialize, Serialize)]

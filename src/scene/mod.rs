@@ -69,8 +69,18 @@ impl Scene {
                 initial: Some(j.initial),
             },
             plate: file::PlateSection { mass: Some(p.mass), eta: Some(p.eta), k: Some(p.k), v: Some(p.v) },
-            run: file::RunSection { engine: Some(r.engine), t_end: Some(r.t_end), t_warmup: Some(r.t_warmup), seed: Some(r.seed) },
-            fixed: file::FixedSection { dt: Some(f.dt), rng: Some(f.rng), flip: Some(f.flip), integrator: Some(f.integrator) },
+            run: file::RunSection {
+                engine: Some(r.engine),
+                t_end: Some(r.t_end),
+                t_warmup: Some(r.t_warmup),
+                seed: Some(r.seed),
+            },
+            fixed: file::FixedSection {
+                dt: Some(f.dt),
+                rng: Some(f.rng),
+                flip: Some(f.flip),
+                integrator: Some(f.integrator),
+            },
             exact: file::ExactSection { rtol: Some(e.rtol), atol: Some(e.atol) },
             output: file::OutputSection {
                 sample_dt: Some(o.sample_dt),

@@ -15,9 +15,7 @@ pub fn apply(table: &mut toml::Table, assignment: &str) -> Result<(), SceneError
         return Err(err("expected section.key=value"));
     }
     let value = parse_value(raw.trim()).ok_or_else(|| err("the value is empty"))?;
-    let entry = table
-        .entry(section.to_string())
-        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+    let entry = table.entry(section.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
     match entry {
         toml::Value::Table(t) => {
             t.insert(field.to_string(), value);

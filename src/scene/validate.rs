@@ -81,9 +81,14 @@ impl SceneFile {
         let t_end = finite_gt("run.t_end", r.t_end.unwrap_or(150.0), 0.0)?;
         let t_warmup = finite_ge("run.t_warmup", r.t_warmup.unwrap_or(0.0), 0.0)?;
         if t_warmup >= t_end {
-            return Err(SceneError::invalid("run.t_warmup", t_warmup, format!("must be less than run.t_end ({t_end})")));
+            return Err(SceneError::invalid(
+                "run.t_warmup",
+                t_warmup,
+                format!("must be less than run.t_end ({t_end})"),
+            ));
         }
-        let run = RunParams { engine: r.engine.unwrap_or(EngineKind::Exact), t_end, t_warmup, seed: r.seed.unwrap_or(1) };
+        let run =
+            RunParams { engine: r.engine.unwrap_or(EngineKind::Exact), t_end, t_warmup, seed: r.seed.unwrap_or(1) };
 
         let f = &self.fixed;
         let fixed = FixedParams {
@@ -104,16 +109,15 @@ impl SceneFile {
                 return Err(SceneError::invalid(
                     "run.seed",
                     run.seed,
-                    format!("must be in [1, {PARK_MILLER_SEED_MAX}] for the Park-Miller generator (fixed.rng = \"park-miller\")"),
+                    format!(
+                        "must be in [1, {PARK_MILLER_SEED_MAX}] for the Park-Miller generator (fixed.rng = \"park-miller\")"
+                    ),
                 ));
             }
         }
 
         let e = &self.exact;
-        let exact = ExactParams {
-            rtol: e.rtol.unwrap_or(1e-10),
-            atol: e.atol.unwrap_or(1e-12),
-        };
+        let exact = ExactParams { rtol: e.rtol.unwrap_or(1e-10), atol: e.atol.unwrap_or(1e-12) };
         if !(exact.rtol.is_finite() && (1e-14..=1e-2).contains(&exact.rtol)) {
             return Err(SceneError::invalid("exact.rtol", exact.rtol, "must be a number from 1e-14 to 1e-2"));
         }

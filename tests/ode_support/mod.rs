@@ -11,13 +11,7 @@ pub struct Mixed;
 
 impl Mixed {
     pub fn exact(t: f64) -> [f64; 5] {
-        [
-            1.0 / (1.0 + t * t),
-            t.sin().exp(),
-            t.sin(),
-            t.cos(),
-            t.exp(),
-        ]
+        [1.0 / (1.0 + t * t), t.sin().exp(), t.sin(), t.cos(), t.exp()]
     }
 }
 
@@ -47,26 +41,10 @@ pub struct Driven {
 
 impl Driven {
     /// Light damping: about 32 periods on [0, 50], amplitude decays by e^-2.5.
-    pub const LIGHT: Driven = Driven {
-        m: 1.0,
-        eta: 0.1,
-        k: 4.0,
-        a: 0.5,
-        b: 0.02,
-        x0: 1.0,
-        v0: 0.0,
-    };
+    pub const LIGHT: Driven = Driven { m: 1.0, eta: 0.1, k: 4.0, a: 0.5, b: 0.02, x0: 1.0, v0: 0.0 };
     /// The letter's plate (M = 75, eta = 75, k = 150) pulled at V = 0.5 (a + b t = k V t),
     /// started off the steady state.
-    pub const PLATE: Driven = Driven {
-        m: 75.0,
-        eta: 75.0,
-        k: 150.0,
-        a: 0.0,
-        b: 75.0,
-        x0: 1.0,
-        v0: 2.0,
-    };
+    pub const PLATE: Driven = Driven { m: 75.0, eta: 75.0, k: 150.0, a: 0.0, b: 75.0, x0: 1.0, v0: 2.0 };
 
     pub fn y0(&self) -> [f64; 3] {
         [self.x0, self.v0, 0.0]
@@ -74,15 +52,7 @@ impl Driven {
 
     /// Exact `[X, X', Q]` at `t`.
     pub fn exact(&self, t: f64) -> [f64; 3] {
-        let Driven {
-            m,
-            eta,
-            k,
-            a,
-            b,
-            x0,
-            v0,
-        } = *self;
+        let Driven { m, eta, k, a, b, x0, v0 } = *self;
         let g = eta / (2.0 * m);
         let w = (k / m - g * g).sqrt();
         assert!(w.is_finite() && w > 0.0, "underdamped parameters expected");
@@ -125,10 +95,7 @@ pub fn slope(hs: &[f64], errs: &[f64]) -> f64 {
 }
 
 pub fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
 }
 
 /// `[1.23e-4, ...]` for messages.

@@ -65,7 +65,11 @@ pub struct Bags {
 
 impl Bags {
     pub fn with_capacity(n: usize) -> Bags {
-        let b = Bags { attached: Vec::with_capacity(n), detached: Vec::with_capacity(n), anchor_sum: CompensatedSum::default() };
+        let b = Bags {
+            attached: Vec::with_capacity(n),
+            detached: Vec::with_capacity(n),
+            anchor_sum: CompensatedSum::default(),
+        };
         advise_huge_pages(&b.attached);
         advise_huge_pages(&b.detached);
         b

@@ -145,19 +145,19 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
             tau: 0.0,
             y: 0.0,
             yd: 0.0,
-            piece: Piece { tau0: 0.0, y0: 0.0, v0: 0.0, traj: LinearPlate::new(1.0, 1.0, 1.0).trajectory(0.0, 0.0, 0.0, 0.0) },
+            piece: Piece {
+                tau0: 0.0,
+                y0: 0.0,
+                v0: 0.0,
+                traj: LinearPlate::new(1.0, 1.0, 1.0).trajectory(0.0, 0.0, 0.0, 0.0),
+            },
             bags,
             rupture,
             clocks: [Clock::default(); CHANNELS],
             queue: Q::new(CHANNELS),
             rng,
             next_formation,
-            counters: Counters {
-                events: Some(0),
-                candidates: Some(0),
-                rebases: Some(0),
-                ..Default::default()
-            },
+            counters: Counters { events: Some(0), candidates: Some(0), rebases: Some(0), ..Default::default() },
             events_since_rebase: 0,
             plates: PlateCache::default(),
         };
@@ -352,7 +352,9 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
             // In the local frame, which a re-basing inside this loop moves.
             let tau_stop = self.frame.local(t_stop).max(self.tau);
             let (ch, t_next) = self.queue.first();
-            if !(t_next <= tau_stop) {
+            // A NaN time is never due (it would stop the loop, not spin it).
+            let due = t_next <= tau_stop;
+            if !due {
                 let (y, v) = self.close_piece(tau_stop, obs);
                 self.check(y, v)?;
                 self.maybe_rebase(obs);
@@ -376,7 +378,12 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
                         self.redraw(FORMATION, t_next);
                     }
                 }
-                RUPTURE => match self.rupture.pick(&mut self.rng, &self.piece.traj, t_next - self.piece.tau0, &self.bags.attached) {
+                RUPTURE => match self.rupture.pick(
+                    &mut self.rng,
+                    &self.piece.traj,
+                    t_next - self.piece.tau0,
+                    &self.bags.attached,
+                ) {
                     Some(slot) => {
                         let (y, v) = self.close_piece(t_next, obs);
                         self.check(y, v)?;

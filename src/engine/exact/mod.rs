@@ -49,7 +49,9 @@ pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output
     match (scene.junctions.force_law, scene.junctions.bond) {
         (ForceLawKind::Linear, BondKind::Strong) => Ok(visitor.visit(strong_linear::<DefaultQueue>(scene))),
         (ForceLawKind::Linear, BondKind::Weak) => Ok(visitor.visit(weak_linear::<DefaultQueue>(scene))),
-        (ForceLawKind::Tilted, BondKind::Strong) => Ok(visitor.visit(ExactTilted::new(scene, Strong::from_scene(scene))?)),
+        (ForceLawKind::Tilted, BondKind::Strong) => {
+            Ok(visitor.visit(ExactTilted::new(scene, Strong::from_scene(scene))?))
+        }
         (ForceLawKind::Tilted, BondKind::Weak) => Ok(visitor.visit(ExactTilted::new(scene, Weak::from_scene(scene))?)),
     }
 }

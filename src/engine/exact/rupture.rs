@@ -180,7 +180,8 @@ impl RuptureModel for WeakRupture {
         }
         // Longest horizon (within a factor 2) whose bound spread is at most SPREAD and that
         // covers about CANDIDATES_PER_HORIZON candidates at the last rate.
-        let cap = if self.last_rate > 0.0 { (CANDIDATES_PER_HORIZON / self.last_rate).min(HORIZON_MAX) } else { HORIZON_MAX };
+        let cap =
+            if self.last_rate > 0.0 { (CANDIDATES_PER_HORIZON / self.last_rate).min(HORIZON_MAX) } else { HORIZON_MAX };
         let mut h = self.horizon.min(cap);
         let mut b = traj.bounds(h);
         for _ in 0..64 {

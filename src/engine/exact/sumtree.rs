@@ -142,10 +142,12 @@ mod tests {
             let s = t.find(0, rng.uniform() * total);
             counts[s / 47] += 1.0;
         }
-        let chi2: f64 = (0..n).map(|i| {
-            let e = draws as f64 * w[i] / total;
-            (counts[i] - e).powi(2) / e
-        }).sum();
+        let chi2: f64 = (0..n)
+            .map(|i| {
+                let e = draws as f64 * w[i] / total;
+                (counts[i] - e).powi(2) / e
+            })
+            .sum();
         assert!(chi2 < 148.2, "chi2 = {chi2}");
     }
 }

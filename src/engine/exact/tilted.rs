@@ -300,7 +300,13 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
 
     fn emit<O: Observer>(&self, obs: &mut O, kind: EventKind, id: u32, x: f64) {
         if O::EVENTS {
-            obs.event(&JunctionEvent { t: self.frame.time(self.tau), junction: id, kind, extension: x, tension: self.law.tension(x) });
+            obs.event(&JunctionEvent {
+                t: self.frame.time(self.tau),
+                junction: id,
+                kind,
+                extension: x,
+                tension: self.law.tension(x),
+            });
         }
     }
 
@@ -480,7 +486,9 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> Engine for ExactTilted<B> {
                 }
             }
             self.check()?;
-            if !(t_next <= tau_stop) {
+            // A NaN time is never due (it would stop the loop, not spin it).
+            let due = t_next <= tau_stop;
+            if !due {
                 self.close_piece(obs);
                 self.maybe_rebase(obs);
                 self.open_piece();

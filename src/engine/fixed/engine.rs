@@ -30,10 +30,7 @@ pub trait Rupture: Bond + Serialize + DeserializeOwned {}
 impl<T: Bond + Serialize + DeserializeOwned> Rupture for T {}
 
 /// A uniform generator the engine can be built with (and checkpointed).
-pub trait Generator:
-    UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned
-{
-}
+pub trait Generator: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned {}
 impl<T: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned> Generator for T {}
 
 /// Magnitude beyond which the plate is declared diverged.
@@ -161,11 +158,7 @@ impl<L: Law, B: Rupture, R: Generator, F: Flip> FixedEngine<L, B, R, F> {
 
     /// `x_i` at `t_n` (with the pending update applied).
     pub fn extension(&self, i: usize) -> f64 {
-        if self.q[i] != 0 {
-            self.x[i] + self.pending_dx
-        } else {
-            self.x[i] * self.pending_relax
-        }
+        if self.q[i] != 0 { self.x[i] + self.pending_dx } else { self.x[i] * self.pending_relax }
     }
 
     /// Steps taken so far.
@@ -203,11 +196,7 @@ impl<L: Law, B: Rupture, R: Generator, F: Flip> FixedEngine<L, B, R, F> {
             let x_n = select(was, *xi + dx, *xi * relax);
             // Rates from the state at t_n; strong-bond thresholds are hoisted.
             let threshold = if B::IS_WEAK {
-                if q_old != 0 {
-                    F::threshold(bond.k_off(law.tension(x_n)) * dt)
-                } else {
-                    on_threshold
-                }
+                if q_old != 0 { F::threshold(bond.k_off(law.tension(x_n)) * dt) } else { on_threshold }
             } else {
                 select(was, off_threshold, on_threshold)
             };
@@ -230,11 +219,7 @@ impl<L: Law, B: Rupture, R: Generator, F: Flip> FixedEngine<L, B, R, F> {
                 obs.event(&JunctionEvent {
                     t,
                     junction: i as u32,
-                    kind: if q_old != 0 {
-                        EventKind::Rupture
-                    } else {
-                        EventKind::Formation
-                    },
+                    kind: if q_old != 0 { EventKind::Rupture } else { EventKind::Formation },
                     extension: x_new,
                     tension: law.tension(x_new),
                 });
@@ -247,15 +232,9 @@ impl<L: Law, B: Rupture, R: Generator, F: Flip> FixedEngine<L, B, R, F> {
         self.attached = self.attached + formations - ruptures;
         if L::IS_LINEAR {
             // f^x(x) = kappa x is linear, so sum_i q_i f^x(x_i) = f^x(sum_i q_i x_i).
-            Pass {
-                bond_force: law.force_x(sum),
-                attached_extension: sum,
-            }
+            Pass { bond_force: law.force_x(sum), attached_extension: sum }
         } else {
-            Pass {
-                bond_force: sum,
-                attached_extension: f64::NAN,
-            }
+            Pass { bond_force: sum, attached_extension: f64::NAN }
         }
     }
 
@@ -263,27 +242,17 @@ impl<L: Law, B: Rupture, R: Generator, F: Flip> FixedEngine<L, B, R, F> {
     /// velocity Verlet). Read-only: the move itself stays pending.
     fn bond_force_moved(&self, dx: f64, pass: Pass) -> f64 {
         if L::IS_LINEAR {
-            self.law
-                .force_x(pass.attached_extension + self.attached as f64 * dx)
+            self.law.force_x(pass.attached_extension + self.attached as f64 * dx)
         } else {
             let law = self.law;
-            self.q
-                .iter()
-                .zip(&self.x)
-                .filter(|(q, _)| **q != 0)
-                .fold(0.0, |s, (_, &x)| s + law.force_x(x + dx))
+            self.q.iter().zip(&self.x).filter(|(q, _)| **q != 0).fold(0.0, |s, (_, &x)| s + law.force_x(x + dx))
         }
     }
 
     /// `F_b` at `t_n` from `(q, x)` before step `n`'s flips.
     fn bond_force_now(&self) -> f64 {
         let dx = self.pending_dx;
-        let attached = self
-            .q
-            .iter()
-            .zip(&self.x)
-            .filter(|(q, _)| **q != 0)
-            .map(|(_, &x)| x + dx);
+        let attached = self.q.iter().zip(&self.x).filter(|(q, _)| **q != 0).map(|(_, &x)| x + dx);
         if L::IS_LINEAR {
             self.law.force_x(attached.fold(0.0, |s, x| s + x))
         } else {
@@ -305,24 +274,11 @@ impl<L: Law, B: Rupture, R: Generator, F: Flip> FixedEngine<L, B, R, F> {
         let t_next = (self.steps + 1) as f64 * self.dt;
         let on_threshold = F::threshold(self.formation.k_on(self.plate_v) * self.dt);
         let pass = self.junction_pass(t, on_threshold, obs);
-        let state = PlateState {
-            t,
-            t_next,
-            x: self.plate_x,
-            v: self.plate_v,
-            bond_force: pass.bond_force,
-        };
-        let next = self.integrator.step(&self.plate, self.dt, state, |dx| {
-            self.bond_force_moved(dx, pass)
-        });
+        let state = PlateState { t, t_next, x: self.plate_x, v: self.plate_v, bond_force: pass.bond_force };
+        let next = self.integrator.step(&self.plate, self.dt, state, |dx| self.bond_force_moved(dx, pass));
         for (quantity, value) in [("X", next.x), ("Xd", next.v)] {
             if !value.is_finite() || value.abs() > DIVERGENCE_LIMIT {
-                return Err(EngineError::Diverged {
-                    step: self.steps + 1,
-                    t: t_next,
-                    quantity,
-                    value,
-                });
+                return Err(EngineError::Diverged { step: self.steps + 1, t: t_next, quantity, value });
             }
         }
         obs.segment(&Segment {
@@ -407,18 +363,12 @@ mod tests {
 
     #[test]
     fn pending_update_is_applied_on_every_read() {
-        let s = testkit::fig1_with(&[
-            "run.engine=fixed",
-            "junctions.force_law=linear",
-            "fixed.dt=0.5",
-        ]);
+        let s = testkit::fig1_with(&["run.engine=fixed", "junctions.force_law=linear", "fixed.dt=0.5"]);
         let (law, bond) = (Linear::from_scene(&s), Strong::from_scene(&s));
         let mut e = FixedEngine::new(&s, law, bond, ParkMiller::new(4).unwrap(), LinearFlip);
         e.advance(10.0, &mut crate::observe::Nothing).unwrap();
         let read = |e: &FixedEngine<_, _, _, _>| -> Vec<(bool, f64)> {
-            (0..e.len())
-                .map(|i| (e.is_attached(i), e.extension(i)))
-                .collect()
+            (0..e.len()).map(|i| (e.is_attached(i), e.extension(i))).collect()
         };
         let before = read(&e);
         let x_before = e.sample().x;

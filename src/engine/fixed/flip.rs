@@ -10,9 +10,7 @@ use serde::{Deserialize, Serialize};
 use crate::scene::FlipRule;
 
 /// A flip rule, chosen once per run (a type parameter of the engine).
-pub trait Flip:
-    Copy + Send + Sync + std::fmt::Debug + Serialize + serde::de::DeserializeOwned + 'static
-{
+pub trait Flip: Copy + Send + Sync + std::fmt::Debug + Serialize + serde::de::DeserializeOwned + 'static {
     /// Which scene option this is.
     const RULE: FlipRule;
     /// The threshold the uniform is compared with, from `k dt >= 0` (`+inf` allowed).
@@ -96,10 +94,7 @@ mod tests {
         assert!(LinearFlip::flips(0.29, LinearFlip::threshold(0.3)));
         assert!(!LinearFlip::flips(0.31, LinearFlip::threshold(0.3)));
         assert_eq!(LinearFlip::threshold(5.0), 1.0);
-        assert!(LinearFlip::flips(
-            1.0 - 1e-16,
-            LinearFlip::threshold(f64::INFINITY)
-        ));
+        assert!(LinearFlip::flips(1.0 - 1e-16, LinearFlip::threshold(f64::INFINITY)));
         assert!(!LinearFlip::flips(1e-300, LinearFlip::threshold(0.0)));
         assert_eq!(LinearFlip::probability(0.25), 0.25);
         assert_eq!(LinearFlip::probability(3.0), 1.0);
@@ -120,10 +115,7 @@ mod tests {
     fn as_printed_rule() {
         assert!(AsPrintedFlip::flips(0.31, AsPrintedFlip::threshold(0.3)));
         assert!(!AsPrintedFlip::flips(0.29, AsPrintedFlip::threshold(0.3)));
-        assert!(!AsPrintedFlip::flips(
-            0.99,
-            AsPrintedFlip::threshold(f64::INFINITY)
-        ));
+        assert!(!AsPrintedFlip::flips(0.99, AsPrintedFlip::threshold(f64::INFINITY)));
         assert!((AsPrintedFlip::probability(0.3) - 0.7).abs() < 1e-16);
         assert_eq!(AsPrintedFlip::probability(2.0), 0.0);
     }

@@ -80,30 +80,16 @@ impl Integrator {
     /// - overdamped (`M = 0`): `v_n = -(F_b + K u_n) / eta`, `X_{n+1} = X_n + dt v_n`,
     ///   `Xd_{n+1} = v_n`.
     #[inline]
-    pub fn step(
-        self,
-        p: &Plate,
-        dt: f64,
-        s: PlateState,
-        bond_force_moved: impl FnOnce(f64) -> f64,
-    ) -> PlateStep {
+    pub fn step(self, p: &Plate, dt: f64, s: PlateState, bond_force_moved: impl FnOnce(f64) -> f64) -> PlateStep {
         let lag = s.x - p.v * s.t;
         match self {
             Integrator::SemiImplicitEuler => {
                 let v = s.v + dt * p.acceleration(lag, s.v, s.bond_force);
-                PlateStep {
-                    x: s.x + dt * v,
-                    v,
-                    viscous_v: s.v,
-                }
+                PlateStep { x: s.x + dt * v, v, viscous_v: s.v }
             }
             Integrator::ExplicitEuler => {
                 let v = s.v + dt * p.acceleration(lag, s.v, s.bond_force);
-                PlateStep {
-                    x: s.x + dt * s.v,
-                    v,
-                    viscous_v: s.v,
-                }
+                PlateStep { x: s.x + dt * s.v, v, viscous_v: s.v }
             }
             Integrator::VelocityVerlet => {
                 let a = p.acceleration(lag, s.v, s.bond_force);
@@ -112,19 +98,11 @@ impl Integrator {
                 let lag_new = x - p.v * s.t_next;
                 let rhs = s.v + 0.5 * dt * (a + (-fb_new - p.k * lag_new) / p.mass);
                 let v = rhs / (1.0 + 0.5 * dt * p.eta / p.mass);
-                PlateStep {
-                    x,
-                    v,
-                    viscous_v: s.v,
-                }
+                PlateStep { x, v, viscous_v: s.v }
             }
             Integrator::Overdamped => {
                 let v = p.overdamped_velocity(lag, s.bond_force);
-                PlateStep {
-                    x: s.x + dt * v,
-                    v,
-                    viscous_v: v,
-                }
+                PlateStep { x: s.x + dt * v, v, viscous_v: v }
             }
         }
     }
@@ -134,21 +112,10 @@ impl Integrator {
 mod tests {
     use super::*;
 
-    const P: Plate = Plate {
-        mass: 2.0,
-        eta: 0.5,
-        k: 3.0,
-        v: 0.25,
-    };
+    const P: Plate = Plate { mass: 2.0, eta: 0.5, k: 3.0, v: 0.25 };
 
     fn state() -> PlateState {
-        PlateState {
-            t: 1.0,
-            t_next: 1.1,
-            x: 0.4,
-            v: -0.2,
-            bond_force: 0.7,
-        }
+        PlateState { t: 1.0, t_next: 1.1, x: 0.4, v: -0.2, bond_force: 0.7 }
     }
 
     #[test]
@@ -185,12 +152,7 @@ mod tests {
     fn overdamped_uses_the_step_velocity() {
         let p = Plate { mass: 0.0, ..P };
         let s = state();
-        let od = Integrator::new(IntegratorKind::VelocityVerlet, 0.0).step(
-            &p,
-            0.1,
-            s,
-            |_| unreachable!(),
-        );
+        let od = Integrator::new(IntegratorKind::VelocityVerlet, 0.0).step(&p, 0.1, s, |_| unreachable!());
         let v = -(0.7 + 3.0 * (0.4 - 0.25)) / 0.5;
         assert_eq!(od.v, v);
         assert_eq!(od.viscous_v, v);

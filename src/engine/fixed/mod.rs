@@ -31,11 +31,7 @@ pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output
     }
 }
 
-fn with_law<L: Law, V: EngineVisitor>(
-    scene: &Scene,
-    law: L,
-    visitor: V,
-) -> Result<V::Output, EngineError> {
+fn with_law<L: Law, V: EngineVisitor>(scene: &Scene, law: L, visitor: V) -> Result<V::Output, EngineError> {
     match scene.junctions.bond {
         BondKind::Strong => with_bond(scene, law, Strong::from_scene(scene), visitor),
         BondKind::Weak => with_bond(scene, law, Weak::from_scene(scene), visitor),
@@ -70,11 +66,7 @@ fn with_rng<L: Law, B: Rupture, R: Generator, V: EngineVisitor>(
 ) -> V::Output {
     match scene.fixed.flip {
         FlipRule::Linear => visitor.visit(FixedEngine::new(scene, law, bond, rng, LinearFlip)),
-        FlipRule::Exponential => {
-            visitor.visit(FixedEngine::new(scene, law, bond, rng, ExponentialFlip))
-        }
-        FlipRule::AsPrinted => {
-            visitor.visit(FixedEngine::new(scene, law, bond, rng, AsPrintedFlip))
-        }
+        FlipRule::Exponential => visitor.visit(FixedEngine::new(scene, law, bond, rng, ExponentialFlip)),
+        FlipRule::AsPrinted => visitor.visit(FixedEngine::new(scene, law, bond, rng, AsPrintedFlip)),
     }
 }
