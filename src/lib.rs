@@ -16,6 +16,7 @@ pub mod propagator;
 pub mod rng;
 pub mod runner;
 pub mod scene;
+pub mod stability;
 #[doc(hidden)]
 pub mod testkit;
 

@@ -4,6 +4,7 @@
 //! mid-run); 2 bad input (command line, scene file, `--set`, output directory).
 
 mod run;
+mod stability;
 mod validate;
 
 use std::path::PathBuf;
@@ -64,6 +65,11 @@ pub enum Command {
         #[command(flatten)]
         scene: SceneArgs,
     },
+    /// Stability limits of the fixed-step scheme at a scene's parameters (docs/stability.md).
+    Stability {
+        #[command(flatten)]
+        scene: SceneArgs,
+    },
 }
 
 /// Prints a one-line error and returns the exit code.
@@ -103,5 +109,6 @@ pub fn main() -> ExitCode {
     match cli.command {
         Command::Run { scene, engine, seed, out } => run::run(&scene, engine, seed, out),
         Command::Validate { scene } => validate::validate(&scene),
+        Command::Stability { scene } => stability::stability(&scene),
     }
 }
