@@ -105,6 +105,20 @@ impl SceneFile {
                     format!("gives more than {STEPS_MAX:e} steps over run.t_end ({t_end})"),
                 ));
             }
+            // The relaxation step `x *= 1 - lambda dt` of detached junctions amplifies their
+            // extensions by |1 - lambda dt| > 1 per step beyond this: refused, never run
+            // (docs/stability.md; docs/scenes.md, "Scenes that validate but strain an engine").
+            if junctions.lambda * fixed.dt > 2.0 {
+                return Err(SceneError::invalid(
+                    "fixed.dt",
+                    fixed.dt,
+                    format!(
+                        "must be <= 2 / junctions.lambda = {:e} with run.engine = \"fixed\" (junctions.lambda * fixed.dt = {:e} > 2 makes the relaxation step x *= 1 - lambda dt of detached junctions unstable)",
+                        2.0 / junctions.lambda,
+                        junctions.lambda * fixed.dt
+                    ),
+                ));
+            }
             if fixed.rng == RngKind::ParkMiller && !(1..=PARK_MILLER_SEED_MAX).contains(&run.seed) {
                 return Err(SceneError::invalid(
                     "run.seed",
