@@ -272,6 +272,13 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
     /// Attaches a uniformly chosen detached junction now; if its rupture rate overflows
     /// (weak bonds), it ruptures at once.
     fn form_one<O: Observer>(&mut self, obs: &mut O) {
+        // Weak bonds: the new anchor's weights exp(+-a c) must be representable. With no
+        // junction attached there is no horizon, so the plate may have moved far since the
+        // last re-basing (a |y| > EXPONENT_CAP would make `attached` refuse the junction as
+        // if its own rate, which depends only on x = y - c, had overflowed): re-base first.
+        if self.rupture.needs_rebase(self.y) {
+            self.maybe_rebase(obs);
+        }
         let slot = self.next_formation.take(self.bags.n_detached(), &mut self.rng);
         let d = self.bags.take_detached(slot);
         let x = match self.reattach {
