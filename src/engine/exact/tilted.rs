@@ -60,6 +60,12 @@ impl Layout {
 /// The right-hand side: plate, quadratures, hazard.
 struct System<'a, B: Bond> {
     attached: &'a [super::bags::Attached],
+    p: Params<B>,
+}
+
+/// Everything the right-hand side needs besides the attached junctions.
+#[derive(Clone, Copy)]
+struct Params<B: Bond> {
     law: Tilted,
     bond: B,
     plate: Plate,
@@ -68,6 +74,13 @@ struct System<'a, B: Bond> {
     layout: Layout,
     /// `k0 e^EXPONENT_CAP`: rates are capped here so the hazard stays finite.
     rate_cap: f64,
+}
+
+impl<B: Bond> std::ops::Deref for System<'_, B> {
+    type Target = Params<B>;
+    fn deref(&self) -> &Params<B> {
+        &self.p
+    }
 }
 
 impl<B: Bond> System<'_, B> {
@@ -197,8 +210,11 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
     }
 
     fn system(&self) -> System<'_, B> {
-        System {
-            attached: &self.bags.attached,
+        System { attached: &self.bags.attached, p: self.params() }
+    }
+
+    fn params(&self) -> Params<B> {
+        Params {
             law: self.law,
             bond: self.bond,
             plate: self.plate,
@@ -414,19 +430,9 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> Engine for ExactTilted<B> {
                 let t_before = self.tau;
                 let mut tau = self.tau;
                 let mut state = std::mem::take(&mut self.state);
-                let result = {
-                    let mut sys = System {
-                        attached: &self.bags.attached,
-                        law: self.law,
-                        bond: self.bond,
-                        plate: self.plate,
-                        frame: self.frame,
-                        lag0: self.lag0,
-                        layout: self.layout,
-                        rate_cap: self.rate_cap(),
-                    };
-                    self.ode.step(&mut sys, &mut tau, &mut state, target)
-                };
+                let p = self.params();
+                let mut sys = System { attached: &self.bags.attached, p };
+                let result = self.ode.step(&mut sys, &mut tau, &mut state, target);
                 self.state = state;
                 result.map_err(|e| ode_error(e, self.frame.time(t_before), rtol))?;
                 self.tau = tau;
