@@ -87,7 +87,10 @@ fn check(s: &Scene, r: &Run) {
     }
     let mut t = r.rec.segments.first().map_or(0.0, |g| g.t0);
     for g in &r.rec.segments {
-        assert!([g.t0, g.t1, g.friction, g.friction_m2, g.bond_force, g.viscous].iter().all(|x| x.is_finite()), "{g:?}");
+        assert!(
+            [g.t0, g.t1, g.friction, g.friction_m2, g.bond_force, g.viscous].iter().all(|x| x.is_finite()),
+            "{g:?}"
+        );
         assert!((g.t0 - t).abs() <= 1e-12 * (1.0 + t.abs()), "segments tile time: {} after {t}", g.t0);
         assert!(g.t1 >= g.t0 && g.friction_m2 >= 0.0 && g.attached <= n);
         t = g.t1;
@@ -106,7 +109,9 @@ fn check(s: &Scene, r: &Run) {
     assert_eq!(count, r.rec.samples.last().unwrap().attached as i64, "the event log replays to the last sample");
     assert_eq!(r.rec.events.len() as u64, r.counters.ruptures + r.counters.formations);
     let st = &r.stats;
-    for x in [st.friction_mean(), st.friction_std(), st.bond_force_mean(), st.viscous_mean(), st.attached_fraction_mean()] {
+    for x in
+        [st.friction_mean(), st.friction_std(), st.bond_force_mean(), st.viscous_mean(), st.attached_fraction_mean()]
+    {
         assert!(x.is_finite(), "non-finite statistic {x}");
     }
 }
@@ -155,8 +160,7 @@ fn n_star(kon: f64, k0: f64) -> f64 {
 /// (linear law) or the integrator's tolerance (tilted law).
 #[test]
 fn stiff_plates_tend_to_the_overdamped_limit() {
-    for (law, ratios, slack) in
-        [("linear", &[1e-3, 1e-6, 1e-9, 1e-12][..], 1e-12), ("tilted", &[1e-2, 1e-3][..], 1e-8)]
+    for (law, ratios, slack) in [("linear", &[1e-3, 1e-6, 1e-9, 1e-12][..], 1e-12), ("tilted", &[1e-2, 1e-3][..], 1e-8)]
     {
         let base = ["junctions.n=100", "plate.v=0.2", "run.t_end=100", "plate.eta=75"];
         let with = |m: &str| exact(law, "strong", &[&base[..], &[m]].concat());
@@ -243,7 +247,8 @@ fn balance(s: &Scene, r: &Run) {
 fn critical_damping_matches_its_closed_form_and_its_neighbours() {
     let (m, k, v) = (75.0f64, 150.0f64, 0.2);
     let eta = 2.0 * (k * m).sqrt();
-    let s = exact("linear", "strong", &["junctions.kappa=0", "plate.v=0.2", &format!("plate.eta={eta}"), "run.t_end=50"]);
+    let s =
+        exact("linear", "strong", &["junctions.kappa=0", "plate.v=0.2", &format!("plate.eta={eta}"), "run.t_end=50"]);
     let r = run(&s);
     let w = (k / m).sqrt();
     let a = eta * v / k;
@@ -284,7 +289,11 @@ fn undamped_plate() {
         balance(&s, &r);
         if law == "linear" {
             let d = 1e-9;
-            let r2 = run(&exact(law, "strong", &["plate.v=0.2", &format!("plate.eta={d}"), "run.t_end=100", "run.t_warmup=20"]));
+            let r2 = run(&exact(
+                law,
+                "strong",
+                &["plate.v=0.2", &format!("plate.eta={d}"), "run.t_end=100", "run.t_warmup=20"],
+            ));
             let bound = d * 100.0 * 100.0 * sup(&r, |p| p.v) / m + 1e-12 * (1.0 + sup(&r, |p| p.x));
             let dx = max_dx(&r, &r2);
             assert!(dx <= bound, "eta 0 vs 1e-9: {dx:e} > {bound:e}");
@@ -475,7 +484,11 @@ fn relaxation_rates_zero_and_1e9() {
         }
         assert!(checked > 100, "{checked}");
         let fast = run(&exact(law, "strong", &[&base[..], &["junctions.lambda=1e9"]].concat()));
-        let fresh = run(&exact(law, "strong", &[&base[..], &["junctions.lambda=1e9", "junctions.reattach=unstretched"]].concat()));
+        let fresh = run(&exact(
+            law,
+            "strong",
+            &[&base[..], &["junctions.lambda=1e9", "junctions.reattach=unstretched"]].concat(),
+        ));
         same_events(&fast, &fresh);
         let d = max_dx(&fast, &fresh);
         assert!(d <= 1e-12 * (1.0 + sup(&fast, |p| p.x)), "{law}: {d:e}");
@@ -577,8 +590,11 @@ fn shifted_coordinates_give_the_same_statistics() {
             let shifted = format!("{}{}{}", &text[..start], serde_json::to_string(&f).unwrap(), &text[end..]);
             let go = |text: &str, t0: f64| {
                 let mut e: E = serde_json::from_str(text).unwrap_or_else(|err| panic!("engine deserialises: {err}"));
-                let grid =
-                    OutputGrid { sample_dt: s.output.sample_dt, t_warmup: t0 + s.run.t_warmup, t_end: t0 + s.run.t_end };
+                let grid = OutputGrid {
+                    sample_dt: s.output.sample_dt,
+                    t_warmup: t0 + s.run.t_warmup,
+                    t_end: t0 + s.run.t_end,
+                };
                 let mut obs = (Recorder::default(), WindowStats::new(grid.t_warmup, grid.t_end, s.junctions.n as u64));
                 drive(&mut e, &grid, &mut obs).expect("run");
                 Run { rec: obs.0, stats: obs.1, counters: e.counters() }
@@ -650,7 +666,19 @@ fn fixed_step_stiff_plates_diverge_with_an_error_or_run_below_the_limit() {
             }
             let lim = stickslip::stability::analyse(&s).selected().dt_stable;
             let dt = 0.5 * lim;
-            let s = scene(FIG1, &[&over[..3], &[&over[3], &format!("fixed.dt={dt}"), &format!("run.t_end={}", 200.0 * dt), &format!("output.sample_dt={}", 10.0 * dt)]].concat());
+            let s = scene(
+                FIG1,
+                &[
+                    &over[..3],
+                    &[
+                        &over[3],
+                        &format!("fixed.dt={dt}"),
+                        &format!("run.t_end={}", 200.0 * dt),
+                        &format!("output.sample_dt={}", 10.0 * dt),
+                    ],
+                ]
+                .concat(),
+            );
             let r = try_run(&s).unwrap_or_else(|e| panic!("{plate:?} {integ} dt {dt}: {e}"));
             assert!(r.rec.samples.iter().all(finite_sample));
         }
@@ -665,10 +693,14 @@ fn fixed_step_stiff_plates_diverge_with_an_error_or_run_below_the_limit() {
 /// `1e100`. Bounded: the lag `X - V t` never exceeds ten times its scale `V/w + eta V/K`.
 #[test]
 fn computed_stability_limits_are_confirmed_by_runs() {
-    for (integ, mass) in
-        [("semi-implicit-euler", 75.0), ("explicit-euler", 75.0), ("velocity-verlet", 75.0), ("semi-implicit-euler", 0.0)]
-    {
-        let base = scene(FIG1, &["junctions.kappa=0", &format!("plate.mass={mass}"), &format!("fixed.integrator={integ}")]);
+    for (integ, mass) in [
+        ("semi-implicit-euler", 75.0),
+        ("explicit-euler", 75.0),
+        ("velocity-verlet", 75.0),
+        ("semi-implicit-euler", 0.0),
+    ] {
+        let base =
+            scene(FIG1, &["junctions.kappa=0", &format!("plate.mass={mass}"), &format!("fixed.integrator={integ}")]);
         let lim = stickslip::stability::analyse(&base).selected().dt_stable;
         assert_eq!(lim, stickslip::stability::analyse(&base).selected().dt_unstable, "kappa = 0: one limit");
         let (k, eta, v) = (150.0f64, 75.0, 0.5);

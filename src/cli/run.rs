@@ -57,13 +57,14 @@ pub(crate) fn run(args: &SceneArgs, engine: Option<EngineArg>, seed: Option<u64>
         Err(code) => return code,
     };
     let out = out.unwrap_or_else(|| Path::new("out").join(&scene.name));
-    if let Some(w) = crate::stability::warning(&scene) {
-        eprintln!("{w}");
-    }
     let created = match prepare_out_dir(&out) {
         Ok(c) => c,
         Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
+    // After every bad-input check: bad input prints its one error line and nothing else.
+    if let Some(w) = crate::stability::warning(&scene) {
+        eprintln!("{w}");
+    }
     match run_scene(&scene, Some(&out)) {
         Ok(s) => {
             let per = s.friction_per_junction;

@@ -154,19 +154,6 @@ impl SceneFile {
             }
         }
 
-        if run.engine == EngineKind::Exact && junctions.force_law == ForceLawKind::Tilted {
-            let steps = tilted_min_steps(&plate, junctions.kappa * junctions.n as f64, t_end);
-            if steps > TILTED_STEPS_MAX {
-                return Err(SceneError::invalid(
-                    "run.t_end",
-                    t_end,
-                    format!(
-                        "needs at least {steps:.1e} steps of the exact engine's explicit plate integrator (tilted law; more than {TILTED_STEPS_MAX:e}): its step is bounded by 6 M/eta and 2 sqrt(M/(K + kappa N)) (2 eta/(K + kappa N) when M = 0); shorten the run, use plate.mass = 0 for the limit M/eta -> 0, or junctions.force_law = \"linear\" (closed form)"
-                    ),
-                ));
-            }
-        }
-
         let e = &self.exact;
         let exact = ExactParams { rtol: e.rtol.unwrap_or(1e-10), atol: e.atol.unwrap_or(1e-12) };
         if !(exact.rtol.is_finite() && (1e-14..=1e-2).contains(&exact.rtol)) {
@@ -186,6 +173,21 @@ impl SceneFile {
                 format!("gives more than {SAMPLES_MAX:e} samples over run.t_end ({t_end})"),
             ));
         }
+        // Last: a cost check across sections (plate, junctions, run), after every field is
+        // checked on its own.
+        if run.engine == EngineKind::Exact && junctions.force_law == ForceLawKind::Tilted {
+            let steps = tilted_min_steps(&plate, junctions.kappa * junctions.n as f64, t_end);
+            if steps > TILTED_STEPS_MAX {
+                return Err(SceneError::invalid(
+                    "run.t_end",
+                    t_end,
+                    format!(
+                        "needs at least {steps:.1e} steps of the exact engine's explicit plate integrator (tilted law; more than {TILTED_STEPS_MAX:e}): its step is bounded by 6 M/eta and 2 sqrt(M/(K + kappa N)) (2 eta/(K + kappa N) when M = 0); shorten the run, use plate.mass = 0 for the limit M/eta -> 0, or junctions.force_law = \"linear\" (closed form)"
+                    ),
+                ));
+            }
+        }
+
         let output = OutputParams {
             sample_dt,
             trace: o.trace.unwrap_or(true),
