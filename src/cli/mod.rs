@@ -3,6 +3,7 @@
 //! Exit codes: 0 success; 1 the run failed (numerical trouble, a write that failed
 //! mid-run); 2 bad input (command line, scene file, `--set`, output directory).
 
+mod compare;
 mod run;
 mod validate;
 
@@ -64,6 +65,8 @@ pub enum Command {
         #[command(flatten)]
         scene: SceneArgs,
     },
+    /// Work-precision study: error against run time of the fixed-step and exact engines.
+    Compare(compare::CompareArgs),
 }
 
 /// Prints a one-line error and returns the exit code.
@@ -103,5 +106,6 @@ pub fn main() -> ExitCode {
     match cli.command {
         Command::Run { scene, engine, seed, out } => run::run(&scene, engine, seed, out),
         Command::Validate { scene } => validate::validate(&scene),
+        Command::Compare(args) => compare::compare(&args),
     }
 }
