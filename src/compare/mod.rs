@@ -34,6 +34,7 @@
 //! attached ([`stability::plate_growth`] > 1) is reported as `unstable`, with its numbers.
 
 pub mod creep;
+pub mod fit;
 pub mod plot;
 pub mod report;
 pub mod seeds;

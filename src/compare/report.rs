@@ -17,6 +17,7 @@
 
 use std::fmt::Write as _;
 
+use super::fit::{BiasFit, bias_fit};
 use super::{Observable, Point, Status, Study};
 use crate::output::csv::push_f64;
 use crate::scene::EngineKind;
@@ -119,14 +120,17 @@ struct CostModel {
 }
 
 impl CostModel {
-    fn new(study: &Study, i: usize) -> CostModel {
+    fn new(study: &Study, i: usize, fit: Option<&BiasFit>) -> CostModel {
+        let fit = fit.filter(|f| f.accepted());
         let fixed = study
             .points
             .iter()
             .filter(|p| p.engine == EngineKind::Fixed && p.status == Status::Ok && p.obs[i].error.is_finite())
             .map(|p| {
                 let o = &p.obs[i];
-                (p.dt.unwrap(), p.wall_seconds / p.replicas as f64, o.se * (p.replicas as f64).sqrt(), o.error)
+                let dt = p.dt.unwrap();
+                let bias = fit.map_or(o.error, |f| f.at(dt).0);
+                (dt, p.wall_seconds / p.replicas as f64, o.se * (p.replicas as f64).sqrt(), bias)
             })
             .collect();
         CostModel { c_exact: exact_cost_per_replica(study), sd_exact: study.reference.stats[i].sd, fixed }
@@ -161,9 +165,26 @@ fn exact_cost_per_replica(study: &Study) -> f64 {
     wall / reps as f64
 }
 
-/// The first line of the reading: where one exact replica costs as much as one fixed-step
-/// replica, and what the cheaper steps' bias is.
-fn cost_line(study: &Study) -> String {
+/// The fitted bias of every observable at `dt`, as text.
+fn fitted_biases(study: &Study, fits: &[Option<BiasFit>], dt: f64) -> String {
+    study
+        .observables
+        .iter()
+        .enumerate()
+        .map(|(i, o)| match &fits[i] {
+            Some(f) if f.accepted() => {
+                let (b, se) = f.at(dt);
+                format!("{} {} +- {}", o.key(), with_pct(b, study.reference.stats[i].mean), sig(se, 1))
+            }
+            _ => format!("{} (no bias model)", o.key()),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The first line of the reading: the per-replica costs, the step at which they are equal,
+/// and the fitted bias there and at the largest stable step.
+fn cost_line(study: &Study, fits: &[Option<BiasFit>]) -> String {
     let c_e = exact_cost_per_replica(study);
     // Stable fixed points, largest step first.
     let mut fixed: Vec<&Point> =
@@ -173,41 +194,30 @@ fn cost_line(study: &Study) -> String {
         return format!("One exact replica costs {} s; no fixed-step point is stable.", sig(c_e, 2));
     }
     let cost = |p: &Point| p.wall_seconds / p.replicas as f64;
-    let errors = |p: &Point| {
-        study
-            .observables
-            .iter()
-            .enumerate()
-            .map(|(i, o)| format!("{} {}", o.key(), with_pct(p.obs[i].error, study.reference.stats[i].mean)))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
     let (first, last) = (fixed[0], fixed[fixed.len() - 1]);
+    let (dt0, dt1) = (first.dt.unwrap(), last.dt.unwrap());
     let head = format!("Per replica, the exact engine costs {} s (wall); the fixed-step engine", sig(c_e, 2));
     let range = if fixed.len() == 1 {
-        format!("{} s at dt = {}", sig(cost(first), 2), dt_label(first.dt.unwrap()))
+        format!("{} s at dt = {}", sig(cost(first), 2), dt_label(dt0))
     } else {
-        format!(
-            "{} s at dt = {}, {} s at dt = {}",
-            sig(cost(first), 2),
-            dt_label(first.dt.unwrap()),
-            sig(cost(last), 2),
-            dt_label(last.dt.unwrap())
-        )
+        format!("{} s at dt = {} to {} s at dt = {}", sig(cost(first), 2), dt_label(dt0), sig(cost(last), 2), dt_label(dt1))
     };
     if cost(first) >= c_e {
         return format!(
-            "{head} costs more at every stable step tried ({range}): the exact engine is cheaper at every \
-             accuracy, by at least x{} per replica, and the fixed-step bias comes on top (at dt = {}: {}).",
+            "{head} costs more at every stable step tried ({range}), by at least x{}, and is biased on top (fitted \
+             bias at dt = {}: {}).",
             sig(cost(first) / c_e, 2),
-            dt_label(first.dt.unwrap()),
-            errors(first)
+            dt_label(dt0),
+            fitted_biases(study, fits, dt0)
         );
     }
     if cost(last) < c_e {
         return format!(
-            "{head} costs less at every stable step tried ({range}); its errors at the smallest step: {}.",
-            errors(last)
+            "{head} costs less at every stable step tried ({range}); fitted bias at dt = {}: {}; at dt = {}: {}.",
+            dt_label(dt0),
+            fitted_biases(study, fits, dt0),
+            dt_label(dt1),
+            fitted_biases(study, fits, dt1)
         );
     }
     // Log-log interpolation of the step at which the costs are equal.
@@ -216,18 +226,13 @@ fn cost_line(study: &Study) -> String {
     let f = (c_e / cost(a)).ln() / (cost(b) / cost(a)).ln();
     let dt_eq = (a.dt.unwrap().ln() + f * (b.dt.unwrap().ln() - a.dt.unwrap().ln())).exp();
     format!(
-        "{head} costs as much at dt = {} (between {} and {}). Larger steps are cheaper, by up to x{} at dt = {}, but \
-         biased: at dt = {}: {}; at dt = {}: {}. Smaller steps cost more per replica and still carry a bias, so the \
-         exact engine wins at every accuracy finer than that.",
+        "{head} costs as much at dt = {} ({range}), where its fitted bias is {}. Larger steps are cheaper, by up to \
+         x{} at dt = {}, and more biased ({}).",
         sig(dt_eq, 2),
-        dt_label(a.dt.unwrap()),
-        dt_label(b.dt.unwrap()),
+        fitted_biases(study, fits, dt_eq),
         sig(c_e / cost(first), 2),
-        dt_label(first.dt.unwrap()),
-        dt_label(first.dt.unwrap()),
-        errors(first),
-        dt_label(a.dt.unwrap()),
-        errors(a)
+        dt_label(dt0),
+        fitted_biases(study, fits, dt0)
     )
 }
 
@@ -237,9 +242,10 @@ type GridPoint = (f64, f64, Option<(f64, f64)>);
 /// The reading: the per-replica cost line, then one line per observable saying where each
 /// engine is cheaper and by what factor.
 pub fn reading(study: &Study) -> Vec<String> {
-    let mut lines = vec![cost_line(study)];
+    let fits: Vec<Option<BiasFit>> = (0..study.observables.len()).map(|i| bias_fit(study, i)).collect();
+    let mut lines = vec![cost_line(study, &fits)];
     for (i, o) in study.observables.iter().enumerate() {
-        let m = CostModel::new(study, i);
+        let m = CostModel::new(study, i, fits[i].as_ref());
         let reference = study.reference.stats[i].mean;
         let se_ref = study.reference.stats[i].se;
         let max_bias = m.fixed.iter().map(|f| f.3.abs()).fold(0.0, f64::max);
