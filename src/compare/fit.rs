@@ -34,8 +34,7 @@ impl BiasFit {
     pub fn at(&self, dt: f64) -> (f64, f64) {
         let x = self.basis(dt);
         let b = x.iter().zip(&self.coef).map(|(x, c)| x * c).sum();
-        let var: f64 =
-            (0..x.len()).map(|i| (0..x.len()).map(|j| x[i] * self.cov[i][j] * x[j]).sum::<f64>()).sum();
+        let var: f64 = (0..x.len()).map(|i| (0..x.len()).map(|j| x[i] * self.cov[i][j] * x[j]).sum::<f64>()).sum();
         (b, var.max(0.0).sqrt())
     }
     /// Whether the model survives its chi-square test at level 0.001.

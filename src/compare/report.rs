@@ -200,7 +200,13 @@ fn cost_line(study: &Study, fits: &[Option<BiasFit>]) -> String {
     let range = if fixed.len() == 1 {
         format!("{} s at dt = {}", sig(cost(first), 2), dt_label(dt0))
     } else {
-        format!("{} s at dt = {} to {} s at dt = {}", sig(cost(first), 2), dt_label(dt0), sig(cost(last), 2), dt_label(dt1))
+        format!(
+            "{} s at dt = {} to {} s at dt = {}",
+            sig(cost(first), 2),
+            dt_label(dt0),
+            sig(cost(last), 2),
+            dt_label(dt1)
+        )
     };
     if cost(first) >= c_e {
         return format!(
