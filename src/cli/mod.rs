@@ -3,6 +3,7 @@
 //! Exit codes: 0 success; 1 the run failed (numerical trouble, a write that failed
 //! mid-run); 2 bad input (command line, scene file, `--set`, output directory).
 
+mod compare;
 mod run;
 mod stability;
 mod validate;
@@ -70,6 +71,8 @@ pub enum Command {
         #[command(flatten)]
         scene: SceneArgs,
     },
+    /// Work-precision study: error against run time of the fixed-step and exact engines.
+    Compare(compare::CompareArgs),
 }
 
 /// Prints a one-line error and returns the exit code.
@@ -110,5 +113,6 @@ pub fn main() -> ExitCode {
         Command::Run { scene, engine, seed, out } => run::run(&scene, engine, seed, out),
         Command::Validate { scene } => validate::validate(&scene),
         Command::Stability { scene } => stability::stability(&scene),
+        Command::Compare(args) => compare::compare(&args),
     }
 }
