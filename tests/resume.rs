@@ -79,7 +79,8 @@ fn strings(a: &[&str]) -> Vec<String> {
 }
 
 /// Starts `args` and kills it (SIGKILL) once `dir/checkpoint.bin` exists and the run has
-/// gone on a little past it. Returns false if the run ended before it could be killed.
+/// gone on a little past it. Returns false if the run ended (or finished its work) before
+/// it could be killed.
 fn kill_after_checkpoint(args: &[String], dir: &Path) -> bool {
     let ckpt = dir.join("checkpoint.bin");
     let before = std::fs::metadata(&ckpt).and_then(|m| m.modified()).ok();
@@ -107,7 +108,9 @@ fn kill_after_checkpoint(args: &[String], dir: &Path) -> bool {
     std::thread::sleep(Duration::from_millis(30));
     child.kill().unwrap(); // SIGKILL
     let status = child.wait().unwrap();
-    if status.success() {
+    // The kill may land after the run has finished its work (summary written, checkpoint
+    // removed) but before the process exited: that is not a killed run either.
+    if status.success() || !ckpt.exists() || dir.join("summary.json").exists() {
         return false;
     }
     true
@@ -239,10 +242,86 @@ fn progress_changes_nothing() {
         let mut args = strings(&["run"]);
         args.extend(scene_args(tmp.path(), &case, 4000.0));
         args.extend(strings(&["--out", dir.to_str().unwrap(), "--set", "output.sample_dt=0.5"]));
-        run(&args, &[("STICKSLIP_PROGRESS", env)]);
+        let out = run(&args, &[("STICKSLIP_PROGRESS", env)]);
+        // stderr is a pipe here: indicatif draws nothing even when the thread runs.
+        assert!(out.stderr.is_empty(), "{env}: {:?}", String::from_utf8_lossy(&out.stderr));
         outs.push(dir);
     }
     assert_same_outputs("progress", &outs[0], &outs[1]);
+}
+
+/// Runs `args` with stderr on a pseudo-terminal (80 x 24); returns what the terminal
+/// received and the exit status.
+fn run_on_terminal(args: &[String]) -> (String, std::process::ExitStatus) {
+    use std::io::Read;
+    use std::os::fd::FromRawFd;
+    let (mut master, mut slave) = (-1, -1);
+    let size = libc::winsize { ws_row: 24, ws_col: 80, ws_xpixel: 0, ws_ypixel: 0 };
+    // SAFETY: openpty writes two fds into the given integers; the null pointers are allowed.
+    let rc = unsafe { libc::openpty(&mut master, &mut slave, std::ptr::null_mut(), std::ptr::null(), &size) };
+    assert_eq!(rc, 0, "openpty: {}", std::io::Error::last_os_error());
+    // SAFETY: both fds were just opened and are owned by nothing else.
+    let (mut master, slave) = unsafe { (std::fs::File::from_raw_fd(master), std::fs::File::from_raw_fd(slave)) };
+    let mut child = Command::new(BIN)
+        .args(args)
+        .env_remove("STICKSLIP_PROGRESS")
+        .stdout(Stdio::null())
+        .stderr(Stdio::from(slave))
+        .spawn()
+        .unwrap();
+    // The child holds the only slave fd now: reading ends (EIO) when it exits.
+    let reader = std::thread::spawn(move || {
+        let mut got = Vec::new();
+        let mut buf = [0u8; 4096];
+        while let Ok(n) = master.read(&mut buf) {
+            if n == 0 {
+                break;
+            }
+            got.extend_from_slice(&buf[..n]);
+        }
+        got
+    });
+    let status = child.wait().unwrap();
+    let got = reader.join().unwrap();
+    (String::from_utf8_lossy(&got).into_owned(), status)
+}
+
+fn wall_seconds(dir: &Path) -> f64 {
+    let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["wall_seconds"].as_f64().unwrap()
+}
+
+#[test]
+fn progress_on_a_terminal_and_quiet_otherwise() {
+    // A run that lasts well past the 1.5 s after which progress appears (t_end doubled
+    // until it does, on a fast machine).
+    let tmp = tempfile::tempdir().unwrap();
+    let mut t_end = 60000.0;
+    for attempt in 0.. {
+        assert!(attempt < 5, "the runs never lasted 2.5 s");
+        let (tty, pipe) = (tmp.path().join(format!("tty{attempt}")), tmp.path().join(format!("pipe{attempt}")));
+        let with_out = |dir: &Path| {
+            let mut a = strings(&["run"]);
+            a.extend(scene_args(tmp.path(), &LINEAR_WEAK, t_end));
+            a.extend(strings(&["--out", dir.to_str().unwrap(), "--set", "output.sample_dt=10"]));
+            a
+        };
+        let (seen, status) = run_on_terminal(&with_out(&tty));
+        assert!(status.success(), "{status:?}: {seen}");
+        if wall_seconds(&tty) < 2.5 {
+            t_end *= 2.0;
+            continue;
+        }
+        assert!(seen.contains("events/s") && seen.contains("t = ") && seen.contains("ETA"), "{seen:?}");
+        assert!(!seen.contains("NaN") && !seen.contains("inf"), "{seen:?}");
+        // The same run with stderr a pipe prints nothing on stderr.
+        let out = run(&with_out(&pipe), &[]);
+        assert!(wall_seconds(&pipe) > 1.5 + 0.2, "too short to show progress: the test tests nothing");
+        assert!(out.stderr.is_empty(), "{:?}", String::from_utf8_lossy(&out.stderr));
+        assert_same_outputs("terminal", &tty, &pipe);
+        return;
+    }
 }
 
 // ---- bad input ---------------------------------------------------------------------------

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::run::print_summary;
+use super::run::{prepare_out_dir, print_summary};
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, fail};
 use crate::runner::{self, Resumed, RunOptions};
 
@@ -31,6 +31,12 @@ pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
 
 pub(crate) fn resume(args: &ResumeArgs) -> ExitCode {
     let opts = RunOptions { checkpoint_every: args.checkpoint_every, progress: true };
+    // A directory that cannot be written is reported before anything else is done.
+    if args.dir.is_dir() {
+        if let Err(m) = prepare_out_dir(&args.dir) {
+            return fail(EXIT_BAD_INPUT, m);
+        }
+    }
     match runner::resume(&args.dir, &opts) {
         Ok(Resumed::Finished) => {
             println!(
