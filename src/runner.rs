@@ -1,7 +1,7 @@
 //! The runner owns the loop: it builds the engine a scene asks for, walks the output grid,
 //! feeds the observers (statistics, regime detector, writers) and assembles the summary.
 //!
-//! Long runs (docs/long-runs.md): outputs are streamed to `NAME.part` and flushed at line
+//! Long runs (docs/runs.md): outputs are streamed to `NAME.part` and flushed at line
 //! boundaries at least every [`FLUSH_EVERY`]; with [`RunOptions::checkpoint_every`] the
 //! runner writes `checkpoint.bin` at output-grid stops ([`checkpoint`]), from which
 //! [`resume`] continues a killed run to the same bytes; [`progress`] shows where a run is.

@@ -1,4 +1,4 @@
-//! Long runs (docs/long-runs.md): a run killed with SIGKILL after it wrote a checkpoint and
+//! Long runs (docs/runs.md): a run killed with SIGKILL after it wrote a checkpoint and
 //! continued with `stickslip resume` gives the same `trace.csv` and `events.csv`, byte for
 //! byte, and the same `summary.json` apart from `wall_seconds`, as an uninterrupted run
 //! with the same seed; for the fixed engine and the exact engine (linear law with strong
@@ -65,12 +65,7 @@ fn run(args: &[String], envs: &[(&str, &str)]) -> Output {
         c.env(k, v);
     }
     let out = c.output().expect("the binary runs");
-    assert!(
-        out.status.success(),
-        "{args:?} failed: {:?}\n{}",
-        out.status,
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{args:?} failed: {:?}\n{}", out.status, String::from_utf8_lossy(&out.stderr));
     out
 }
 
@@ -152,7 +147,12 @@ fn assert_same_outputs(name: &str, a: &Path, b: &Path) {
             let (x, y) = (std::fs::read(&pa).unwrap(), std::fs::read(&pb).unwrap());
             assert!(x.len() > 1000, "{name}: {f} is too short to test anything");
             let first = x.iter().zip(&y).position(|(p, q)| p != q);
-            assert!(x == y, "{name}: {f} differs (lengths {} and {}, first difference at byte {first:?})", x.len(), y.len());
+            assert!(
+                x == y,
+                "{name}: {f} differs (lengths {} and {}, first difference at byte {first:?})",
+                x.len(),
+                y.len()
+            );
         }
     }
     assert_eq!(summary_without_wall_time(a), summary_without_wall_time(b), "{name}: summary.json");
@@ -406,11 +406,28 @@ fn bad_resume_inputs() {
 
     // Damaged: a flipped byte, cut short, not a checkpoint at all, empty.
     for (name, bytes, mentions) in [
-        ("flipped", { let mut b = ckpt.clone(); let n = b.len(); b[n / 2] ^= 1; b }, &["damaged"][..]),
+        (
+            "flipped",
+            {
+                let mut b = ckpt.clone();
+                let n = b.len();
+                b[n / 2] ^= 1;
+                b
+            },
+            &["damaged"][..],
+        ),
         ("cut", ckpt[..ckpt.len() - 100].to_vec(), &["damaged"][..]),
         ("json", b"{\"t\": 1}".to_vec(), &["not a stickslip checkpoint"][..]),
         ("zero", Vec::new(), &["not a stickslip checkpoint"][..]),
-        ("version", { let mut b = ckpt.clone(); b[21] = 99; b }, &["format 99"][..]),
+        (
+            "version",
+            {
+                let mut b = ckpt.clone();
+                b[21] = 99;
+                b
+            },
+            &["format 99"][..],
+        ),
     ] {
         let d = variant(name, &|d| std::fs::write(d.join("checkpoint.bin"), &bytes).unwrap());
         expect_bad_input(&resume(&d), &d, &[&["checkpoint.bin"][..], mentions].concat());

@@ -1,5 +1,5 @@
 //! `stickslip resume DIR`: continues a killed run from the checkpoint in its output
-//! directory (docs/long-runs.md).
+//! directory (docs/runs.md).
 
 use std::path::PathBuf;
 use std::process::ExitCode;

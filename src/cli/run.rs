@@ -86,7 +86,10 @@ pub(crate) fn run(
 pub(crate) fn print_summary(s: &Summary, out: &Path) {
     let per = s.friction_per_junction;
     println!("scene {} ({} engine, seed {}, N = {}, t_end = {})", s.scene, s.engine_name(), s.seed, s.n, s.t_end);
-    println!("friction per junction {:.6} (std of total {:.6}) over [{}, {}]", per, s.friction_std, s.t_warmup, s.t_end);
+    println!(
+        "friction per junction {:.6} (std of total {:.6}) over [{}, {}]",
+        per, s.friction_std, s.t_warmup, s.t_end
+    );
     println!(
         "attached fraction {:.4}; regime {} ({} stick-slip cycles)",
         s.attached_fraction_mean,

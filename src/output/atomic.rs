@@ -169,7 +169,7 @@ mod tests {
         assert_eq!(std::fs::read(d.join("a.csv.part")).unwrap(), b"h\n1\n2\n3\n4");
         PartFile::check_reopen(d, "a.csv", 6, b"1\n2\n").unwrap();
         let mut f = PartFile::reopen(d, "a.csv", 6).unwrap();
-        write!(f.writer(), "x\n").unwrap();
+        writeln!(f.writer(), "x").unwrap();
         f.commit().unwrap();
         assert_eq!(std::fs::read(d.join("a.csv")).unwrap(), b"h\n1\n2\nx\n");
     }

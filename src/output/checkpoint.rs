@@ -14,7 +14,7 @@
 //! MessagePack (`rmp-serde`, structs written as maps with their field names) rather than
 //! JSON: the engines' state holds infinite times (a channel at rate 0 never fires) that
 //! JSON cannot represent (`serde_json` writes them as `null`); it keeps every `f64` bit for
-//! bit in 9 bytes; and it is 3–4 times smaller and faster at large `N` (docs/long-runs.md).
+//! bit in 9 bytes; and it is 3–4 times smaller and faster at large `N` (docs/runs.md).
 //! Maps with field names, not positional arrays, because some state skips fields that are
 //! `None` when serialized.
 //!
@@ -231,8 +231,11 @@ pub fn read<H: DeserializeOwned>(path: &Path) -> Result<Loaded<H>, CheckpointErr
         return Err(CheckpointError::Damaged { path });
     }
     let engine_at = PREAMBLE + head_len as usize;
-    let header = rmp_serde::from_slice(&bytes[PREAMBLE..engine_at])
-        .map_err(|e| CheckpointError::Decode { path: path.clone(), what: "header", message: e.to_string() })?;
+    let header = rmp_serde::from_slice(&bytes[PREAMBLE..engine_at]).map_err(|e| CheckpointError::Decode {
+        path: path.clone(),
+        what: "header",
+        message: e.to_string(),
+    })?;
     Ok(Loaded { path, header, bytes, engine_at })
 }
 
@@ -258,7 +261,10 @@ mod tests {
     fn sample() -> (Head, State) {
         (
             Head { name: "x".into(), t: 1.5, skipped: None },
-            State { times: vec![f64::INFINITY, -0.0, 0.1 + 0.2, f64::MIN_POSITIVE / 3.0, f64::NAN], big: u128::MAX - 7 },
+            State {
+                times: vec![f64::INFINITY, -0.0, 0.1 + 0.2, f64::MIN_POSITIVE / 3.0, f64::NAN],
+                big: u128::MAX - 7,
+            },
         )
     }
 
