@@ -337,7 +337,12 @@ mod tests {
                 "fixed.dt=0.5",
             ]),
             round_trip(&["fixed.flip=as-printed", "fixed.integrator=explicit-euler", "fixed.dt=0.1"]),
-            round_trip(&["plate.mass=0", "junctions.initial=stationary", "junctions.reattach=unstretched"]),
+            round_trip(&[
+                "junctions.bond=weak",
+                "plate.mass=0",
+                "junctions.initial=stationary",
+                "junctions.reattach=unstretched",
+            ]),
         ];
         types.sort();
         types.dedup();
