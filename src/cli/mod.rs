@@ -1,8 +1,9 @@
-//! The command line: `stickslip run`, `stickslip resume`, `stickslip validate`.
+//! The command line: `stickslip run`, `stickslip resume`, `stickslip validate`, `stickslip compare`.
 //!
 //! Exit codes: 0 success; 1 the run failed (numerical trouble, a write that failed
 //! mid-run); 2 bad input (command line, scene file, `--set`, output directory).
 
+mod compare;
 mod resume;
 mod run;
 mod validate;
@@ -70,6 +71,8 @@ pub enum Command {
         #[command(flatten)]
         scene: SceneArgs,
     },
+    /// Work-precision study: error against run time of the fixed-step and exact engines.
+    Compare(compare::CompareArgs),
 }
 
 /// Prints a one-line error and returns the exit code.
@@ -84,7 +87,7 @@ pub(crate) fn fail(code: u8, message: impl std::fmt::Display) -> ExitCode {
 fn clap_one_line(e: &clap::Error) -> String {
     use clap::error::ErrorKind;
     if matches!(e.kind(), ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand) {
-        return "a command is required: `run`, `resume` or `validate` (try --help)".to_string();
+        return "a command is required: `run`, `resume`, `validate` or `compare` (try --help)".to_string();
     }
     let text = e.to_string();
     let first: Vec<&str> = text.lines().map(str::trim).take_while(|l| !l.is_empty()).collect();
@@ -112,5 +115,6 @@ pub fn main() -> ExitCode {
         }
         Command::Resume(args) => resume::resume(&args),
         Command::Validate { scene } => validate::validate(&scene),
+        Command::Compare(args) => compare::compare(&args),
     }
 }
