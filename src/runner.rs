@@ -1,9 +1,19 @@
 //! The runner owns the loop: it builds the engine a scene asks for, walks the output grid,
 //! feeds the observers (statistics, regime detector, writers) and assembles the summary.
+//!
+//! Long runs (docs/runs.md): outputs are streamed to `NAME.part` and flushed at line
+//! boundaries at least every [`FLUSH_EVERY`]; with [`RunOptions::checkpoint_every`] the
+//! runner writes `checkpoint.bin` at output-grid stops ([`checkpoint`]), from which
+//! [`resume`] continues a killed run to the same bytes; [`progress`] shows where a run is.
+
+pub mod checkpoint;
+pub mod progress;
 
 use std::io;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
+
+use serde::{Deserialize, Serialize};
 
 use crate::engine::{Engine, EngineError, EngineVisitor, with_engine};
 use crate::observe::regime::RegimeDetector;
@@ -13,6 +23,11 @@ use crate::output::Summary;
 use crate::output::atomic::write_whole;
 use crate::output::csv::{EventWriter, TraceWriter};
 use crate::scene::{BondKind, Scene};
+
+pub use checkpoint::{ResumeError, Resumed, resume};
+
+/// Outputs are flushed to the operating system at least this often (at grid stops).
+pub const FLUSH_EVERY: Duration = Duration::from_secs(1);
 
 /// Why a run failed.
 #[derive(Debug, thiserror::Error)]
@@ -25,11 +40,32 @@ pub enum RunError {
         #[source]
         source: io::Error,
     },
+    /// Writing failed after a checkpoint was written: the partial outputs and the
+    /// checkpoint are kept, and the run can be resumed once the cause is fixed.
+    #[error("{source}; the run stopped at t = {t} and can be resumed from its checkpoint with `stickslip resume {}`", dir.display())]
+    Resumable {
+        #[source]
+        source: Box<RunError>,
+        dir: PathBuf,
+        t: f64,
+    },
 }
 
 fn output_error(dir: &Path, name: &str) -> impl FnOnce(io::Error) -> RunError {
     let path = dir.join(name);
     move |source| RunError::Output { path, source }
+}
+
+/// How a run is carried out, beyond its scene. The default (no checkpoints, no progress)
+/// is [`run_scene`]'s.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RunOptions {
+    /// Write a checkpoint at output-grid stops, at most every this many seconds of wall
+    /// time (> 0). Needs an output directory.
+    pub checkpoint_every: Option<f64>,
+    /// Show progress on stderr when stderr is a terminal and the run lasts more than
+    /// [`progress::SHOW_AFTER`].
+    pub progress: bool,
 }
 
 /// One stop of the output grid.
@@ -139,6 +175,60 @@ pub fn drive<E: Engine, O: Observer>(engine: &mut E, grid: &OutputGrid, obs: &mu
     Ok(())
 }
 
+/// Where a run is on its output grid: what [`drive_from`] needs to continue it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GridPosition {
+    /// Stops of `grid.stops_after(0.0)` done.
+    pub stops_done: u64,
+    /// Time of the last sample fed to the observers (NaN before the first).
+    pub last_sample_t: f64,
+}
+
+impl Default for GridPosition {
+    fn default() -> Self {
+        GridPosition { stops_done: 0, last_sample_t: f64::NAN }
+    }
+}
+
+/// As [`drive`], from grid position `pos` (the start, or a checkpoint's), keeping `pos`
+/// up to date. After every stop but the last, `at_stop` is called with the engine, the
+/// observers and the position: the engine is between two advances there, in the state a
+/// checkpoint records.
+pub fn drive_from<E, O, H>(
+    engine: &mut E,
+    grid: &OutputGrid,
+    obs: &mut O,
+    pos: &mut GridPosition,
+    mut at_stop: H,
+) -> Result<(), RunError>
+where
+    E: Engine,
+    O: Observer,
+    H: FnMut(&E, &mut O, &GridPosition) -> Result<(), RunError>,
+{
+    if pos.stops_done == 0 && engine.time() == 0.0 {
+        let s = engine.sample();
+        check_finite(&s)?;
+        obs.sample(&s);
+        pos.last_sample_t = s.t;
+    }
+    let mut stops = grid.stops_after(0.0).skip(pos.stops_done as usize).peekable();
+    while let Some(stop) = stops.next() {
+        engine.advance(stop.t, obs)?;
+        let s = engine.sample();
+        check_finite(&s)?;
+        if stop.sample && s.t != pos.last_sample_t {
+            obs.sample(&s);
+            pos.last_sample_t = s.t;
+        }
+        pos.stops_done += 1;
+        if stops.peek().is_some() {
+            at_stop(engine, obs, pos)?;
+        }
+    }
+    Ok(())
+}
+
 /// Assembles the summary from the core observers and the engine's counters.
 pub fn summarize<E: Engine>(
     scene: &Scene,
@@ -187,117 +277,341 @@ pub fn summarize<E: Engine>(
 /// Runs a scene to its end. With `out = Some(dir)` (an existing, writable directory) the
 /// files the scene asks for and `summary.json` are written there, each whole or not at all.
 pub fn run_scene(scene: &Scene, out: Option<&Path>) -> Result<Summary, RunError> {
-    with_engine(scene, RunVisitor { scene, out })?
+    run_scene_with(scene, out, &RunOptions::default())
+}
+
+/// As [`run_scene`], with checkpoints and progress as `opts` asks. A checkpoint and
+/// partial outputs left in `out` by an earlier, killed run are removed first.
+pub fn run_scene_with(scene: &Scene, out: Option<&Path>, opts: &RunOptions) -> Result<Summary, RunError> {
+    if let Some(dir) = out {
+        checkpoint::remove_stale(dir)?;
+    }
+    with_engine(scene, RunVisitor { ctx: Ctx { scene, out, opts: *opts } })?
+}
+
+/// What a run needs besides its engine.
+#[derive(Clone, Copy)]
+struct Ctx<'a> {
+    scene: &'a Scene,
+    out: Option<&'a Path>,
+    opts: RunOptions,
+}
+
+/// Where a run starts: `t = 0`, or a checkpoint.
+struct Start {
+    pos: GridPosition,
+    core: CoreObservers,
+    trace: Option<TraceWriter>,
+    /// Wall time spent before this process.
+    wall_seconds: f64,
+    /// Checkpoints written before this process.
+    checkpoints: u64,
+    /// Time of the checkpoint the run was resumed from.
+    checkpoint_t: Option<f64>,
 }
 
 struct RunVisitor<'a> {
-    scene: &'a Scene,
-    out: Option<&'a Path>,
+    ctx: Ctx<'a>,
 }
 
 impl EngineVisitor for RunVisitor<'_> {
     type Output = Result<Summary, RunError>;
     fn visit<E: Engine>(self, engine: E) -> Self::Output {
-        let (scene, out) = (self.scene, self.out);
-        let events = match out {
-            Some(dir) if scene.output.events => {
-                Some(EventWriter::create(dir).map_err(output_error(dir, "events.csv"))?)
-            }
-            _ => None,
+        let scene = self.ctx.scene;
+        let (trace, events) = match self.ctx.out {
+            Some(dir) => create_writers(scene, dir)?,
+            None => (None, None),
         };
-        let weak = scene.junctions.bond == BondKind::Weak;
-        let ruptures = || RuptureForces::new(scene.run.t_warmup, scene.run.t_end);
-        // Event observers are chosen statically: a run that logs no events and has no
-        // weak bonds compiles the event path out of the engine.
-        match (events, weak) {
-            (None, false) => run_with(engine, scene, out, Nothing).map(|(s, _)| s),
-            (None, true) => run_with(engine, scene, out, ruptures()).map(|(s, _)| s),
-            (Some(ev), false) => finish_events(run_with(engine, scene, out, ev), out),
-            (Some(ev), true) => {
-                let (summary, (ev, _)) = run_with(engine, scene, out, (ev, ruptures()))?;
-                finish_events(Ok((summary, ev)), out)
-            }
-        }
+        let start = Start {
+            pos: GridPosition::default(),
+            core: core_observers(scene),
+            trace,
+            wall_seconds: 0.0,
+            checkpoints: 0,
+            checkpoint_t: None,
+        };
+        run_extra(engine, &self.ctx, events, None, start)
     }
 }
 
-fn finish_events(r: Result<(Summary, EventWriter), RunError>, out: Option<&Path>) -> Result<Summary, RunError> {
-    let (summary, ev) = r?;
-    let dir = out.expect("events are only written with an output directory");
-    ev.0.finish().map_err(output_error(dir, "events.csv"))?;
-    Ok(summary)
+/// Creates the CSV files the scene asks for (none, or both, are left on error).
+fn create_writers(scene: &Scene, dir: &Path) -> Result<(Option<TraceWriter>, Option<EventWriter>), RunError> {
+    let trace = match scene.output.trace {
+        true => Some(TraceWriter::create(dir).map_err(output_error(dir, TraceWriter::NAME))?),
+        false => None,
+    };
+    let events = match scene.output.events {
+        true => match EventWriter::create(dir) {
+            Ok(ev) => Some(ev),
+            Err(e) => {
+                if let Some(t) = trace {
+                    t.0.discard();
+                }
+                return Err(output_error(dir, EventWriter::NAME)(e));
+            }
+        },
+        false => None,
+    };
+    Ok((trace, events))
 }
 
-/// A few observers need their results back after the run.
+/// Chooses the event observers and runs. `ruptures` are restored rupture-force statistics.
+fn run_extra<E: Engine>(
+    engine: E,
+    ctx: &Ctx,
+    events: Option<EventWriter>,
+    ruptures: Option<RuptureForces>,
+    start: Start,
+) -> Result<Summary, RunError> {
+    let run = &ctx.scene.run;
+    let weak = ctx.scene.junctions.bond == BondKind::Weak;
+    let ruptures = move || ruptures.unwrap_or_else(|| RuptureForces::new(run.t_warmup, run.t_end));
+    // Event observers are chosen statically: a run that logs no events and has no
+    // weak bonds compiles the event path out of the engine.
+    match (events, weak) {
+        (None, false) => run_engine(engine, ctx, Nothing, start),
+        (None, true) => run_engine(engine, ctx, ruptures(), start),
+        (Some(ev), false) => run_engine(engine, ctx, ev, start),
+        (Some(ev), true) => run_engine(engine, ctx, (ev, ruptures()), start),
+    }
+}
+
+/// The observers that need more than observing: rupture-force statistics for the summary,
+/// the event writer for checkpoints and the end of the run.
 trait Extra: Observer {
     fn rupture_forces(&self) -> Option<&RuptureForces> {
         None
     }
-    fn discard(self);
+    fn events(&mut self) -> Option<&mut EventWriter> {
+        None
+    }
+    fn into_events(self) -> Option<EventWriter>;
 }
 impl Extra for Nothing {
-    fn discard(self) {}
+    fn into_events(self) -> Option<EventWriter> {
+        None
+    }
 }
 impl Extra for RuptureForces {
     fn rupture_forces(&self) -> Option<&RuptureForces> {
         Some(self)
     }
-    fn discard(self) {}
+    fn into_events(self) -> Option<EventWriter> {
+        None
+    }
 }
 impl Extra for EventWriter {
-    fn discard(self) {
-        self.0.discard()
+    fn events(&mut self) -> Option<&mut EventWriter> {
+        Some(self)
+    }
+    fn into_events(self) -> Option<EventWriter> {
+        Some(self)
     }
 }
 impl Extra for (EventWriter, RuptureForces) {
     fn rupture_forces(&self) -> Option<&RuptureForces> {
         Some(&self.1)
     }
-    fn discard(self) {
-        self.0.0.discard()
+    fn events(&mut self) -> Option<&mut EventWriter> {
+        Some(&mut self.0)
+    }
+    fn into_events(self) -> Option<EventWriter> {
+        Some(self.0)
     }
 }
 
-fn run_with<E: Engine, X: Extra>(
-    mut engine: E,
-    scene: &Scene,
-    out: Option<&Path>,
-    extra: X,
-) -> Result<(Summary, X), RunError> {
-    let started = Instant::now();
-    let trace = match out {
-        Some(dir) if scene.output.trace => Some(TraceWriter::create(dir).map_err(output_error(dir, "trace.csv"))?),
-        _ => None,
-    };
-    let grid = OutputGrid::new(scene, engine.time_step());
-    let mut obs = (core_observers(scene), (trace, extra));
-    if let Err(e) = drive(&mut engine, &grid, &mut obs) {
-        let (_, (trace, extra)) = obs;
-        if let Some(t) = trace {
-            t.0.discard();
-        }
-        extra.discard();
-        return Err(e.into());
+/// Every observer of a run.
+type Observers<X> = (CoreObservers, (Option<TraceWriter>, (X, progress::Probe)));
+
+/// The engine's work counter: steps (fixed engine) or events (exact engine).
+fn work(engine: &impl Engine) -> (u64, &'static str) {
+    let c = engine.counters();
+    match (c.steps, c.events) {
+        (Some(s), _) => (s, "steps"),
+        (None, e) => (e.unwrap_or(0), "events"),
     }
-    let (core, (trace, extra)) = obs;
-    let summary = match summarize(scene, &engine, &core, extra.rupture_forces(), started.elapsed().as_secs_f64()) {
-        Ok(s) => s,
-        Err(e) => {
-            if let Some(t) = trace {
-                t.0.discard();
+}
+
+fn run_engine<E: Engine, X: Extra>(mut engine: E, ctx: &Ctx, extra: X, start: Start) -> Result<Summary, RunError> {
+    let scene = ctx.scene;
+    let started = Instant::now();
+    let grid = OutputGrid::new(scene, engine.time_step());
+    let (work0, unit) = work(&engine);
+    let span = progress::Span { t0: engine.time(), t_end: scene.run.t_end, work0, unit };
+    let (progress, probe) = progress::Progress::start(ctx.opts.progress, span);
+    let mut control = StopControl::new(ctx, started, &start);
+    let wall_before = start.wall_seconds;
+    let mut pos = start.pos;
+    let mut obs: Observers<X> = (start.core, (start.trace, (extra, probe)));
+    let driven = drive_from(&mut engine, &grid, &mut obs, &mut pos, |e, o, p| control.at_stop(e, o, p, &progress));
+    progress.finish();
+    let checkpoint_t = control.checkpoint_t;
+    let (core, (mut trace, (mut extra, _))) = obs;
+    let wall_seconds = wall_before + started.elapsed().as_secs_f64();
+    let result = driven
+        .and_then(|()| summarize(scene, &engine, &core, extra.rupture_forces(), wall_seconds).map_err(RunError::from));
+    // Flush everything before anything is renamed, so that a write error leaves the run
+    // as it was (resumable, if it has a checkpoint).
+    let result = result.and_then(|s| {
+        if let Some(dir) = ctx.out {
+            if let Some(t) = trace.as_mut() {
+                t.0.flush().map_err(output_error(dir, TraceWriter::NAME))?;
             }
-            extra.discard();
-            return Err(e.into());
+            if let Some(ev) = extra.events() {
+                ev.0.flush().map_err(output_error(dir, EventWriter::NAME))?;
+            }
         }
+        Ok(s)
+    });
+    let summary = match result {
+        Ok(s) => s,
+        Err(e) => return Err(abandon(e, ctx.out, checkpoint_t, trace, extra)),
     };
-    if let Some(dir) = out {
+    if let Some(dir) = ctx.out {
         if let Some(t) = trace {
-            t.0.finish().map_err(output_error(dir, "trace.csv"))?;
+            t.0.finish().map_err(output_error(dir, TraceWriter::NAME))?;
         }
+        if let Some(ev) = extra.into_events() {
+            ev.0.finish().map_err(output_error(dir, EventWriter::NAME))?;
+        }
+        // summary.json comes last: its presence says the run is complete.
         let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
         write_whole(dir, "summary.json", json.as_bytes()).map_err(output_error(dir, "summary.json"))?;
+        checkpoint::remove(dir)?;
     }
-    Ok((summary, extra))
+    Ok(summary)
+}
+
+/// A run that failed: an output error after a checkpoint keeps the partial outputs and
+/// the checkpoint (the run can be resumed); any other failure removes them.
+fn abandon<X: Extra>(
+    e: RunError,
+    out: Option<&Path>,
+    checkpoint_t: Option<f64>,
+    trace: Option<TraceWriter>,
+    extra: X,
+) -> RunError {
+    if let (RunError::Output { .. }, Some(dir), Some(t)) = (&e, out, checkpoint_t) {
+        return RunError::Resumable { source: Box::new(e), dir: dir.to_path_buf(), t };
+    }
+    if let Some(t) = trace {
+        t.0.discard();
+    }
+    if let Some(ev) = extra.into_events() {
+        ev.0.discard();
+    }
+    if let Some(dir) = out {
+        let _ = checkpoint::remove(dir);
+    }
+    e
+}
+
+/// Looks at the clock only every `stride` stops, with `stride` adapted so that it does so
+/// every few milliseconds: a grid stop costs a decrement, however fine the grid.
+struct Pacer {
+    stride: u64,
+    left: u64,
+    last: Instant,
+}
+
+impl Pacer {
+    const MIN_GAP: Duration = Duration::from_millis(5);
+    const MAX_GAP: Duration = Duration::from_millis(50);
+
+    fn new(now: Instant) -> Pacer {
+        Pacer { stride: 1, left: 1, last: now }
+    }
+
+    /// The time now, every few milliseconds; `None` at the stops in between.
+    #[inline]
+    fn tick(&mut self) -> Option<Instant> {
+        self.left -= 1;
+        if self.left > 0 {
+            return None;
+        }
+        let now = Instant::now();
+        let gap = now - self.last;
+        self.last = now;
+        if gap < Self::MIN_GAP {
+            self.stride = (self.stride * 2).min(1 << 24);
+        } else if gap > Self::MAX_GAP {
+            self.stride = (self.stride / 2).max(1);
+        }
+        self.left = self.stride;
+        Some(now)
+    }
+}
+
+/// What the runner does at grid stops: progress, flushes, checkpoints.
+struct StopControl<'a> {
+    ctx: &'a Ctx<'a>,
+    started: Instant,
+    wall_before: f64,
+    pacer: Pacer,
+    last_flush: Instant,
+    last_checkpoint: Instant,
+    /// Checkpoint interval, when there is a directory to write checkpoints to.
+    every: Option<(Duration, &'a Path)>,
+    checkpoints: u64,
+    /// Time of the checkpoint on disk, if any.
+    checkpoint_t: Option<f64>,
+}
+
+impl<'a> StopControl<'a> {
+    fn new(ctx: &'a Ctx<'a>, started: Instant, start: &Start) -> Self {
+        let every = match (ctx.opts.checkpoint_every, ctx.out) {
+            (Some(s), Some(dir)) => Some((Duration::from_secs_f64(s), dir)),
+            _ => None,
+        };
+        StopControl {
+            ctx,
+            started,
+            wall_before: start.wall_seconds,
+            pacer: Pacer::new(started),
+            last_flush: started,
+            last_checkpoint: started,
+            every,
+            checkpoints: start.checkpoints,
+            checkpoint_t: start.checkpoint_t,
+        }
+    }
+
+    fn at_stop<E: Engine, X: Extra>(
+        &mut self,
+        engine: &E,
+        obs: &mut Observers<X>,
+        pos: &GridPosition,
+        progress: &progress::Progress,
+    ) -> Result<(), RunError> {
+        let Some(now) = self.pacer.tick() else {
+            return Ok(());
+        };
+        progress.publish(work(engine).0);
+        if let Some((every, dir)) = self.every {
+            if now - self.last_checkpoint >= every {
+                let wall_seconds = self.wall_before + self.started.elapsed().as_secs_f64();
+                checkpoint::save(dir, self.ctx, engine, obs, pos, wall_seconds, self.checkpoints + 1)?;
+                self.checkpoints += 1;
+                self.checkpoint_t = Some(engine.time());
+                self.last_checkpoint = Instant::now();
+                self.last_flush = self.last_checkpoint;
+                return Ok(());
+            }
+        }
+        if now - self.last_flush >= FLUSH_EVERY {
+            if let Some(dir) = self.ctx.out {
+                let (_, (trace, (extra, _))) = obs;
+                if let Some(t) = trace {
+                    t.0.flush().map_err(output_error(dir, TraceWriter::NAME))?;
+                }
+                if let Some(ev) = extra.events() {
+                    ev.0.flush().map_err(output_error(dir, EventWriter::NAME))?;
+                }
+            }
+            self.last_flush = now;
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]

@@ -237,6 +237,29 @@ fn output_directory_under_a_regular_file() {
     assert_eq!(std::fs::read(dir.path().join("plain-file")).unwrap(), b"keep me");
 }
 
+#[test]
+fn output_directory_that_cannot_be_written() {
+    // Reported before the run starts, in one line naming the directory; works as root too
+    // (nobody can create a directory under /proc).
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("scene.toml"), GOOD).unwrap();
+    for extra in [&[][..], &["--checkpoint-every", "1"][..]] {
+        let mut args = vec!["run", "scene.toml", "--out", "/proc/stickslip-no/results"];
+        args.extend_from_slice(extra);
+        expect_bad_input_in(dir.path(), &args, &["output directory /proc/stickslip-no/results", "cannot create"]);
+    }
+    // A directory without write permission (meaningless as root, who may write anyway).
+    // SAFETY: geteuid has no preconditions.
+    if unsafe { libc::geteuid() } != 0 {
+        use std::os::unix::fs::PermissionsExt;
+        let ro = dir.path().join("read-only");
+        std::fs::create_dir(&ro).unwrap();
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o555)).unwrap();
+        expect_bad_input_in(dir.path(), &["run", "scene.toml", "--out", "read-only"], &["read-only", "cannot write"]);
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+}
+
 // ---- overrides and arguments -------------------------------------------------------------
 
 #[test]

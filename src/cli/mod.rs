@@ -1,9 +1,10 @@
-//! The command line: `stickslip run`, `stickslip validate`.
+//! The command line: `stickslip run`, `stickslip resume`, `stickslip validate`, `stickslip compare`.
 //!
 //! Exit codes: 0 success; 1 the run failed (numerical trouble, a write that failed
 //! mid-run); 2 bad input (command line, scene file, `--set`, output directory).
 
 mod compare;
+mod resume;
 mod run;
 mod stability;
 mod validate;
@@ -60,7 +61,12 @@ pub enum Command {
         /// Output directory (default: out/<scene file stem>/).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Write checkpoint.bin into the output directory at most every SECONDS of wall time, so that a killed run can be resumed.
+        #[arg(long, value_name = "SECONDS", value_parser = resume::parse_seconds, allow_hyphen_values = true)]
+        checkpoint_every: Option<f64>,
     },
+    /// Continue a killed run from the checkpoint in its output directory.
+    Resume(resume::ResumeArgs),
     /// Check a scene and print its resolved parameters.
     Validate {
         #[command(flatten)]
@@ -87,7 +93,7 @@ pub(crate) fn fail(code: u8, message: impl std::fmt::Display) -> ExitCode {
 fn clap_one_line(e: &clap::Error) -> String {
     use clap::error::ErrorKind;
     if matches!(e.kind(), ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand) {
-        return "a command is required: `run`, `validate`, `stability` or `compare` (try --help)".to_string();
+        return "a command is required: `run`, `resume`, `validate`, `stability` or `compare` (try --help)".to_string();
     }
     let text = e.to_string();
     let first: Vec<&str> = text.lines().map(str::trim).take_while(|l| !l.is_empty()).collect();
@@ -110,7 +116,10 @@ pub fn main() -> ExitCode {
         }
     };
     match cli.command {
-        Command::Run { scene, engine, seed, out } => run::run(&scene, engine, seed, out),
+        Command::Run { scene, engine, seed, out, checkpoint_every } => {
+            run::run(&scene, engine, seed, out, checkpoint_every)
+        }
+        Command::Resume(args) => resume::resume(&args),
         Command::Validate { scene } => validate::validate(&scene),
         Command::Stability { scene } => stability::stability(&scene),
         Command::Compare(args) => compare::compare(&args),

@@ -4,7 +4,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, EngineArg, SceneArgs, fail};
-use crate::runner::run_scene;
+use crate::output::Summary;
+use crate::runner::{RunOptions, run_scene_with};
 use crate::scene::Scene;
 
 /// Reads and validates the scene with `--set` overrides and the flag overrides after them.
@@ -44,7 +45,13 @@ pub(crate) fn remove_if_empty(created: &[PathBuf]) {
     }
 }
 
-pub(crate) fn run(args: &SceneArgs, engine: Option<EngineArg>, seed: Option<u64>, out: Option<PathBuf>) -> ExitCode {
+pub(crate) fn run(
+    args: &SceneArgs,
+    engine: Option<EngineArg>,
+    seed: Option<u64>,
+    out: Option<PathBuf>,
+    checkpoint_every: Option<f64>,
+) -> ExitCode {
     let mut extra = Vec::new();
     if let Some(e) = engine {
         extra.push(format!("run.engine={}", if matches!(e, EngineArg::Exact) { "exact" } else { "fixed" }));
@@ -65,39 +72,10 @@ pub(crate) fn run(args: &SceneArgs, engine: Option<EngineArg>, seed: Option<u64>
     if let Some(w) = crate::stability::warning(&scene) {
         eprintln!("{w}");
     }
-    match run_scene(&scene, Some(&out)) {
+    let opts = RunOptions { checkpoint_every, progress: true };
+    match run_scene_with(&scene, Some(&out), &opts) {
         Ok(s) => {
-            let per = s.friction_per_junction;
-            println!(
-                "scene {} ({} engine, seed {}, N = {}, t_end = {})",
-                s.scene,
-                s.engine_name(),
-                s.seed,
-                s.n,
-                s.t_end
-            );
-            println!(
-                "friction per junction {:.6} (std of total {:.6}) over [{}, {}]",
-                per, s.friction_std, s.t_warmup, s.t_end
-            );
-            println!(
-                "attached fraction {:.4}; regime {} ({} stick-slip cycles)",
-                s.attached_fraction_mean,
-                s.regime.as_str(),
-                s.stick_slip_cycles
-            );
-            let work = match (s.counters.steps, s.counters.events) {
-                (Some(n), _) => format!("{n} steps"),
-                (_, Some(n)) => format!("{n} events"),
-                _ => String::new(),
-            };
-            println!(
-                "{work}, {} ruptures, {} formations in {:.3} s; output in {}",
-                s.counters.ruptures,
-                s.counters.formations,
-                s.wall_seconds,
-                out.display()
-            );
+            print_summary(&s, &out);
             ExitCode::SUCCESS
         }
         Err(e) => {
@@ -106,4 +84,32 @@ pub(crate) fn run(args: &SceneArgs, engine: Option<EngineArg>, seed: Option<u64>
             fail(EXIT_RUN_FAILED, e)
         }
     }
+}
+
+/// The four summary lines `run` and `resume` print.
+pub(crate) fn print_summary(s: &Summary, out: &Path) {
+    let per = s.friction_per_junction;
+    println!("scene {} ({} engine, seed {}, N = {}, t_end = {})", s.scene, s.engine_name(), s.seed, s.n, s.t_end);
+    println!(
+        "friction per junction {:.6} (std of total {:.6}) over [{}, {}]",
+        per, s.friction_std, s.t_warmup, s.t_end
+    );
+    println!(
+        "attached fraction {:.4}; regime {} ({} stick-slip cycles)",
+        s.attached_fraction_mean,
+        s.regime.as_str(),
+        s.stick_slip_cycles
+    );
+    let work = match (s.counters.steps, s.counters.events) {
+        (Some(n), _) => format!("{n} steps"),
+        (_, Some(n)) => format!("{n} events"),
+        _ => String::new(),
+    };
+    println!(
+        "{work}, {} ruptures, {} formations in {:.3} s; output in {}",
+        s.counters.ruptures,
+        s.counters.formations,
+        s.wall_seconds,
+        out.display()
+    );
 }

@@ -1,13 +1,13 @@
 //! Time-weighted statistics over the averaging window `[t_warmup, t_end]`, built from
 //! [`Segment`]s, plus rupture-force statistics from events.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::{EventKind, JunctionEvent, Observer, Segment};
 
 /// Time-weighted mean and second central moment, merged segment by segment with the
 /// pairwise update of Chan, Golub & LeVeque (stable: no `E[F^2] - E[F]^2` cancellation).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Moments {
     /// Total weight (time).
     pub weight: f64,
@@ -38,7 +38,7 @@ impl Moments {
 /// Window statistics of a run. Segments are clipped to the window; a segment that
 /// straddles a window edge (only the fixed engine's, which are constant) is weighted by
 /// its overlap.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct WindowStats {
     pub t_lo: f64,
     pub t_hi: f64,
@@ -101,7 +101,7 @@ impl Observer for WindowStats {
 }
 
 /// Statistics of the tension at rupture, for ruptures inside the window.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RuptureForces {
     pub t_lo: f64,
     pub t_hi: f64,

@@ -1,10 +1,16 @@
 //! Files that appear whole or not at all: written to `NAME.part`, renamed to `NAME` on
 //! [`PartFile::commit`]. A run that is killed leaves `NAME.part` holding every line
-//! written so far; a run that fails removes it with [`PartFile::discard`].
+//! flushed so far (writers hand the operating system whole lines only); a run that fails
+//! removes it with [`PartFile::discard`]; `stickslip resume` reopens it with
+//! [`PartFile::reopen`], cut back to the length its checkpoint recorded.
 
-use std::fs::File;
-use std::io::{self, BufWriter, Write};
+use std::fs::{File, OpenOptions};
+use std::io::{self, BufWriter, Seek, SeekFrom, Write};
+use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
+
+/// Capacity of a part file's buffer: the largest write the operating system receives at once.
+const BUFFER: usize = 1 << 16;
 
 /// A buffered file written under a temporary name.
 pub struct PartFile {
@@ -13,20 +19,96 @@ pub struct PartFile {
     writer: BufWriter<File>,
 }
 
+/// Why a part file cannot be reopened at a checkpointed length.
+#[derive(Debug, thiserror::Error)]
+pub enum ReopenError {
+    #[error("{path} is missing")]
+    Missing { path: PathBuf },
+    #[error("{path} holds {len} bytes, fewer than the {expected} the checkpoint recorded")]
+    Short { path: PathBuf, len: u64, expected: u64 },
+    #[error("{path} does not hold at byte {at} what the checkpoint recorded (written by another run?)")]
+    Mismatch { path: PathBuf, at: u64 },
+    #[error("cannot reopen {path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: io::Error,
+    },
+}
+
 impl PartFile {
     /// Creates `dir/name.part` (truncating any left-over one).
     pub fn create(dir: &Path, name: &str) -> io::Result<PartFile> {
-        let target = dir.join(name);
-        let part = dir.join(format!("{name}.part"));
-        let writer = BufWriter::with_capacity(1 << 16, File::create(&part)?);
-        Ok(PartFile { part, target, writer })
+        let (part, target) = Self::names(dir, name);
+        // Readable too: a checkpoint reads back the last bytes written.
+        let file = OpenOptions::new().read(true).write(true).create(true).truncate(true).open(&part)?;
+        Ok(PartFile { part, target, writer: BufWriter::with_capacity(BUFFER, file) })
     }
+
+    fn names(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
+        (dir.join(format!("{name}.part")), dir.join(name))
+    }
+
+    /// Checks, without changing anything, that `dir/name.part` can be reopened at length
+    /// `len`: it exists (or, if a run was killed while renaming its outputs into place,
+    /// `dir/name` does), is at least `len` bytes long and holds `tail` just before `len`.
+    /// Returns the path that will be reopened.
+    pub fn check_reopen(dir: &Path, name: &str, len: u64, tail: &[u8]) -> Result<PathBuf, ReopenError> {
+        let (part, target) = Self::names(dir, name);
+        let path = if part.exists() {
+            part
+        } else if target.exists() {
+            target
+        } else {
+            return Err(ReopenError::Missing { path: part });
+        };
+        let io = |source| ReopenError::Io { path: path.clone(), source };
+        let f = File::open(&path).map_err(io)?;
+        let have = f.metadata().map_err(io)?.len();
+        if have < len {
+            return Err(ReopenError::Short { path, len: have, expected: len });
+        }
+        if tail.len() as u64 > len {
+            return Err(ReopenError::Mismatch { path, at: 0 });
+        }
+        let at = len - tail.len() as u64;
+        let mut buf = vec![0; tail.len()];
+        f.read_exact_at(&mut buf, at).map_err(io)?;
+        if buf != tail {
+            return Err(ReopenError::Mismatch { path, at });
+        }
+        Ok(path)
+    }
+
+    /// Reopens `dir/name.part` for appending after cutting it to `len` bytes (call
+    /// [`PartFile::check_reopen`] first). A `dir/name` left by a run killed while renaming
+    /// its outputs is moved back to `dir/name.part` first.
+    pub fn reopen(dir: &Path, name: &str, len: u64) -> io::Result<PartFile> {
+        let (part, target) = Self::names(dir, name);
+        if !part.exists() && target.exists() {
+            std::fs::rename(&target, &part)?;
+        }
+        let mut f = OpenOptions::new().read(true).write(true).open(&part)?;
+        f.set_len(len)?;
+        f.seek(SeekFrom::End(0))?;
+        Ok(PartFile { part, target, writer: BufWriter::with_capacity(BUFFER, f) })
+    }
+
     pub fn writer(&mut self) -> &mut BufWriter<File> {
         &mut self.writer
     }
     /// Flushes to the operating system (the file stays under its temporary name).
     pub fn flush(&mut self) -> io::Result<()> {
         self.writer.flush()
+    }
+    /// Flushes and waits until the data is on disk.
+    pub fn sync(&mut self) -> io::Result<()> {
+        self.writer.flush()?;
+        self.writer.get_ref().sync_data()
+    }
+    /// Reads `buf.len()` bytes of what has been flushed, at offset `at`.
+    pub fn read_at(&self, buf: &mut [u8], at: u64) -> io::Result<()> {
+        self.writer.get_ref().read_exact_at(buf, at)
     }
     /// Flushes, syncs and renames to the final name.
     pub fn commit(mut self) -> io::Result<PathBuf> {
@@ -48,6 +130,11 @@ pub fn write_whole(dir: &Path, name: &str, bytes: &[u8]) -> io::Result<PathBuf> 
     f.commit()
 }
 
+/// Syncs a directory, so that a rename inside it survives a crash of the machine.
+pub fn sync_dir(dir: &Path) -> io::Result<()> {
+    File::open(dir)?.sync_all()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -64,5 +151,38 @@ mod tests {
         let g = PartFile::create(dir.path(), "b.csv").unwrap();
         g.discard();
         assert!(!dir.path().join("b.csv.part").exists() && !dir.path().join("b.csv").exists());
+    }
+
+    #[test]
+    fn reopen_cuts_back_and_appends() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let mut f = PartFile::create(d, "a.csv").unwrap();
+        write!(f.writer(), "h\n1\n2\n3\n4").unwrap(); // "4" is a line cut short by a kill
+        f.flush().unwrap();
+        drop(f);
+        // The checkpoint recorded 6 bytes ("h\n1\n2\n"), ending in "2\n".
+        assert!(matches!(PartFile::check_reopen(d, "a.csv", 6, b"1\n3\n"), Err(ReopenError::Mismatch { at: 2, .. })));
+        assert!(matches!(PartFile::check_reopen(d, "a.csv", 64, b""), Err(ReopenError::Short { len: 9, .. })));
+        assert!(matches!(PartFile::check_reopen(d, "b.csv", 0, b""), Err(ReopenError::Missing { .. })));
+        // Checks change nothing.
+        assert_eq!(std::fs::read(d.join("a.csv.part")).unwrap(), b"h\n1\n2\n3\n4");
+        PartFile::check_reopen(d, "a.csv", 6, b"1\n2\n").unwrap();
+        let mut f = PartFile::reopen(d, "a.csv", 6).unwrap();
+        writeln!(f.writer(), "x").unwrap();
+        f.commit().unwrap();
+        assert_eq!(std::fs::read(d.join("a.csv")).unwrap(), b"h\n1\n2\nx\n");
+    }
+
+    #[test]
+    fn reopen_takes_back_a_file_already_renamed_into_place() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::write(d.join("a.csv"), b"h\n1\n2\n").unwrap();
+        assert_eq!(PartFile::check_reopen(d, "a.csv", 4, b"1\n").unwrap(), d.join("a.csv"));
+        let f = PartFile::reopen(d, "a.csv", 4).unwrap();
+        assert!(!d.join("a.csv").exists());
+        f.commit().unwrap();
+        assert_eq!(std::fs::read(d.join("a.csv")).unwrap(), b"h\n1\n");
     }
 }

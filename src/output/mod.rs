@@ -1,6 +1,7 @@
-//! Output files: atomic writes, CSV writers (observers) and the summary.
+//! Output files: atomic writes, CSV writers (observers), the summary and checkpoints.
 
 pub mod atomic;
+pub mod checkpoint;
 pub mod csv;
 pub mod summary;
 

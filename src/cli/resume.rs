@@ -1,0 +1,70 @@
+//! `stickslip resume DIR`: continues a killed run from the checkpoint in its output
+//! directory (docs/runs.md).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use super::run::{prepare_out_dir, print_summary};
+use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, fail};
+use crate::runner::{self, Resumed, RunOptions};
+
+#[derive(clap::Args, Debug)]
+pub struct ResumeArgs {
+    /// Output directory of the run (the one holding checkpoint.bin).
+    pub dir: PathBuf,
+    /// Checkpoint interval from now on (default: the run's own --checkpoint-every).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, allow_hyphen_values = true)]
+    pub checkpoint_every: Option<f64>,
+}
+
+/// Longest checkpoint interval accepted (about 30 000 years).
+const MAX_SECONDS: f64 = 1e12;
+
+/// Parses `--checkpoint-every`: a finite number of seconds, > 0.
+pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|_| "not a number (expected seconds, a number > 0)".to_string())?;
+    if !(v > 0.0 && v <= MAX_SECONDS) {
+        return Err(format!("must be a number of seconds > 0 and <= {MAX_SECONDS:e}"));
+    }
+    Ok(v)
+}
+
+pub(crate) fn resume(args: &ResumeArgs) -> ExitCode {
+    let opts = RunOptions { checkpoint_every: args.checkpoint_every, progress: true };
+    // A directory that cannot be written is reported before anything else is done.
+    if args.dir.is_dir() {
+        if let Err(m) = prepare_out_dir(&args.dir) {
+            return fail(EXIT_BAD_INPUT, m);
+        }
+    }
+    match runner::resume(&args.dir, &opts) {
+        Ok(Resumed::Finished) => {
+            println!(
+                "the run in {} is finished (summary.json is there, no checkpoint is left): nothing to resume",
+                args.dir.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Ok(Resumed::Completed { from_t, summary }) => {
+            println!("resumed from the checkpoint at t = {from_t}");
+            print_summary(&summary, &args.dir);
+            ExitCode::SUCCESS
+        }
+        Err(e) if e.is_bad_input() => fail(EXIT_BAD_INPUT, e),
+        Err(e) => fail(EXIT_RUN_FAILED, e),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn seconds() {
+        assert_eq!(parse_seconds("2.5"), Ok(2.5));
+        assert_eq!(parse_seconds("1e-3"), Ok(1e-3));
+        for bad in ["0", "-1", "-0.5", "NaN", "nan", "inf", "-inf", "abc", "", "1e13", "0x10"] {
+            assert!(parse_seconds(bad).is_err(), "{bad}");
+        }
+    }
+}
