@@ -4,6 +4,7 @@
 //! mid-run); 2 bad input (command line, scene file, `--set`, output directory).
 
 mod run;
+mod sweep;
 mod validate;
 
 use std::path::PathBuf;
@@ -59,6 +60,8 @@ pub enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Sweep one scene field over values, with replicas, in parallel; writes sweep.csv and sweep.svg.
+    Sweep(sweep::SweepArgs),
     /// Check a scene and print its resolved parameters.
     Validate {
         #[command(flatten)]
@@ -103,5 +106,6 @@ pub fn main() -> ExitCode {
     match cli.command {
         Command::Run { scene, engine, seed, out } => run::run(&scene, engine, seed, out),
         Command::Validate { scene } => validate::validate(&scene),
+        Command::Sweep(args) => sweep::sweep(&args),
     }
 }

@@ -61,7 +61,17 @@ pub(crate) fn run(args: &SceneArgs, engine: Option<EngineArg>, seed: Option<u64>
         Ok(c) => c,
         Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
-    match run_scene(&scene, Some(&out)) {
+    // trace.svg is drawn from trace.csv after a successful run (output.plot needs output.trace).
+    let result = run_scene(&scene, Some(&out)).and_then(|s| {
+        if scene.output.plot {
+            crate::plot::trace::write_trace_svg(&out, &scene).map_err(|e| crate::runner::RunError::Output {
+                path: out.join("trace.svg"),
+                source: std::io::Error::other(e),
+            })?;
+        }
+        Ok(s)
+    });
+    match result {
         Ok(s) => {
             let per = s.friction_per_junction;
             println!(
