@@ -421,7 +421,7 @@ impl SweepOutcome {
     pub fn sweep_csv(&self, sweep: &Sweep) -> String {
         let mut s = format!("{},{SWEEP_COLUMNS}\n", sweep.param);
         for r in &self.rows {
-            push_f64(&mut s, r.value.x);
+            s.push_str(&value_text(r.value.x));
             let _ = write!(s, ",{}", r.replicas);
             for (m, c) in [r.friction_mean, r.friction_per_junction, r.friction_std, r.attached_fraction_mean] {
                 s.push(',');
@@ -441,7 +441,7 @@ impl SweepOutcome {
         let mut s = format!("{},{RUNS_COLUMNS}\n", sweep.param);
         for (v, row) in sweep.values.iter().zip(&self.summaries) {
             for (r, run) in row.iter().enumerate() {
-                push_f64(&mut s, v.x);
+                s.push_str(&value_text(v.x));
                 let _ = write!(s, ",{r},{}", run.seed);
                 for x in [run.friction_mean, run.friction_per_junction, run.friction_std, run.attached_fraction_mean] {
                     s.push(',');
