@@ -7,7 +7,8 @@ use std::time::{Duration, Instant};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use stickslip::engine::Engine;
 use stickslip::engine::exact::{ArrayQueue, ChannelQueue, PqQueue, strong_linear, weak_linear};
-use stickslip::observe::Nothing;
+use stickslip::observe::{Nothing, Observer};
+use stickslip::runner::core_observers;
 use stickslip::testkit::scaled_linear;
 
 /// Simulated time per iteration that gives about 1e5 events (about 0.1 events per junction
@@ -16,7 +17,19 @@ fn span(n: usize) -> f64 {
     1e6 / n as f64
 }
 
-fn bench_engine<E: Engine>(c: &mut Criterion, group: &str, n: usize, mut make: impl FnMut() -> E) {
+fn bench_engine<E: Engine>(c: &mut Criterion, group: &str, n: usize, make: impl FnMut() -> E) {
+    bench_with(c, group, n, make, || Nothing);
+}
+
+/// Like `bench_engine`, with the observers `obs` makes fed along the way (e.g. the window
+/// statistics and regime detector every run has).
+fn bench_with<E: Engine, O: Observer>(
+    c: &mut Criterion,
+    group: &str,
+    n: usize,
+    mut make: impl FnMut() -> E,
+    mut obs: impl FnMut() -> O,
+) {
     // Pilot: events per span at steady state, for the throughput figure.
     let mut pilot = make();
     pilot.advance(20.0, &mut Nothing).unwrap();
@@ -30,12 +43,13 @@ fn bench_engine<E: Engine>(c: &mut Criterion, group: &str, n: usize, mut make: i
     g.bench_function(BenchmarkId::from_parameter(n), |b| {
         b.iter_custom(|iters| {
             let mut e = make();
-            e.advance(20.0, &mut Nothing).unwrap();
+            let mut o = obs();
+            e.advance(20.0, &mut o).unwrap();
             let mut t = 20.0;
             let start = Instant::now();
             for _ in 0..iters {
                 t += span(n);
-                e.advance(t, &mut Nothing).unwrap();
+                e.advance(t, &mut o).unwrap();
             }
             start.elapsed()
         })
@@ -52,6 +66,20 @@ fn sizes(c: &mut Criterion) {
     }
 }
 
+/// What a run pays: the same engines feeding the window statistics and regime detector.
+fn with_statistics(c: &mut Criterion) {
+    let n = 1_000_000;
+    for bond in ["strong", "weak"] {
+        let s = scaled_linear(n, bond);
+        let obs = || core_observers(&s);
+        if bond == "strong" {
+            bench_with(c, "exact/strong-linear+stats", n, || strong_linear::<ArrayQueue>(&s), obs);
+        } else {
+            bench_with(c, "exact/weak-linear+stats", n, || weak_linear::<ArrayQueue>(&s), obs);
+        }
+    }
+}
+
 fn queues(c: &mut Criterion) {
     fn both<Q: ChannelQueue>(c: &mut Criterion, name: &str) {
         let n = 100_000;
@@ -64,5 +92,5 @@ fn queues(c: &mut Criterion) {
     both::<PqQueue>(c, "priority-queue");
 }
 
-criterion_group!(benches, sizes, queues);
+criterion_group!(benches, sizes, with_statistics, queues);
 criterion_main!(benches);

@@ -10,6 +10,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::rng::{Pcg64, UniformSource};
+use crate::scene::{Initial, JunctionParams};
+
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Attached {
     /// Anchor: the junction's extension is `y - c`.
@@ -73,6 +76,26 @@ impl Bags {
         advise_huge_pages(&b.attached);
         advise_huge_pages(&b.detached);
         b
+    }
+    /// The initial state of `j.n` junctions, all at zero extension: detached, attached, or
+    /// each attached with probability `kon0/(kon0+k0)` (one uniform per junction, in index
+    /// order).
+    pub fn initial(j: &JunctionParams, rng: &mut Pcg64) -> Bags {
+        let mut bags = Bags::with_capacity(j.n);
+        let p_att = j.kon0 / (j.kon0 + j.k0);
+        for id in 0..j.n as u32 {
+            let attached = match j.initial {
+                Initial::Detached => false,
+                Initial::Attached => true,
+                Initial::Stationary => rng.uniform() < p_att,
+            };
+            if attached {
+                bags.attach(0.0, id);
+            } else {
+                bags.detached.push(Detached { x: 0.0, t: 0.0, id });
+            }
+        }
+        bags
     }
     #[inline]
     pub fn n_attached(&self) -> usize {

@@ -17,7 +17,10 @@ use std::cmp::Reverse;
 
 use ordered_float::OrderedFloat;
 use priority_queue::PriorityQueue;
+use rand_distr::{Distribution, Exp1};
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
+
+use crate::rng::Pcg64;
 
 /// A channel's rate and next firing time (local time; `+inf` when the rate is 0).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -56,6 +59,56 @@ impl Clock {
         } else {
             true
         }
+    }
+}
+
+/// The channels of an engine: their clocks and the queue that orders them.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(bound = "")]
+pub struct Channels<Q: ChannelQueue> {
+    clocks: Vec<Clock>,
+    queue: Q,
+}
+
+impl<Q: ChannelQueue> Channels<Q> {
+    /// `n` channels, all at rate 0 (never firing).
+    pub fn new(n: usize) -> Self {
+        Channels { clocks: vec![Clock::default(); n], queue: Q::new(n) }
+    }
+    /// Sets the rates of channels `0..rates.len()` at `now`. Pending times are rescaled;
+    /// channel `fired`, and any channel coming back from rate 0, draws a fresh exponential.
+    #[inline]
+    pub fn set_rates(&mut self, now: f64, rates: &[f64], fired: Option<usize>, rng: &mut Pcg64) {
+        for (ch, &rate) in rates.iter().enumerate() {
+            let fresh = self.clocks[ch].set_rate(now, rate);
+            if fresh || fired == Some(ch) {
+                self.clocks[ch].fire(now, Exp1.sample(rng));
+            }
+            self.queue.set(ch, self.clocks[ch].next);
+        }
+    }
+    /// A fresh time after `now` for channel `ch` at its current rate (after a rejected
+    /// candidate at `now`).
+    #[inline]
+    pub fn redraw(&mut self, ch: usize, now: f64, rng: &mut Pcg64) {
+        self.clocks[ch].fire(now, Exp1.sample(rng));
+        self.queue.set(ch, self.clocks[ch].next);
+    }
+    /// Sets the time of a deterministic channel (such as the end of a horizon).
+    #[inline]
+    pub fn set_time(&mut self, ch: usize, t: f64) {
+        self.clocks[ch].next = t;
+        self.queue.set(ch, t);
+    }
+    /// The channel that fires first and its time.
+    #[inline]
+    pub fn first(&self) -> (usize, f64) {
+        self.queue.first()
+    }
+    /// Subtracts `dt` from every pending time (re-basing).
+    pub fn shift(&mut self, dt: f64) {
+        self.clocks.iter_mut().for_each(|c| c.next -= dt);
+        self.queue.shift(dt);
     }
 }
 

@@ -13,11 +13,10 @@
 //! event, horizon end and stop; each restart reports the exact time integrals of the
 //! observables over the finished piece as a [`Segment`].
 
-use rand_distr::{Distribution, Exp1};
 use serde::{Deserialize, Serialize};
 
 use super::bags::Bags;
-use super::clocks::{ChannelQueue, Clock};
+use super::clocks::{ChannelQueue, Channels};
 use super::frame::Frame;
 use super::pick::Pick;
 use super::rupture::RuptureModel;
@@ -26,7 +25,7 @@ use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
 use crate::physics::{Formation, Plate};
 use crate::propagator::{Integrals, LinearPlate, Trajectory};
 use crate::rng::{Pcg64, UniformSource, pcg};
-use crate::scene::{EngineKind, Initial, Reattach, Scene};
+use crate::scene::{EngineKind, Reattach, Scene};
 
 /// Channel of formation candidates.
 const FORMATION: usize = 0;
@@ -73,8 +72,7 @@ pub struct ExactLinear<R: RuptureModel, Q: ChannelQueue> {
     piece: Piece,
     bags: Bags,
     rupture: R,
-    clocks: [Clock; CHANNELS],
-    queue: Q,
+    channels: Channels<Q>,
     rng: Pcg64,
     /// The next uniform pick of a detached junction.
     next_formation: Pick,
@@ -117,20 +115,7 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
     pub fn new(scene: &Scene, rupture: impl FnOnce(&mut Pcg64) -> R) -> Self {
         let j = &scene.junctions;
         let mut rng = pcg(scene.run.seed);
-        let mut bags = Bags::with_capacity(j.n);
-        let p_att = j.kon0 / (j.kon0 + j.k0);
-        for id in 0..j.n as u32 {
-            let attached = match j.initial {
-                Initial::Detached => false,
-                Initial::Attached => true,
-                Initial::Stationary => rng.uniform() < p_att,
-            };
-            if attached {
-                bags.attach(0.0, id);
-            } else {
-                bags.detached.push(super::bags::Detached { x: 0.0, t: 0.0, id });
-            }
-        }
+        let bags = Bags::initial(j, &mut rng);
         let plate = Plate::from_scene(scene);
         let rupture = rupture(&mut rng);
         let next_formation = Pick::draw(&mut rng);
@@ -153,8 +138,7 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
             },
             bags,
             rupture,
-            clocks: [Clock::default(); CHANNELS],
-            queue: Q::new(CHANNELS),
+            channels: Channels::new(CHANNELS),
             rng,
             next_formation,
             counters: Counters { events: Some(0), candidates: Some(0), rebases: Some(0), ..Default::default() },
@@ -225,24 +209,8 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
         let now = self.tau;
         let plan = self.rupture.plan(&self.piece.traj, self.bags.n_attached());
         let rates = [self.formation.kon0 * self.bags.n_detached() as f64, plan.rate];
-        for (ch, &rate) in rates.iter().enumerate() {
-            let fresh = self.clocks[ch].set_rate(now, rate);
-            if fresh || fired == Some(ch) {
-                let e: f64 = Exp1.sample(&mut self.rng);
-                self.clocks[ch].fire(now, e);
-            }
-            self.queue.set(ch, self.clocks[ch].next);
-        }
-        let horizon = if R::WEAK { now + plan.horizon } else { f64::INFINITY };
-        self.clocks[HORIZON].next = horizon;
-        self.queue.set(HORIZON, horizon);
-    }
-
-    /// Draws a fresh time after `now` for channel `ch` (a rejected candidate at `now`).
-    fn redraw(&mut self, ch: usize, now: f64) {
-        let e: f64 = Exp1.sample(&mut self.rng);
-        self.clocks[ch].fire(now, e);
-        self.queue.set(ch, self.clocks[ch].next);
+        self.channels.set_rates(now, &rates, fired, &mut self.rng);
+        self.channels.set_time(HORIZON, if R::WEAK { now + plan.horizon } else { f64::INFINITY });
     }
 
     fn emit<O: Observer>(&self, obs: &mut O, kind: EventKind, id: u32, x: f64) {
@@ -299,10 +267,7 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
         let (dtau, dy) = (self.tau, self.y);
         self.frame.shift(dtau, dy);
         self.bags.rebase(dtau, dy);
-        for c in self.clocks.iter_mut() {
-            c.next -= dtau;
-        }
-        self.queue.shift(dtau);
+        self.channels.shift(dtau);
         self.tau = 0.0;
         self.y = 0.0;
         self.piece.tau0 = 0.0;
@@ -351,7 +316,7 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
         loop {
             // In the local frame, which a re-basing inside this loop moves.
             let tau_stop = self.frame.local(t_stop).max(self.tau);
-            let (ch, t_next) = self.queue.first();
+            let (ch, t_next) = self.channels.first();
             // A NaN time is never due (it would stop the loop, not spin it).
             let due = t_next <= tau_stop;
             if !due {
@@ -375,7 +340,7 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
                         self.form_one(obs);
                         self.after_event(Some(FORMATION), obs);
                     } else {
-                        self.redraw(FORMATION, t_next);
+                        self.channels.redraw(FORMATION, t_next, &mut self.rng);
                     }
                 }
                 RUPTURE => match self.rupture.pick(
@@ -390,7 +355,7 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
                         self.rupture_slot(slot, obs);
                         self.after_event(Some(RUPTURE), obs);
                     }
-                    None => self.redraw(RUPTURE, t_next),
+                    None => self.channels.redraw(RUPTURE, t_next, &mut self.rng),
                 },
                 _ => {
                     // End of a thinning horizon: restart the piece, recompute the bound.

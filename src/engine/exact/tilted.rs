@@ -23,14 +23,14 @@ use rand_distr::{Distribution, Exp1};
 use serde::{Deserialize, Serialize};
 
 use super::bags::{Bags, Detached};
-use super::clocks::{ArrayQueue, ChannelQueue, Clock};
+use super::clocks::{ArrayQueue, Channels};
 use super::frame::Frame;
 use crate::engine::{Counters, Engine, EngineError};
 use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
 use crate::ode::{Dop853, Dop853Config, OdeError, OdeSystem};
 use crate::physics::{Bond, ForceLaw, Formation, Plate, Tilted};
 use crate::rng::{Pcg64, UniformSource, pcg};
-use crate::scene::{EngineKind, Initial, Reattach, Scene};
+use crate::scene::{EngineKind, Reattach, Scene};
 
 const FORMATION: usize = 0;
 const RUPTURE: usize = 1;
@@ -60,6 +60,12 @@ impl Layout {
 /// The right-hand side: plate, quadratures, hazard.
 struct System<'a, B: Bond> {
     attached: &'a [super::bags::Attached],
+    p: Params<B>,
+}
+
+/// Everything the right-hand side needs besides the attached junctions.
+#[derive(Clone, Copy)]
+struct Params<B: Bond> {
     law: Tilted,
     bond: B,
     plate: Plate,
@@ -68,6 +74,13 @@ struct System<'a, B: Bond> {
     layout: Layout,
     /// `k0 e^EXPONENT_CAP`: rates are capped here so the hazard stays finite.
     rate_cap: f64,
+}
+
+impl<B: Bond> std::ops::Deref for System<'_, B> {
+    type Target = Params<B>;
+    fn deref(&self) -> &Params<B> {
+        &self.p
+    }
 }
 
 impl<B: Bond> System<'_, B> {
@@ -141,8 +154,7 @@ pub struct ExactTilted<B: Bond + Serialize + for<'d> Deserialize<'d>> {
     hazard_target: f64,
     bags: Bags,
     ode: Dop853,
-    clocks: [Clock; 2],
-    queue: ArrayQueue,
+    channels: Channels<ArrayQueue>,
     rng: Pcg64,
     counters: Counters,
     events_since_rebase: u64,
@@ -152,20 +164,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
     pub fn new(scene: &Scene, bond: B) -> Result<Self, EngineError> {
         let j = &scene.junctions;
         let mut rng = pcg(scene.run.seed);
-        let mut bags = Bags::with_capacity(j.n);
-        let p_att = j.kon0 / (j.kon0 + j.k0);
-        for id in 0..j.n as u32 {
-            let attached = match j.initial {
-                Initial::Detached => false,
-                Initial::Attached => true,
-                Initial::Stationary => rng.uniform() < p_att,
-            };
-            if attached {
-                bags.attach(0.0, id);
-            } else {
-                bags.detached.push(Detached { x: 0.0, t: 0.0, id });
-            }
-        }
+        let bags = Bags::initial(j, &mut rng);
         let plate = Plate::from_scene(scene);
         let layout = Layout::new(plate.mass == 0.0, B::IS_WEAK);
         let cfg = Dop853Config {
@@ -193,8 +192,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
             hazard_target: 0.0,
             bags,
             ode,
-            clocks: [Clock::default(); 2],
-            queue: ArrayQueue::new(2),
+            channels: Channels::new(2),
             rng,
             counters: Counters {
                 events: Some(0),
@@ -212,8 +210,11 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
     }
 
     fn system(&self) -> System<'_, B> {
-        System {
-            attached: &self.bags.attached,
+        System { attached: &self.bags.attached, p: self.params() }
+    }
+
+    fn params(&self) -> Params<B> {
+        Params {
             law: self.law,
             bond: self.bond,
             plate: self.plate,
@@ -279,23 +280,9 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
     }
 
     fn refresh_clocks(&mut self, fired: Option<usize>) {
-        let now = self.tau;
         let strong_rate = if B::IS_WEAK { 0.0 } else { self.bond.k_off(0.0) * self.bags.n_attached() as f64 };
         let rates = [self.formation.kon0 * self.bags.n_detached() as f64, strong_rate];
-        for (ch, &rate) in rates.iter().enumerate() {
-            let fresh = self.clocks[ch].set_rate(now, rate);
-            if fresh || fired == Some(ch) {
-                let e: f64 = Exp1.sample(&mut self.rng);
-                self.clocks[ch].fire(now, e);
-            }
-            self.queue.set(ch, self.clocks[ch].next);
-        }
-    }
-
-    fn redraw(&mut self, ch: usize, now: f64) {
-        let e: f64 = Exp1.sample(&mut self.rng);
-        self.clocks[ch].fire(now, e);
-        self.queue.set(ch, self.clocks[ch].next);
+        self.channels.set_rates(self.tau, &rates, fired, &mut self.rng);
     }
 
     fn emit<O: Observer>(&self, obs: &mut O, kind: EventKind, id: u32, x: f64) {
@@ -367,10 +354,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
         let (dtau, dy) = (self.tau, self.state[0]);
         self.frame.shift(dtau, dy);
         self.bags.rebase(dtau, dy);
-        for c in self.clocks.iter_mut() {
-            c.next -= dtau;
-        }
-        self.queue.shift(dtau);
+        self.channels.shift(dtau);
         self.tau = 0.0;
         self.state[0] = 0.0;
         self.events_since_rebase = 0;
@@ -440,25 +424,15 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> Engine for ExactTilted<B> {
         loop {
             // In the local frame, which a re-basing inside this loop moves.
             let tau_stop = self.frame.local(t_stop).max(self.tau);
-            let (ch, t_next) = self.queue.first();
+            let (ch, t_next) = self.channels.first();
             let target = t_next.min(tau_stop);
             if self.tau < target {
                 let t_before = self.tau;
                 let mut tau = self.tau;
                 let mut state = std::mem::take(&mut self.state);
-                let result = {
-                    let mut sys = System {
-                        attached: &self.bags.attached,
-                        law: self.law,
-                        bond: self.bond,
-                        plate: self.plate,
-                        frame: self.frame,
-                        lag0: self.lag0,
-                        layout: self.layout,
-                        rate_cap: self.rate_cap(),
-                    };
-                    self.ode.step(&mut sys, &mut tau, &mut state, target)
-                };
+                let p = self.params();
+                let mut sys = System { attached: &self.bags.attached, p };
+                let result = self.ode.step(&mut sys, &mut tau, &mut state, target);
                 self.state = state;
                 result.map_err(|e| ode_error(e, self.frame.time(t_before), rtol))?;
                 self.tau = tau;
@@ -503,7 +477,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> Engine for ExactTilted<B> {
                         self.form_one(obs);
                         self.after_event(Some(FORMATION), obs);
                     } else {
-                        self.redraw(FORMATION, self.tau);
+                        self.channels.redraw(FORMATION, self.tau, &mut self.rng);
                     }
                 }
                 _ => {
