@@ -130,10 +130,15 @@ fn bad_sweep_arguments_are_refused() {
         |extra: &[&'static str]| -> Vec<&'static str> { v.iter().copied().chain(extra.iter().copied()).collect() };
     expect_bad_input(&with(&["--values", "0.1,abc"]), &["--values", "abc"]);
     expect_bad_input(&with(&["--values", "0.1,,1"]), &["--values"]);
+    expect_bad_input(&with(&["--values", ""]), &["--values"]);
+    expect_bad_input(&with(&["--values", "1,inf"]), &["--values", "inf"]);
     expect_bad_input(&with(&["--values", "0.1,-2"]), &["plate.v", "-2", ">= 0"]);
     expect_bad_input(&with(&["--log-range", "0:1:5"]), &["--log-range", "0:1:5", "> 0"]);
     expect_bad_input(&with(&["--log-range", "1:0.1:5"]), &["--log-range", "less than"]);
+    expect_bad_input(&with(&["--log-range", "-1:1:5"]), &["--log-range", "-1:1:5", "> 0"]);
     expect_bad_input(&with(&["--log-range", "0.1:1:1"]), &["--log-range", "COUNT"]);
+    expect_bad_input(&with(&["--log-range", "0.1:1:0"]), &["--log-range", "COUNT"]);
+    expect_bad_input(&with(&["--log-range", "0.1:x:3"]), &["--log-range", "HI"]);
     expect_bad_input(&with(&["--log-range", "0.1:1"]), &["--log-range"]);
     expect_bad_input(&with(&["--range", "a:1:3"]), &["--range", "LO"]);
     expect_bad_input(&with(&["--values", "1", "--replicas", "0"]), &["--replicas"]);

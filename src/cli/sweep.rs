@@ -101,8 +101,9 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
     );
     for r in &outcome.rows {
         let (m, c) = r.friction_per_junction;
+        let ci = if c.is_finite() { format!(" +- {c:.6}") } else { String::new() };
         println!(
-            "  {} = {:<12} F/N = {m:.6} +- {c:.6}  attached {:.4}  {} ({}/{} stick-slip)",
+            "  {} = {:<12} F/N = {m:.6}{ci}  attached {:.4}  {} ({}/{} stick-slip)",
             sweep.param,
             r.value.text,
             r.attached_fraction_mean.0,

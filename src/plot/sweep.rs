@@ -19,11 +19,10 @@ pub fn sweep_panel(sweep: &Sweep, outcome: &SweepOutcome) -> Panel {
     let replicas = sweep.replicas;
     Panel {
         title: format!(
-            "{}: friction per junction against {} ({} replica{}, 95% CI; SI sliding, SS stick-slip)",
+            "{}: friction per junction against {} ({}; SI sliding, SS stick-slip)",
             sweep.base.name,
             sweep.param,
-            replicas,
-            if replicas == 1 { "" } else { "s" }
+            if replicas == 1 { "1 replica, no CI".to_string() } else { format!("{replicas} replicas, 95% CI") }
         ),
         x,
         y: Axis::linear("mean friction per junction F/N  (kB T / l0)"),

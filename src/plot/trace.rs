@@ -12,8 +12,10 @@ use super::{Axis, PALETTE, Panel, PlotError, Series, render_svg};
 use crate::output::atomic::write_whole;
 use crate::scene::Scene;
 
-/// Number of time buckets a long trace is thinned to.
-pub const BUCKETS: usize = 2000;
+/// Number of time buckets a long trace is thinned to: one per pixel column of the
+/// 1000-pixel-wide figure or finer, so the drawn envelope is the same as the full trace's
+/// (SVG coordinates are whole pixels) while the file stays small.
+pub const BUCKETS: usize = 1000;
 
 /// Min/max thinning of a time series over `[0, t_end]`.
 #[derive(Clone, Debug)]

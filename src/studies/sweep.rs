@@ -322,7 +322,7 @@ pub enum SweepError {
 }
 
 /// Mean of `x` and the half-width of its two-sided 95% Student-t confidence interval
-/// (`NaN` for a single value).
+/// (`NaN` for a single value; `sweep.csv` leaves that field empty).
 pub fn mean_ci95(x: &[f64]) -> (f64, f64) {
     let n = x.len() as f64;
     let m = x.iter().sum::<f64>() / n;
@@ -427,7 +427,10 @@ impl SweepOutcome {
                 s.push(',');
                 push_f64(&mut s, m);
                 s.push(',');
-                push_f64(&mut s, c);
+                // A single replica has no confidence interval: the field is left empty.
+                if c.is_finite() {
+                    push_f64(&mut s, c);
+                }
             }
             let _ = write!(s, ",{},", r.regime.as_str());
             push_f64(&mut s, r.stick_slip_fraction);
