@@ -148,3 +148,32 @@ fn many_rebasings_keep_every_invariant() {
         assert_eq!(r.samples.last().unwrap().t, t_end);
     }
 }
+
+/// The two event queues (a scan and the `priority-queue` crate) order the same channels the
+/// same way, so a run gives the same events and the same final state with either.
+#[test]
+fn both_event_queues_give_the_same_run() {
+    use stickslip::engine::exact::{ArrayQueue, PqQueue, strong_linear, weak_linear};
+    for bond in ["strong", "weak"] {
+        let s = stickslip::testkit::scaled_linear(2000, bond);
+        let (mut a, mut b) = (Recorder::default(), Recorder::default());
+        let (sa, sb, ca, cb) = if bond == "strong" {
+            let (mut ea, mut eb) = (strong_linear::<ArrayQueue>(&s), strong_linear::<PqQueue>(&s));
+            ea.advance(30.0, &mut a).unwrap();
+            eb.advance(30.0, &mut b).unwrap();
+            (ea.sample(), eb.sample(), ea.counters(), eb.counters())
+        } else {
+            let (mut ea, mut eb) = (weak_linear::<ArrayQueue>(&s), weak_linear::<PqQueue>(&s));
+            ea.advance(30.0, &mut a).unwrap();
+            eb.advance(30.0, &mut b).unwrap();
+            (ea.sample(), eb.sample(), ea.counters(), eb.counters())
+        };
+        assert!(ca.events.unwrap() > 1000, "{bond}: too few events to compare ({:?})", ca.events);
+        assert_eq!(ca, cb, "{bond}: counters differ");
+        assert_eq!(format!("{sa:?}"), format!("{sb:?}"), "{bond}: final state differs");
+        assert_eq!(a.events.len(), b.events.len());
+        for (x, y) in a.events.iter().zip(&b.events) {
+            assert_eq!((x.t, x.junction, x.kind), (y.t, y.junction, y.kind), "{bond}: event logs differ");
+        }
+    }
+}
