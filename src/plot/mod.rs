@@ -77,7 +77,8 @@ impl Axis {
             lo = lo.min(v);
             hi = hi.max(v);
         }
-        if !(lo <= hi) {
+        // No finite value: `lo` is still +inf (never NaN, the values were filtered).
+        if lo > hi {
             return if self.log { (0.1, 10.0) } else { (0.0, 1.0) };
         }
         if lo == hi {

@@ -17,11 +17,15 @@ use crate::scene::Scene;
 /// (SVG coordinates are whole pixels) while the file stays small.
 pub const BUCKETS: usize = 1000;
 
+/// A point `(t, y)`.
+type Point = (f64, f64);
+
 /// Min/max thinning of a time series over `[0, t_end]`.
 #[derive(Clone, Debug)]
 pub struct Thinner {
     t_end: f64,
-    buckets: Vec<Option<((f64, f64), (f64, f64))>>,
+    /// Per bucket, its lowest and highest point.
+    buckets: Vec<Option<(Point, Point)>>,
 }
 
 impl Thinner {
