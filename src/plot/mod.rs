@@ -332,6 +332,9 @@ mod tests {
         let b = render_svg(&[p], 400, 300).unwrap();
         assert_eq!(a, b);
         assert!(a.starts_with("<svg") && a.trim_end().ends_with("</svg>"));
-        assert!(a.contains(">SI<"));
+        // plotters writes a text element's content on its own line: `<text ...>\nSI\n</text>`.
+        let texts: Vec<&str> =
+            a.split("</text>").filter_map(|chunk| chunk.rsplit_once('>').map(|(_, t)| t.trim())).collect();
+        assert!(texts.contains(&"SI"), "{texts:?}");
     }
 }
