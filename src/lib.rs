@@ -7,6 +7,7 @@
 //! an engine along the output grid and feeds the [`observe`]rs and [`output`] writers.
 
 pub mod cli;
+pub mod compare;
 pub mod engine;
 pub mod observe;
 pub mod ode;

@@ -3,6 +3,7 @@
 //! Exit codes: 0 success; 1 the run failed (numerical trouble, a write that failed
 //! mid-run); 2 bad input (command line, scene file, `--set`, output directory).
 
+mod compare;
 mod run;
 mod sweep;
 mod validate;
@@ -67,6 +68,8 @@ pub enum Command {
         #[command(flatten)]
         scene: SceneArgs,
     },
+    /// Work-precision study: error against run time of the fixed-step and exact engines.
+    Compare(compare::CompareArgs),
 }
 
 /// Prints a one-line error and returns the exit code.
@@ -106,6 +109,7 @@ pub fn main() -> ExitCode {
     match cli.command {
         Command::Run { scene, engine, seed, out } => run::run(&scene, engine, seed, out),
         Command::Validate { scene } => validate::validate(&scene),
+        Command::Compare(args) => compare::compare(&args),
         Command::Sweep(args) => sweep::sweep(&args),
     }
 }

@@ -1,0 +1,134 @@
+//! `stickslip compare`: the work-precision study of [`crate::compare`].
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use super::run::{load_scene, prepare_out_dir, remove_if_empty};
+use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
+use crate::compare::{Plan, default_dts, plot, report};
+use crate::output::atomic::write_whole;
+
+#[derive(clap::Args, Debug)]
+pub struct CompareArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Steps of the fixed engine, comma-separated (default: the scene's fixed.dt and its
+    /// halvings down to fixed.dt/256).
+    #[arg(long, value_name = "DT,DT,..", allow_hyphen_values = true)]
+    pub dts: Option<String>,
+    /// Replicas per fixed-step point; the exact points use 1, 2, 4, .. up to this many.
+    #[arg(long, default_value_t = 64)]
+    pub replicas: usize,
+    /// Replicas of the exact reference (default: 4 x --replicas).
+    #[arg(long)]
+    pub ref_replicas: Option<usize>,
+    /// Output directory (default: out/<scene file stem>-compare/).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Worker threads (default: one per core). Results do not depend on it.
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+/// Parses `--dts`: a comma-separated list of finite numbers > 0.
+pub(crate) fn parse_dts(text: &str) -> Result<Vec<f64>, String> {
+    let bad = |why: String| format!("--dts = {text:?}: {why} (a comma-separated list of steps > 0, e.g. 1,0.5,0.25)");
+    if text.trim().is_empty() {
+        return Err(bad("the list is empty".into()));
+    }
+    text.split(',')
+        .map(|item| {
+            let item = item.trim();
+            if item.is_empty() {
+                return Err(bad("an entry is empty".into()));
+            }
+            match item.parse::<f64>() {
+                Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+                Ok(_) => Err(bad(format!("{item} is not allowed: each step must be a finite number > 0"))),
+                Err(_) => Err(bad(format!("{item:?} is not a number"))),
+            }
+        })
+        .collect()
+}
+
+/// The command line as typed, for the report.
+fn command_line() -> String {
+    let quote = |a: String| {
+        if !a.is_empty() && a.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=,:+".contains(c)) {
+            a
+        } else {
+            format!("'{}'", a.replace('\'', r"'\''"))
+        }
+    };
+    std::iter::once("stickslip".to_string()).chain(std::env::args().skip(1).map(quote)).collect::<Vec<_>>().join(" ")
+}
+
+pub(crate) fn compare(args: &CompareArgs) -> ExitCode {
+    let scene = match load_scene(&args.scene, &[]) {
+        Ok(s) => s,
+        Err(code) => return code,
+    };
+    let dts = match &args.dts {
+        Some(text) => match parse_dts(text) {
+            Ok(d) => d,
+            Err(m) => return fail(EXIT_BAD_INPUT, m),
+        },
+        None => default_dts(&scene),
+    };
+    if args.threads == Some(0) {
+        return fail(EXIT_BAD_INPUT, "--threads = 0: must be at least 1");
+    }
+    let ref_replicas = args.ref_replicas.unwrap_or(args.replicas.saturating_mul(4));
+    let plan = match Plan::new(&scene, dts, args.replicas, ref_replicas) {
+        Ok(p) => p,
+        Err(e) => return fail(EXIT_BAD_INPUT, e),
+    };
+    let out = args.out.clone().unwrap_or_else(|| Path::new("out").join(format!("{}-compare", scene.name)));
+    let created = match prepare_out_dir(&out) {
+        Ok(c) => c,
+        Err(m) => return fail(EXIT_BAD_INPUT, m),
+    };
+    let failed = |m: String| {
+        remove_if_empty(&created);
+        fail(EXIT_RUN_FAILED, m)
+    };
+    let study = match plan.run(args.threads) {
+        Ok(s) => s,
+        Err(e) => return failed(e.to_string()),
+    };
+    let svg = match plot::svg(&study) {
+        Ok(s) => s,
+        Err(m) => return failed(format!("cannot draw compare.svg: {m}")),
+    };
+    let files = [
+        ("compare.csv", report::csv(&study)),
+        ("compare.svg", svg),
+        ("compare.md", report::markdown(&study, &command_line())),
+    ];
+    for (name, text) in &files {
+        if let Err(e) = write_whole(&out, name, text.as_bytes()) {
+            return failed(format!("cannot write {}: {e}", out.join(name).display()));
+        }
+    }
+    println!("compare {}: {} points, reference of {} exact replicas", scene.name, study.points.len(), ref_replicas);
+    for line in report::reading(&study) {
+        println!("{line}");
+    }
+    println!("output in {}", out.display());
+    ExitCode::SUCCESS
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_dts;
+
+    #[test]
+    fn dts_lists() {
+        assert_eq!(parse_dts("1, 0.5,0.25").unwrap(), vec![1.0, 0.5, 0.25]);
+        for bad in ["", " ", "1,,2", "-1", "0", "NaN", "nan", "inf", "abc", "1;2"] {
+            let e = parse_dts(bad).unwrap_err();
+            assert!(e.starts_with("--dts = "), "{bad}: {e}");
+            assert!(!e.contains('\n'));
+        }
+    }
+}

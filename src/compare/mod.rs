@@ -1,0 +1,576 @@
+//! `stickslip compare`: error against run time (a work-precision diagram) of the fixed-step
+//! engine and the exact engine on one scene.
+//!
+//! **What is estimated.** Each observable is a window average of one run (`friction_mean`,
+//! `friction_std`, `attached_fraction_mean` over `[t_warmup, t_end]`, and for weak bonds the
+//! run's mean rupture force). Its *target* is its expectation under the exact process for the
+//! scene's own window, estimated by the **reference**: the exact engine over `ref_replicas`
+//! independent replicas (mean and standard error over replicas).
+//!
+//! **Points.** The fixed engine at each `dt`, `replicas` replicas each: bias plus sampling
+//! error. The exact engine at increasing *run lengths*, where the run length is the number of
+//! replicas `r = 1, 2, 4, .., replicas` of the scene's window (total simulated time
+//! `r t_end`): it has no bias, so its error is pure sampling error and falls as
+//! `1/sqrt(r)`, i.e. as `1/sqrt(cost)`. (Lengthening `t_end` instead would change the
+//! target: the window would hold less of the start-up transient and a finite-window standard
+//! deviation has its own bias, so the exact engine would appear biased against a reference
+//! computed for the scene's window.)
+//!
+//! **Errors and intervals.** For a point with mean `m` the error is `m - m_ref`. Its
+//! standard deviation under zero bias is the **floor** `sqrt(se^2 + se_ref^2)`: the error
+//! expected from sampling alone at that point's cost. The 95 % interval is
+//! `error +- t * floor`, with `t` the Student-t quantile: for fixed points `se` is the
+//! point's own standard error over its replicas and the degrees of freedom are
+//! Welch–Satterthwaite's; for exact points, whose replicas have the reference's
+//! distribution, `se = sd_ref / sqrt(r)` (a single replica has no spread of its own) and
+//! the degrees of freedom are `ref_replicas - 1`.
+//!
+//! **Wall time** of a point is the sum of its replicas' measured wall times: its cost on
+//! one core, whatever the number of threads.
+//!
+//! **Guards.** A fixed point in which any replica diverges (`EngineError::Diverged`, or a
+//! non-finite state) is reported as `diverged` with the number of diverged replicas. A
+//! point whose `dt` lies beyond the plate step's linear stability with every junction
+//! attached ([`stability::plate_growth`] > 1) is reported as `unstable`, with its numbers.
+
+pub mod creep;
+pub mod fit;
+pub mod plot;
+pub mod report;
+pub mod seeds;
+pub mod stability;
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+use crate::engine::EngineError;
+use crate::output::Summary;
+use crate::runner::{RunError, run_scene};
+use crate::scene::{BondKind, EngineKind, RngKind, Scene};
+use seeds::Role;
+
+/// An observable compared between the engines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Observable {
+    FrictionMean,
+    FrictionStd,
+    AttachedFraction,
+    RuptureForce,
+}
+
+impl Observable {
+    /// Column-name stem, as in `summary.json`.
+    pub fn key(self) -> &'static str {
+        match self {
+            Observable::FrictionMean => "friction_mean",
+            Observable::FrictionStd => "friction_std",
+            Observable::AttachedFraction => "attached_fraction_mean",
+            Observable::RuptureForce => "rupture_force_mean",
+        }
+    }
+    /// Human-readable name.
+    pub fn label(self) -> &'static str {
+        match self {
+            Observable::FrictionMean => "mean friction",
+            Observable::FrictionStd => "friction std",
+            Observable::AttachedFraction => "attached fraction",
+            Observable::RuptureForce => "mean rupture force",
+        }
+    }
+    fn of(self, s: &Summary) -> Option<f64> {
+        match self {
+            Observable::FrictionMean => Some(s.friction_mean),
+            Observable::FrictionStd => Some(s.friction_std),
+            Observable::AttachedFraction => Some(s.attached_fraction_mean),
+            Observable::RuptureForce => s.rupture_force_mean,
+        }
+    }
+    /// The observables of a scene: the rupture force for weak bonds only.
+    pub fn for_scene(scene: &Scene) -> Vec<Observable> {
+        let mut v = vec![Observable::FrictionMean, Observable::FrictionStd, Observable::AttachedFraction];
+        if scene.junctions.bond == BondKind::Weak {
+            v.push(Observable::RuptureForce);
+        }
+        v
+    }
+}
+
+/// The default ladder: the scene's `fixed.dt` and its halvings down to `dt / 256`.
+pub fn default_dts(scene: &Scene) -> Vec<f64> {
+    (0..=8).map(|k| scene.fixed.dt / f64::from(1u32 << k)).collect()
+}
+
+/// Replica counts of the exact engine's points: `1, 2, 4, ..` up to `replicas` (which is
+/// always the last).
+pub fn exact_counts(replicas: usize) -> Vec<usize> {
+    let mut v: Vec<usize> =
+        std::iter::successors(Some(1usize), |r| Some(r * 2)).take_while(|&r| r < replicas).collect();
+    v.push(replicas);
+    v
+}
+
+/// Bad study parameters: the message names the argument, the value and what is allowed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct PlanError(pub String);
+
+/// Why a study failed after it started.
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    #[error("{what} (seed {seed}): {source}")]
+    Run {
+        what: String,
+        seed: u64,
+        #[source]
+        source: RunError,
+    },
+    #[error("cannot build a thread pool: {0}")]
+    Threads(String),
+}
+
+/// One simulation of a study.
+#[derive(Clone, Debug)]
+struct Job {
+    role: Role,
+    point: usize,
+    scene: Scene,
+}
+
+/// A checked study, ready to run.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// The scene as given (engine and step as in the file).
+    pub scene: Scene,
+    pub dts: Vec<f64>,
+    pub replicas: usize,
+    pub ref_replicas: usize,
+    pub exact_counts: Vec<usize>,
+    pub observables: Vec<Observable>,
+    jobs: Vec<Job>,
+}
+
+fn quiet(scene: &Scene, extra: &[String]) -> Result<Scene, crate::scene::SceneError> {
+    let mut o =
+        vec!["output.trace=false".to_string(), "output.events=false".to_string(), "output.plot=false".to_string()];
+    o.extend_from_slice(extra);
+    scene.with_overrides(&o)
+}
+
+impl Plan {
+    /// Checks the parameters and builds every job (scene and seed). Nothing runs.
+    pub fn new(scene: &Scene, dts: Vec<f64>, replicas: usize, ref_replicas: usize) -> Result<Plan, PlanError> {
+        if dts.is_empty() {
+            return Err(PlanError(
+                "--dts: the list is empty; give one or more steps > 0, e.g. --dts 1,0.5,0.25".into(),
+            ));
+        }
+        for &dt in &dts {
+            if !(dt.is_finite() && dt > 0.0) {
+                return Err(PlanError(format!("--dts: {dt} is not allowed: each step must be a finite number > 0")));
+            }
+        }
+        if replicas < 2 {
+            return Err(PlanError(format!("--replicas = {replicas}: must be at least 2")));
+        }
+        if ref_replicas < 2 {
+            return Err(PlanError(format!("--ref-replicas = {ref_replicas}: must be at least 2")));
+        }
+        let base = scene.run.seed;
+        let mut jobs = Vec::new();
+        let exact = quiet(scene, &["run.engine=exact".into()]).map_err(|e| PlanError(e.to_string()))?;
+        let with_seed = |s: &Scene, seed: u64| {
+            let mut s = s.clone();
+            s.run.seed = seed;
+            s
+        };
+        for r in 0..ref_replicas {
+            let seed = seeds::pcg_seed(base, Role::Reference, 0, r as u64);
+            jobs.push(Job { role: Role::Reference, point: 0, scene: with_seed(&exact, seed) });
+        }
+        let counts = exact_counts(replicas);
+        for (k, &count) in counts.iter().enumerate() {
+            for r in 0..count {
+                let seed = seeds::pcg_seed(base, Role::Exact, k as u64, r as u64);
+                jobs.push(Job { role: Role::Exact, point: k, scene: with_seed(&exact, seed) });
+            }
+        }
+        for (j, &dt) in dts.iter().enumerate() {
+            // The seed is replaced below; 1 is valid for every generator.
+            let set_dt = format!("fixed.dt={}", ryu::Buffer::new().format(dt));
+            let fixed = quiet(scene, &["run.engine=fixed".into(), "run.seed=1".into(), set_dt])
+                .map_err(|e| PlanError(format!("--dts: {dt}: {e}")))?;
+            let seeds: Vec<u64> = match fixed.fixed.rng {
+                RngKind::Pcg => (0..replicas).map(|r| seeds::pcg_seed(base, Role::Fixed, j as u64, r as u64)).collect(),
+                RngKind::ParkMiller => {
+                    let n = fixed.junctions.n as u64;
+                    let draws = n.saturating_mul(fixed.fixed.steps_for(fixed.run.t_end).saturating_add(1));
+                    seeds::park_miller_seeds(base, j as u64, replicas, draws).ok_or_else(|| {
+                        PlanError(format!(
+                            "--replicas = {replicas}: at --dts {dt} the replicas need {replicas} x {draws} Park-Miller \
+                             draws, more than the generator's period {}; use fewer replicas, a larger step or \
+                             --set fixed.rng=pcg",
+                            seeds::PARK_MILLER_PERIOD
+                        ))
+                    })?
+                }
+            };
+            for seed in seeds {
+                jobs.push(Job { role: Role::Fixed, point: j, scene: with_seed(&fixed, seed) });
+            }
+        }
+        Ok(Plan {
+            scene: scene.clone(),
+            dts,
+            replicas,
+            ref_replicas,
+            exact_counts: counts,
+            observables: Observable::for_scene(scene),
+            jobs,
+        })
+    }
+
+    /// Runs every job (on `threads` threads, or rayon's default) and aggregates.
+    pub fn run(&self, threads: Option<usize>) -> Result<Study, StudyError> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.unwrap_or(0))
+            .build()
+            .map_err(|e| StudyError::Threads(e.to_string()))?;
+        let obs = &self.observables;
+        // Jobs run in a fixed pseudo-random order, so that a change of machine load during
+        // the study (other processes) spreads over all points instead of hitting one; the
+        // outcomes are put back in job order.
+        let mut order: Vec<usize> = (0..self.jobs.len()).collect();
+        order.sort_by_key(|&i| seeds::splitmix64(i as u64));
+        let ran: Vec<(usize, Outcome)> =
+            pool.install(|| order.par_iter().map(|&i| (i, run_job(&self.jobs[i], obs))).collect());
+        let mut slots: Vec<Option<Outcome>> = (0..self.jobs.len()).map(|_| None).collect();
+        for (i, o) in ran {
+            slots[i] = Some(o);
+        }
+        let outcomes = slots.into_iter().map(|o| o.expect("every job ran"));
+        // The first failure in job order, so the message does not depend on scheduling.
+        let mut results = Vec::with_capacity(outcomes.len());
+        for (job, o) in self.jobs.iter().zip(outcomes) {
+            match o {
+                Outcome::Failed(source) => {
+                    let what = match job.role {
+                        Role::Reference => "the exact reference run failed".to_string(),
+                        Role::Exact => "an exact run failed".to_string(),
+                        Role::Fixed => format!("a fixed-step run at dt = {} failed", job.scene.fixed.dt),
+                    };
+                    return Err(StudyError::Run { what, seed: job.scene.run.seed, source });
+                }
+                o => results.push((job, o)),
+            }
+        }
+        Ok(self.aggregate(&results))
+    }
+
+    fn aggregate(&self, results: &[(&Job, Outcome)]) -> Study {
+        let pick = |role: Role, point: usize| -> Vec<&Outcome> {
+            results.iter().filter(|(j, _)| j.role == role && j.point == point).map(|(_, o)| o).collect()
+        };
+        let nobs = self.observables.len();
+        // Reference.
+        let refs = pick(Role::Reference, 0);
+        let ref_wall: f64 = refs.iter().map(|o| o.wall()).sum();
+        let ref_cpu: f64 = refs.iter().map(|o| o.cpu()).sum();
+        let ref_stats: Vec<Sample> = (0..nobs).map(|i| Sample::of(refs.iter().map(|o| o.value(i)))).collect();
+        let reference = Reference {
+            replicas: self.ref_replicas,
+            wall_seconds: ref_wall,
+            cpu_seconds: ref_cpu,
+            stats: ref_stats.clone(),
+        };
+        let mut points = Vec::new();
+        for (k, &count) in self.exact_counts.iter().enumerate() {
+            let outs = pick(Role::Exact, k);
+            let wall = outs.iter().map(|o| o.wall()).sum();
+            let cpu = outs.iter().map(|o| o.cpu()).sum();
+            let obs = (0..nobs)
+                .map(|i| {
+                    let s = Sample::of(outs.iter().map(|o| o.value(i)));
+                    let r = &ref_stats[i];
+                    let se = r.sd / (count as f64).sqrt();
+                    PointObs::new(s.mean, se, r, r.n.saturating_sub(1) as f64)
+                })
+                .collect();
+            points.push(Point {
+                engine: EngineKind::Exact,
+                dt: None,
+                replicas: count,
+                wall_seconds: wall,
+                cpu_seconds: cpu,
+                status: Status::Ok,
+                diverged_replicas: 0,
+                plate_growth: None,
+                obs,
+            });
+        }
+        for (j, &dt) in self.dts.iter().enumerate() {
+            let outs = pick(Role::Fixed, j);
+            let wall = outs.iter().map(|o| o.wall()).sum();
+            let cpu = outs.iter().map(|o| o.cpu()).sum();
+            let diverged = outs.iter().filter(|o| matches!(o, Outcome::Diverged { .. })).count();
+            let growth = stability::plate_growth(&self.scene, dt);
+            let status = if diverged > 0 {
+                Status::Diverged
+            } else if growth > 1.0 {
+                Status::Unstable
+            } else {
+                Status::Ok
+            };
+            let obs = (0..nobs)
+                .map(|i| {
+                    if diverged > 0 {
+                        return PointObs::none();
+                    }
+                    let s = Sample::of(outs.iter().map(|o| o.value(i)));
+                    let r = &ref_stats[i];
+                    let (a, b) = (s.se * s.se, r.se * r.se);
+                    let df = (a + b) * (a + b) / (a * a / (s.n as f64 - 1.0) + b * b / (r.n as f64 - 1.0));
+                    PointObs::new(s.mean, s.se, r, df)
+                })
+                .collect();
+            points.push(Point {
+                engine: EngineKind::Fixed,
+                dt: Some(dt),
+                replicas: self.replicas,
+                wall_seconds: wall,
+                cpu_seconds: cpu,
+                status,
+                diverged_replicas: diverged,
+                plate_growth: Some(growth),
+                obs,
+            });
+        }
+        Study {
+            scene: self.scene.clone(),
+            observables: self.observables.clone(),
+            replicas: self.replicas,
+            reference,
+            points,
+        }
+    }
+}
+
+/// What one job gave.
+#[derive(Debug)]
+enum Outcome {
+    Done { values: Vec<Option<f64>>, wall: f64, cpu: f64 },
+    Diverged { wall: f64, cpu: f64 },
+    Failed(RunError),
+}
+
+impl Outcome {
+    fn wall(&self) -> f64 {
+        match self {
+            Outcome::Done { wall, .. } | Outcome::Diverged { wall, .. } => *wall,
+            Outcome::Failed(_) => 0.0,
+        }
+    }
+    fn cpu(&self) -> f64 {
+        match self {
+            Outcome::Done { cpu, .. } | Outcome::Diverged { cpu, .. } => *cpu,
+            Outcome::Failed(_) => 0.0,
+        }
+    }
+    fn value(&self, i: usize) -> Option<f64> {
+        match self {
+            Outcome::Done { values, .. } => values[i],
+            _ => None,
+        }
+    }
+}
+
+/// CPU time consumed by the calling thread, in seconds (0 where the clock is unavailable).
+pub fn thread_cpu_seconds() -> f64 {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: `ts` is a valid, writable timespec; the call only writes into it.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    if rc == 0 { ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9 } else { 0.0 }
+}
+
+fn run_job(job: &Job, obs: &[Observable]) -> Outcome {
+    let cpu0 = thread_cpu_seconds();
+    let started = Instant::now();
+    let r = run_scene(&job.scene, None);
+    let wall = started.elapsed().as_secs_f64();
+    let cpu = thread_cpu_seconds() - cpu0;
+    match r {
+        Ok(s) => Outcome::Done { values: obs.iter().map(|o| o.of(&s)).collect(), wall, cpu },
+        Err(RunError::Engine(EngineError::Diverged { .. } | EngineError::NonFinite { .. }))
+            if job.role == Role::Fixed =>
+        {
+            Outcome::Diverged { wall, cpu }
+        }
+        Err(e) => Outcome::Failed(e),
+    }
+}
+
+/// Mean, standard deviation and standard error over replicas. If any replica lacks the
+/// value (a weak-bond run without a rupture in its window) every field is NaN.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    pub n: usize,
+    pub mean: f64,
+    /// Standard deviation of one replica's value.
+    pub sd: f64,
+    /// Standard error of the mean.
+    pub se: f64,
+}
+
+impl Sample {
+    fn of(values: impl Iterator<Item = Option<f64>>) -> Sample {
+        let v: Option<Vec<f64>> = values.collect();
+        let Some(v) = v else { return Sample { n: 0, mean: f64::NAN, sd: f64::NAN, se: f64::NAN } };
+        let n = v.len();
+        // Summed in replica order: the same bytes whatever the thread count.
+        let mean = v.iter().sum::<f64>() / n as f64;
+        let sd = if n > 1 {
+            (v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n as f64 - 1.0)).sqrt()
+        } else {
+            f64::NAN
+        };
+        Sample { n, mean, sd, se: sd / (n as f64).sqrt() }
+    }
+}
+
+/// The reference: the exact engine over many replicas.
+#[derive(Clone, Debug)]
+pub struct Reference {
+    pub replicas: usize,
+    pub wall_seconds: f64,
+    pub cpu_seconds: f64,
+    /// One per observable.
+    pub stats: Vec<Sample>,
+}
+
+/// How a point ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Status {
+    Ok,
+    /// Completed, but `dt` lies beyond the plate step's linear stability (all attached).
+    Unstable,
+    /// At least one replica diverged; no estimate.
+    Diverged,
+}
+
+impl Status {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Status::Ok => "ok",
+            Status::Unstable => "unstable",
+            Status::Diverged => "diverged",
+        }
+    }
+}
+
+/// One observable at one point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointObs {
+    pub estimate: f64,
+    pub se: f64,
+    /// `estimate - reference`.
+    pub error: f64,
+    pub ci_low: f64,
+    pub ci_high: f64,
+    /// Standard deviation of the error from sampling alone: `sqrt(se^2 + se_ref^2)`.
+    pub floor: f64,
+}
+
+impl PointObs {
+    fn none() -> PointObs {
+        PointObs {
+            estimate: f64::NAN,
+            se: f64::NAN,
+            error: f64::NAN,
+            ci_low: f64::NAN,
+            ci_high: f64::NAN,
+            floor: f64::NAN,
+        }
+    }
+    fn new(estimate: f64, se: f64, reference: &Sample, df: f64) -> PointObs {
+        let error = estimate - reference.mean;
+        let floor = (se * se + reference.se * reference.se).sqrt();
+        let half = t_quantile(df) * floor;
+        PointObs { estimate, se, error, ci_low: error - half, ci_high: error + half, floor }
+    }
+}
+
+/// Two-sided 95 % Student-t quantile; the normal one when `df` is not a usable number.
+pub fn t_quantile(df: f64) -> f64 {
+    match StudentsT::new(0.0, 1.0, df) {
+        Ok(t) if df.is_finite() && df > 0.0 => t.inverse_cdf(0.975),
+        _ => 1.959_963_984_540_054,
+    }
+}
+
+/// One point of the diagram.
+#[derive(Clone, Debug)]
+pub struct Point {
+    pub engine: EngineKind,
+    /// The fixed engine's step.
+    pub dt: Option<f64>,
+    pub replicas: usize,
+    /// Sum over replicas of each replica's measured wall time.
+    pub wall_seconds: f64,
+    /// Sum over replicas of the CPU time of the thread that ran each replica (less
+    /// sensitive than the wall time to other processes on a shared machine).
+    pub cpu_seconds: f64,
+    pub status: Status,
+    pub diverged_replicas: usize,
+    /// Fixed engine: growth factor per step of the plate update, all junctions attached.
+    pub plate_growth: Option<f64>,
+    /// One per observable.
+    pub obs: Vec<PointObs>,
+}
+
+/// A finished study.
+#[derive(Clone, Debug)]
+pub struct Study {
+    pub scene: Scene,
+    pub observables: Vec<Observable>,
+    /// Replicas per fixed point (and of the largest exact point).
+    pub replicas: usize,
+    pub reference: Reference,
+    pub points: Vec<Point>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ladders() {
+        assert_eq!(exact_counts(64), vec![1, 2, 4, 8, 16, 32, 64]);
+        assert_eq!(exact_counts(5), vec![1, 2, 4, 5]);
+        assert_eq!(exact_counts(2), vec![1, 2]);
+        let s = crate::testkit::fig1();
+        let d = default_dts(&s);
+        assert_eq!(d.len(), 9);
+        assert_eq!(d[0], 1.0);
+        assert_eq!(d[8], 1.0 / 256.0);
+    }
+
+    #[test]
+    fn bad_plans_name_their_argument() {
+        let s = crate::testkit::fig1();
+        for dts in [vec![], vec![-1.0], vec![0.0], vec![f64::NAN], vec![f64::INFINITY]] {
+            let e = Plan::new(&s, dts, 4, 4).unwrap_err();
+            assert!(e.0.starts_with("--dts"), "{e}");
+        }
+        assert!(Plan::new(&s, vec![0.5], 1, 4).unwrap_err().0.starts_with("--replicas"));
+        assert!(Plan::new(&s, vec![0.5], 4, 1).unwrap_err().0.starts_with("--ref-replicas"));
+        // 1e-5 over 150 time units is 1.5e7 steps of 300 junctions: 4.5e9 draws per replica.
+        assert!(Plan::new(&s, vec![1e-5], 4, 4).unwrap_err().0.starts_with("--replicas"));
+    }
+
+    #[test]
+    fn student_t_quantile() {
+        assert!((t_quantile(f64::INFINITY) - 1.96).abs() < 1e-3);
+        assert!((t_quantile(10.0) - 2.228).abs() < 1e-3);
+    }
+}

@@ -1,0 +1,441 @@
+//! The study's files: `compare.csv` (every number), `compare.md` (tables and a reading).
+//!
+//! **The reading** answers "at what accuracy does each engine win, and by how much" with a
+//! cost model whose every input is measured by the study. To reach a root-mean-square error
+//! `e` in an observable:
+//! - the exact engine needs `max(1, sd_ref^2 / e^2)` replicas at `c_exact` seconds each
+//!   (`sd_ref` the reference's spread over replicas, `c_exact` the mean wall time of the
+//!   study's exact replicas): it has no bias, so only sampling error;
+//! - the fixed engine at step `dt` has bias `b(dt)` (its measured error), so it reaches `e`
+//!   only if `e > |b|`, with `max(1, sd^2 / (e^2 - b^2))` replicas at `c(dt)` seconds each
+//!   (`sd`, `c` its own spread and mean wall time per replica); the cheapest stable `dt` is
+//!   taken.
+//!
+//! The ratio of the two costs is evaluated on a logarithmic grid of `e`, from twice the
+//! reference's standard error (smaller errors cannot be resolved against this reference) to
+//! the larger of one exact replica's spread and the largest measured bias.
+
+use std::fmt::Write as _;
+
+use super::fit::{BiasFit, bias_fit};
+use super::{Observable, Point, Status, Study};
+use crate::output::csv::push_f64;
+use crate::scene::EngineKind;
+
+fn cell(line: &mut String, v: f64) {
+    line.push(',');
+    if v.is_finite() {
+        push_f64(line, v);
+    }
+}
+
+/// The columns of `compare.csv`; `wall_seconds` and `cpu_seconds` are the only ones that
+/// depend on the machine and its load.
+pub fn csv_header(observables: &[Observable]) -> String {
+    let mut h = String::from(
+        "engine,dt,replicas,simulated_time,status,diverged_replicas,plate_growth,wall_seconds,cpu_seconds",
+    );
+    for o in observables {
+        for c in ["estimate", "se", "error", "ci_low", "ci_high", "floor"] {
+            let _ = write!(h, ",{}_{c}", o.key());
+        }
+    }
+    h
+}
+
+/// `compare.csv`: the reference row, then one row per point (exact, then fixed).
+pub fn csv(study: &Study) -> String {
+    let t_end = study.scene.run.t_end;
+    let mut out = csv_header(&study.observables);
+    out.push('\n');
+    let r = &study.reference;
+    let mut line = String::from("reference,");
+    let _ = write!(line, ",{}", r.replicas);
+    cell(&mut line, r.replicas as f64 * t_end);
+    line.push_str(",ok,0,");
+    cell(&mut line, r.wall_seconds);
+    cell(&mut line, r.cpu_seconds);
+    for s in &r.stats {
+        cell(&mut line, s.mean);
+        cell(&mut line, s.se);
+        line.push_str(",,,,");
+    }
+    out.push_str(&line);
+    out.push('\n');
+    for p in &study.points {
+        let mut line = String::from(engine_name(p.engine));
+        cell(&mut line, p.dt.unwrap_or(f64::NAN));
+        let _ = write!(line, ",{}", p.replicas);
+        cell(&mut line, p.replicas as f64 * t_end);
+        let _ = write!(line, ",{},{}", p.status.as_str(), p.diverged_replicas);
+        cell(&mut line, p.plate_growth.unwrap_or(f64::NAN));
+        cell(&mut line, p.wall_seconds);
+        cell(&mut line, p.cpu_seconds);
+        for o in &p.obs {
+            for v in [o.estimate, o.se, o.error, o.ci_low, o.ci_high, o.floor] {
+                cell(&mut line, v);
+            }
+        }
+        out.push_str(&line);
+        out.push('\n');
+    }
+    out
+}
+
+fn engine_name(e: EngineKind) -> &'static str {
+    match e {
+        EngineKind::Exact => "exact",
+        EngineKind::Fixed => "fixed",
+    }
+}
+
+/// `v` with `sig` significant digits, plain or scientific as suits its size.
+pub fn sig(v: f64, sig: usize) -> String {
+    if !v.is_finite() {
+        return if v.is_nan() { "-".into() } else { format!("{v}") };
+    }
+    if v == 0.0 {
+        return "0".into();
+    }
+    let mag = v.abs().log10().floor() as i32;
+    if !(-3..6).contains(&mag) {
+        return format!("{:.*e}", sig.saturating_sub(1), v);
+    }
+    let decimals = (sig as i32 - 1 - mag).max(0) as usize;
+    format!("{v:.decimals$}")
+}
+
+/// A step, as short as it reads back exactly.
+fn dt_label(dt: f64) -> String {
+    format!("{dt}")
+}
+
+/// The cost (seconds) of the cheapest way each engine reaches RMS error `e`.
+struct CostModel {
+    /// Exact engine: seconds per replica and spread of one replica.
+    c_exact: f64,
+    sd_exact: f64,
+    /// Fixed engine, stable points: (dt, seconds per replica, spread, bias).
+    fixed: Vec<(f64, f64, f64, f64)>,
+}
+
+impl CostModel {
+    fn new(study: &Study, i: usize, fit: Option<&BiasFit>) -> CostModel {
+        let fit = fit.filter(|f| f.accepted());
+        let fixed = study
+            .points
+            .iter()
+            .filter(|p| p.engine == EngineKind::Fixed && p.status == Status::Ok && p.obs[i].error.is_finite())
+            .map(|p| {
+                let o = &p.obs[i];
+                let dt = p.dt.unwrap();
+                let bias = fit.map_or(o.error, |f| f.at(dt).0);
+                (dt, p.wall_seconds / p.replicas as f64, o.se * (p.replicas as f64).sqrt(), bias)
+            })
+            .collect();
+        CostModel { c_exact: exact_cost_per_replica(study), sd_exact: study.reference.stats[i].sd, fixed }
+    }
+    fn exact(&self, e: f64) -> f64 {
+        self.c_exact * (self.sd_exact * self.sd_exact / (e * e)).max(1.0)
+    }
+    /// Cheapest fixed cost and its step; `None` if no step reaches `e`.
+    fn fixed(&self, e: f64) -> Option<(f64, f64)> {
+        self.fixed
+            .iter()
+            .filter(|f| e > f.3.abs())
+            .map(|&(dt, c, sd, b)| (c * (sd * sd / (e * e - b * b)).max(1.0), dt))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+    }
+}
+
+/// `error` and, in parentheses, as a percentage of `reference`.
+fn with_pct(error: f64, reference: f64) -> String {
+    if reference != 0.0 && reference.is_finite() {
+        format!("{} ({} %)", sig(error, 2), sig(100.0 * error / reference.abs(), 2))
+    } else {
+        sig(error, 2)
+    }
+}
+
+/// Mean cost of one exact replica (wall seconds), over the reference and the exact points.
+fn exact_cost_per_replica(study: &Study) -> f64 {
+    let exact = study.points.iter().filter(|p| p.engine == EngineKind::Exact);
+    let wall: f64 = exact.clone().map(|p| p.wall_seconds).sum::<f64>() + study.reference.wall_seconds;
+    let reps: usize = exact.map(|p| p.replicas).sum::<usize>() + study.reference.replicas;
+    wall / reps as f64
+}
+
+/// The fitted bias of every observable at `dt`, as text.
+fn fitted_biases(study: &Study, fits: &[Option<BiasFit>], dt: f64) -> String {
+    study
+        .observables
+        .iter()
+        .enumerate()
+        .map(|(i, o)| match &fits[i] {
+            Some(f) if f.accepted() => {
+                let (b, se) = f.at(dt);
+                format!("{} {} +- {}", o.key(), with_pct(b, study.reference.stats[i].mean), sig(se, 1))
+            }
+            _ => format!("{} (no bias model)", o.key()),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The first line of the reading: the per-replica costs, the step at which they are equal,
+/// and the fitted bias there and at the largest stable step.
+fn cost_line(study: &Study, fits: &[Option<BiasFit>]) -> String {
+    let c_e = exact_cost_per_replica(study);
+    // Stable fixed points, largest step first.
+    let mut fixed: Vec<&Point> =
+        study.points.iter().filter(|p| p.engine == EngineKind::Fixed && p.status == Status::Ok).collect();
+    fixed.sort_by(|a, b| b.dt.unwrap().total_cmp(&a.dt.unwrap()));
+    if fixed.is_empty() {
+        return format!("One exact replica costs {} s; no fixed-step point is stable.", sig(c_e, 2));
+    }
+    let cost = |p: &Point| p.wall_seconds / p.replicas as f64;
+    let (first, last) = (fixed[0], fixed[fixed.len() - 1]);
+    let (dt0, dt1) = (first.dt.unwrap(), last.dt.unwrap());
+    let head = format!("Per replica, the exact engine costs {} s (wall); the fixed-step engine", sig(c_e, 2));
+    let range = if fixed.len() == 1 {
+        format!("{} s at dt = {}", sig(cost(first), 2), dt_label(dt0))
+    } else {
+        format!(
+            "{} s at dt = {} to {} s at dt = {}",
+            sig(cost(first), 2),
+            dt_label(dt0),
+            sig(cost(last), 2),
+            dt_label(dt1)
+        )
+    };
+    if cost(first) >= c_e {
+        return format!(
+            "{head} costs more at every stable step tried ({range}), by at least x{}, and is biased on top (fitted \
+             bias at dt = {}: {}).",
+            sig(cost(first) / c_e, 2),
+            dt_label(dt0),
+            fitted_biases(study, fits, dt0)
+        );
+    }
+    if cost(last) < c_e {
+        return format!(
+            "{head} costs less at every stable step tried ({range}); fitted bias at dt = {}: {}; at dt = {}: {}.",
+            dt_label(dt0),
+            fitted_biases(study, fits, dt0),
+            dt_label(dt1),
+            fitted_biases(study, fits, dt1)
+        );
+    }
+    // Log-log interpolation of the step at which the costs are equal.
+    let k = fixed.windows(2).position(|w| cost(w[0]) < c_e && cost(w[1]) >= c_e).unwrap_or(0);
+    let (a, b) = (fixed[k], fixed[k + 1]);
+    let f = (c_e / cost(a)).ln() / (cost(b) / cost(a)).ln();
+    let dt_eq = (a.dt.unwrap().ln() + f * (b.dt.unwrap().ln() - a.dt.unwrap().ln())).exp();
+    format!(
+        "{head} costs as much at dt = {} ({range}), where its fitted bias is {}. Larger steps are cheaper, by up to \
+         x{} at dt = {}, and more biased ({}).",
+        sig(dt_eq, 2),
+        fitted_biases(study, fits, dt_eq),
+        sig(c_e / cost(first), 2),
+        dt_label(dt0),
+        fitted_biases(study, fits, dt0)
+    )
+}
+
+/// A point of the reading's grid: error, exact cost, cheapest fixed cost and its step.
+type GridPoint = (f64, f64, Option<(f64, f64)>);
+
+/// The reading: the per-replica cost line, then one line per observable saying where each
+/// engine is cheaper and by what factor.
+pub fn reading(study: &Study) -> Vec<String> {
+    let fits: Vec<Option<BiasFit>> = (0..study.observables.len()).map(|i| bias_fit(study, i)).collect();
+    let mut lines = vec![cost_line(study, &fits)];
+    for (i, o) in study.observables.iter().enumerate() {
+        let m = CostModel::new(study, i, fits[i].as_ref());
+        let reference = study.reference.stats[i].mean;
+        let se_ref = study.reference.stats[i].se;
+        let max_bias = m.fixed.iter().map(|f| f.3.abs()).fold(0.0, f64::max);
+        let (lo, hi) = (2.0 * se_ref, m.sd_exact.max(max_bias));
+        if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi > lo) {
+            lines.push(format!("`{}`: not enough data for a reading.", o.key()));
+            continue;
+        }
+        let n = 60;
+        // (error, exact cost, fixed cost and step)
+        let grid: Vec<GridPoint> = (0..=n)
+            .map(|k| {
+                let e = lo * (hi / lo).powf(k as f64 / n as f64);
+                (e, m.exact(e), m.fixed(e))
+            })
+            .collect();
+        let fixed_wins = |g: &GridPoint| g.2.is_some_and(|(c, _)| c < g.1);
+        let fmt = |g: &GridPoint| match g.2 {
+            Some((c, dt)) => format!(
+                "at error {}: exact {} s, fixed {} s at dt = {}",
+                with_pct(g.0, reference),
+                sig(g.1, 2),
+                sig(c, 2),
+                dt_label(dt)
+            ),
+            None => format!("at error {}: exact {} s, no step tried gets there", with_pct(g.0, reference), sig(g.1, 2)),
+        };
+        let ratio = |g: &GridPoint| g.2.map_or(f64::INFINITY, |(c, _)| c / g.1);
+        let mut line = format!("`{}`: ", o.key());
+        let first_fixed = grid.iter().position(fixed_wins);
+        let exact_anywhere = grid.iter().any(|g| !fixed_wins(g));
+        match (first_fixed, exact_anywhere) {
+            (None, _) => {
+                let at = grid.iter().min_by(|a, b| ratio(a).total_cmp(&ratio(b))).unwrap();
+                let _ = write!(
+                    line,
+                    "the exact engine is cheaper at every error from {} to {}; {}; {}.",
+                    with_pct(lo, reference),
+                    with_pct(hi, reference),
+                    fmt(&grid[0]),
+                    fmt(at)
+                );
+            }
+            (Some(_), false) => {
+                let at = grid.iter().max_by(|a, b| ratio(a).total_cmp(&ratio(b))).unwrap();
+                let _ = write!(
+                    line,
+                    "the fixed-step engine is cheaper at every error from {} to {}, by at least x{} ({}).",
+                    with_pct(lo, reference),
+                    with_pct(hi, reference),
+                    sig(1.0 / ratio(at), 2),
+                    fmt(at)
+                );
+            }
+            (Some(k), true) => {
+                let best = grid.iter().filter(|g| fixed_wins(g)).min_by(|a, b| ratio(a).total_cmp(&ratio(b))).unwrap();
+                let _ = write!(
+                    line,
+                    "the exact engine is cheaper below error {} ({}); the fixed-step engine is cheaper above it, \
+                     by up to x{} ({}).",
+                    with_pct(grid[k].0, reference),
+                    fmt(&grid[0]),
+                    sig(1.0 / ratio(best), 2),
+                    fmt(best)
+                );
+            }
+        }
+        lines.push(line);
+    }
+    lines
+}
+
+/// `compare.md`: what was run, the reading, one table per observable.
+pub fn markdown(study: &Study, command: &str) -> String {
+    let s = &study.scene;
+    let j = &s.junctions;
+    let mut md = String::new();
+    let _ = writeln!(md, "# Work-precision comparison: `{}`\n", s.name);
+    let _ = writeln!(md, "Command: `{command}`\n");
+    let _ = writeln!(
+        md,
+        "Scene: N = {}, {:?} bonds, {:?} force law, V = {}, window [{}, {}]. Reference: exact engine, {} replicas \
+         ({} s). Fixed-step points: {} replicas each. Exact points: 1 to {} replicas of the same window. Error = \
+         estimate - reference, with its 95 % interval; floor = its standard deviation from sampling alone. Wall \
+         times are summed over replicas (one core).\n",
+        j.n,
+        j.bond,
+        j.force_law,
+        s.plate.v,
+        s.run.t_warmup,
+        s.run.t_end,
+        study.reference.replicas,
+        sig(study.reference.wall_seconds, 3),
+        study.replicas,
+        study.replicas
+    );
+    let _ = writeln!(md, "## Reading\n");
+    for l in reading(study) {
+        let _ = writeln!(md, "- {l}");
+    }
+    let _ = writeln!(
+        md,
+        "\n(Cost to reach an RMS error e: exact `c sd^2/e^2`, fixed at dt `c(dt) sd(dt)^2/(e^2 - b(dt)^2)`, at least \
+         one replica; c, sd, b measured here. See `src/compare/report.rs`.)\n"
+    );
+    let bad: Vec<String> = study
+        .points
+        .iter()
+        .filter(|p| p.status != Status::Ok)
+        .map(|p| {
+            let g = sig(p.plate_growth.unwrap_or(f64::NAN), 3);
+            match p.status {
+                Status::Diverged => format!(
+                    "dt = {}: diverged in {} of {} replicas (plate growth factor {g} per step)",
+                    dt_label(p.dt.unwrap()),
+                    p.diverged_replicas,
+                    p.replicas
+                ),
+                _ => format!(
+                    "dt = {}: unstable (plate growth factor {g} per step with every junction attached); its numbers \
+                     are the scheme's, not the model's",
+                    dt_label(p.dt.unwrap())
+                ),
+            }
+        })
+        .collect();
+    if !bad.is_empty() {
+        let _ = writeln!(md, "Beyond the plate step's stability: {}.\n", bad.join("; "));
+    }
+    for (i, o) in study.observables.iter().enumerate() {
+        let r = &study.reference.stats[i];
+        let _ = writeln!(
+            md,
+            "## {} (`{}`)\n\nReference {} +- {} (standard error; spread of one replica {}).\n",
+            o.label(),
+            o.key(),
+            sig(r.mean, 6),
+            sig(r.se, 2),
+            sig(r.sd, 3)
+        );
+        let _ = writeln!(
+            md,
+            "| engine | dt | replicas | wall s | cpu s | status | estimate | error | 95 % interval | floor |"
+        );
+        let _ = writeln!(md, "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+        for p in &study.points {
+            let ob = &p.obs[i];
+            let dt = p.dt.map(dt_label).unwrap_or_else(|| "-".into());
+            let status = match p.status {
+                Status::Diverged => format!("diverged ({}/{})", p.diverged_replicas, p.replicas),
+                st => st.as_str().to_string(),
+            };
+            let interval = if ob.ci_low.is_finite() {
+                format!("[{}, {}]", sig(ob.ci_low, 3), sig(ob.ci_high, 3))
+            } else {
+                "-".to_string()
+            };
+            let _ = writeln!(
+                md,
+                "| {} | {dt} | {} | {} | {} | {status} | {} | {} | {interval} | {} |",
+                engine_name(p.engine),
+                p.replicas,
+                sig(p.wall_seconds, 3),
+                sig(p.cpu_seconds, 3),
+                sig(ob.estimate, 6),
+                sig(ob.error, 3),
+                sig(ob.floor, 2)
+            );
+        }
+        md.push('\n');
+    }
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn significant_digits() {
+        assert_eq!(sig(0.012345, 3), "0.0123");
+        assert_eq!(sig(123.456, 3), "123");
+        assert_eq!(sig(-1.5, 2), "-1.5");
+        assert_eq!(sig(1.23e-7, 2), "1.2e-7");
+        assert_eq!(sig(f64::NAN, 2), "-");
+    }
+}
