@@ -18,6 +18,7 @@ pub mod propagator;
 pub mod rng;
 pub mod runner;
 pub mod scene;
+pub mod stability;
 pub mod studies;
 #[doc(hidden)]
 pub mod testkit;

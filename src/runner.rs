@@ -61,7 +61,10 @@ impl OutputGrid {
 
     /// The stops after `t = t_from`, in increasing order.
     pub fn stops_after(&self, t_from: f64) -> impl Iterator<Item = Stop> + '_ {
-        let last = self.t_end * (1.0 - 1e-12);
+        // A grid point within round-off of t_end is t_end itself (sampled once, as the final
+        // stop). The slack is relative to t_end *and* to sample_dt: at t_end = 1e12 a slack
+        // of 1e-12 t_end alone (one time unit) dropped every sample in the last time unit.
+        let last = (self.t_end * (1.0 - 1e-12)).max(self.t_end - 1e-6 * self.sample_dt);
         let mut k = (t_from / self.sample_dt).floor().max(0.0) as u64;
         while k as f64 * self.sample_dt <= t_from {
             k += 1;
@@ -331,5 +334,14 @@ mod tests {
     fn end_not_on_grid_and_grid_coarser_than_run() {
         let t: Vec<f64> = grid(10.0, 0.0, 3.0).stops_after(0.0).map(|s| s.t).collect();
         assert_eq!(t, vec![3.0]);
+    }
+
+    /// Regression: at t_end = 1e12 the end slack was 1e-12 t_end = 1 time unit, and the
+    /// samples at t_end - 0.5 (and any in the last time unit) were dropped.
+    #[test]
+    fn late_samples_are_kept_at_large_times() {
+        let t0 = 1e12;
+        let t: Vec<f64> = grid(0.25, 0.0, t0 + 1.0).stops_after(t0).map(|s| s.t).collect();
+        assert_eq!(t, vec![t0 + 0.25, t0 + 0.5, t0 + 0.75, t0 + 1.0]);
     }
 }

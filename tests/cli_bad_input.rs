@@ -291,3 +291,40 @@ fn unknown_and_missing_arguments() {
     expect_bad_input_in(dir.path(), &[], &["run", "validate"]);
     expect_bad_input_in(dir.path(), &["simulate", "scene.toml"], &["simulate"]);
 }
+
+#[test]
+fn stability_command_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    expect_bad_input_in(dir.path(), &["stability", "nope.toml"], &["nope.toml"]);
+    std::fs::write(dir.path().join("scene.toml"), GOOD).unwrap();
+    expect_bad_input_in(dir.path(), &["stability", "scene.toml", "--set", "fixed.dt=-1"], &["fixed.dt", "-1"]);
+    expect_bad_input_in(dir.path(), &["stability", "scene.toml", "--set", "plate.v"], &["--set plate.v"]);
+}
+
+/// Item 2 of issue #5: a fixed-step run beyond the stability limit prints one warning line
+/// on stderr and still runs; below the limit it prints none.
+#[test]
+fn unstable_fixed_step_warns_on_stderr() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("scene.toml"), GOOD).unwrap();
+    let out = Command::new(BIN).args(["run", "scene.toml"]).current_dir(dir.path()).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let warnings: Vec<&str> = stderr.lines().filter(|l| l.starts_with("warning: ")).collect();
+    assert_eq!(warnings.len(), 1, "{stderr}");
+    assert!(warnings[0].contains("fixed.dt = 1") && warnings[0].contains("stability limit"), "{}", warnings[0]);
+    let out = Command::new(BIN)
+        .args(["run", "scene.toml", "--set", "fixed.dt=0.5"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+    // `stability` prints every integrator's limit.
+    let out = Command::new(BIN).args(["stability", "scene.toml"]).current_dir(dir.path()).output().unwrap();
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0));
+    for i in ["semi-implicit-euler *", "explicit-euler", "velocity-verlet", "0.993406"] {
+        assert!(table.contains(i), "{i} missing from\n{table}");
+    }
+}

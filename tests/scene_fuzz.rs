@@ -18,6 +18,11 @@ fn check(text: &str, overrides: &[String]) -> Result<(), TestCaseError> {
                 "a valid scene written back is refused: {:?}",
                 again.err().map(|e| e.to_string())
             );
+            // What `validate` and `stability` print from a valid scene never panics either.
+            let a = stickslip::stability::analyse(&scene);
+            prop_assert!(!a.table(&scene.name).is_empty());
+            prop_assert!(!a.validate_block(scene.run.engine).is_empty());
+            let _ = stickslip::stability::warning(&scene);
             prop_assert_eq!(again.unwrap(), scene);
         }
         Err(e) => {

@@ -5,6 +5,7 @@
 
 mod compare;
 mod run;
+mod stability;
 mod sweep;
 mod validate;
 
@@ -68,6 +69,11 @@ pub enum Command {
         #[command(flatten)]
         scene: SceneArgs,
     },
+    /// Stability limits of the fixed-step scheme at a scene's parameters (docs/stability.md).
+    Stability {
+        #[command(flatten)]
+        scene: SceneArgs,
+    },
     /// Work-precision study: error against run time of the fixed-step and exact engines.
     Compare(compare::CompareArgs),
 }
@@ -84,7 +90,7 @@ pub(crate) fn fail(code: u8, message: impl std::fmt::Display) -> ExitCode {
 fn clap_one_line(e: &clap::Error) -> String {
     use clap::error::ErrorKind;
     if matches!(e.kind(), ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand) {
-        return "a command is required: `run` or `validate` (try --help)".to_string();
+        return "a command is required: `run`, `validate`, `stability` or `compare` (try --help)".to_string();
     }
     let text = e.to_string();
     let first: Vec<&str> = text.lines().map(str::trim).take_while(|l| !l.is_empty()).collect();
@@ -109,6 +115,7 @@ pub fn main() -> ExitCode {
     match cli.command {
         Command::Run { scene, engine, seed, out } => run::run(&scene, engine, seed, out),
         Command::Validate { scene } => validate::validate(&scene),
+        Command::Stability { scene } => stability::stability(&scene),
         Command::Compare(args) => compare::compare(&args),
         Command::Sweep(args) => sweep::sweep(&args),
     }

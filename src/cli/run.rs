@@ -61,6 +61,10 @@ pub(crate) fn run(args: &SceneArgs, engine: Option<EngineArg>, seed: Option<u64>
         Ok(c) => c,
         Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
+    // After every bad-input check: bad input prints its one error line and nothing else.
+    if let Some(w) = crate::stability::warning(&scene) {
+        eprintln!("{w}");
+    }
     // trace.svg is drawn from trace.csv after a successful run (output.plot needs output.trace).
     let result = run_scene(&scene, Some(&out)).and_then(|s| {
         if scene.output.plot {

@@ -22,5 +22,8 @@ pub(crate) fn validate(args: &SceneArgs) -> ExitCode {
         let zeta = if k_tot > 0.0 { p.eta / (2.0 * (k_tot * p.mass).sqrt()) } else { f64::INFINITY };
         println!("# plate (no junctions attached): omega = sqrt(K/M) = {omega}, damping ratio = {zeta}");
     }
+    for line in crate::stability::analyse(&scene).validate_block(scene.run.engine) {
+        println!("{line}");
+    }
     ExitCode::SUCCESS
 }

@@ -7,47 +7,19 @@
 //! One step maps `(u, Xd)` by a 2x2 matrix; its spectral radius is the factor by which a
 //! plate oscillation grows per step. The study evaluates it in the stiffest state, every
 //! junction attached (`k = K + kappa N`): above 1 the scheme amplifies the plate's
-//! oscillation whenever enough junctions hold.
+//! oscillation whenever enough junctions hold. The analysis itself is [`crate::stability`].
 
-use crate::scene::{IntegratorKind, Scene};
-
-/// Spectral radius of `[[a, b], [c, d]]`.
-fn spectral_radius(a: f64, b: f64, c: f64, d: f64) -> f64 {
-    let tr = a + d;
-    let det = a * d - b * c;
-    let disc = tr * tr - 4.0 * det;
-    if disc >= 0.0 {
-        let s = disc.sqrt();
-        ((tr + s) / 2.0).abs().max(((tr - s) / 2.0).abs())
-    } else {
-        det.abs().sqrt()
-    }
-}
+use crate::engine::fixed::Integrator;
+use crate::scene::Scene;
+use crate::stability::{Oscillator, radius};
 
 /// Growth factor per step of the scene's fixed-step plate update at step `dt`, with every
-/// junction attached.
+/// junction attached: the spectral radius of the engine's own step
+/// ([`crate::stability::amplification`]) for `k = K + kappa N`.
 pub fn plate_growth(scene: &Scene, dt: f64) -> f64 {
     let p = &scene.plate;
     let k = p.k + scene.junctions.kappa * scene.junctions.n as f64;
-    if p.mass == 0.0 {
-        return (1.0 - dt * k / p.eta).abs();
-    }
-    let (c, w2) = (p.eta / p.mass, k / p.mass);
-    match scene.fixed.integrator {
-        IntegratorKind::SemiImplicitEuler => {
-            spectral_radius(1.0 - dt * dt * w2, dt * (1.0 - dt * c), -dt * w2, 1.0 - dt * c)
-        }
-        IntegratorKind::ExplicitEuler => spectral_radius(1.0, dt, -dt * w2, 1.0 - dt * c),
-        IntegratorKind::VelocityVerlet => {
-            // u' = (1 - dt^2 w2 / 2) u + (dt - dt^2 c / 2) v
-            // v' (1 + dt c / 2) = v (1 - dt c / 2) - dt/2 w2 (u + u')
-            let (uu, uv) = (1.0 - 0.5 * dt * dt * w2, dt - 0.5 * dt * dt * c);
-            let den = 1.0 + 0.5 * dt * c;
-            let vu = -0.5 * dt * w2 * (1.0 + uu) / den;
-            let vv = (1.0 - 0.5 * dt * c - 0.5 * dt * w2 * uv) / den;
-            spectral_radius(uu, uv, vu, vv)
-        }
-    }
+    radius(Integrator::new(scene.fixed.integrator, p.mass), Oscillator { mass: p.mass, eta: p.eta, k }, dt)
 }
 
 #[cfg(test)]

@@ -40,7 +40,7 @@ pub struct Counters {
 pub enum EngineError {
     /// The fixed-step plate update blew up (typically `dt` beyond the stability limit).
     #[error(
-        "the plate diverged at step {step} (t = {t}): {quantity} = {value}; the time step fixed.dt is probably beyond the integrator's stability limit"
+        "the plate diverged at step {step} (t = {t}): {quantity} = {value:.6e}; the time step fixed.dt is probably beyond the integrator's stability limit (see `stickslip stability`)"
     )]
     Diverged { step: u64, t: f64, quantity: &'static str, value: f64 },
     /// A quantity became NaN or infinite.

@@ -13,6 +13,30 @@ pub const N_MAX: usize = u32::MAX as usize;
 pub const SAMPLES_MAX: f64 = 1e9;
 /// Largest number of fixed steps a run may ask for.
 pub const STEPS_MAX: f64 = 1e15;
+/// Largest lower bound on the exact engine's plate-integrator steps (tilted law) a run may
+/// need: beyond it the run would take days (docs/scenes.md).
+pub const TILTED_STEPS_MAX: f64 = 1e9;
+
+/// A lower bound on the steps the exact engine's explicit plate integrator (DOP853, tilted
+/// law) takes over `[0, t_end]`, whatever the events: its step is capped at
+/// `2 sqrt(M / (K + kappa N))` (`2 eta / (K + kappa N)` when `M = 0`) and, on a stiff plate,
+/// limited by stability to about `6 M / eta` (DOP853's stability interval on the negative
+/// real axis is about `[-6, 0]`, and the plate's fast eigenvalue is `-eta/M`).
+pub fn tilted_min_steps(plate: &PlateParams, kappa_n: f64, t_end: f64) -> f64 {
+    let k = plate.k + kappa_n;
+    let mut h = f64::INFINITY;
+    if plate.mass > 0.0 {
+        if plate.eta > 0.0 {
+            h = h.min(6.0 * plate.mass / plate.eta);
+        }
+        if k > 0.0 {
+            h = h.min(2.0 * (plate.mass / k).sqrt());
+        }
+    } else if k > 0.0 {
+        h = 2.0 * plate.eta / k;
+    }
+    t_end / h
+}
 
 fn finite_ge(field: &'static str, v: f64, lo: f64) -> Result<f64, SceneError> {
     if v.is_finite() && v >= lo {
@@ -105,6 +129,20 @@ impl SceneFile {
                     format!("gives more than {STEPS_MAX:e} steps over run.t_end ({t_end})"),
                 ));
             }
+            // The relaxation step `x *= 1 - lambda dt` of detached junctions amplifies their
+            // extensions by |1 - lambda dt| > 1 per step beyond this: refused, never run
+            // (docs/stability.md; docs/scenes.md, "Scenes that validate but strain an engine").
+            if junctions.lambda * fixed.dt > 2.0 {
+                return Err(SceneError::invalid(
+                    "fixed.dt",
+                    fixed.dt,
+                    format!(
+                        "must be <= 2 / junctions.lambda = {:e} with run.engine = \"fixed\" (junctions.lambda * fixed.dt = {:e} > 2 makes the relaxation step x *= 1 - lambda dt of detached junctions unstable)",
+                        2.0 / junctions.lambda,
+                        junctions.lambda * fixed.dt
+                    ),
+                ));
+            }
             if fixed.rng == RngKind::ParkMiller && !(1..=PARK_MILLER_SEED_MAX).contains(&run.seed) {
                 return Err(SceneError::invalid(
                     "run.seed",
@@ -135,6 +173,21 @@ impl SceneFile {
                 format!("gives more than {SAMPLES_MAX:e} samples over run.t_end ({t_end})"),
             ));
         }
+        // Last: a cost check across sections (plate, junctions, run), after every field is
+        // checked on its own.
+        if run.engine == EngineKind::Exact && junctions.force_law == ForceLawKind::Tilted {
+            let steps = tilted_min_steps(&plate, junctions.kappa * junctions.n as f64, t_end);
+            if steps > TILTED_STEPS_MAX {
+                return Err(SceneError::invalid(
+                    "run.t_end",
+                    t_end,
+                    format!(
+                        "needs at least {steps:.1e} steps of the exact engine's explicit plate integrator (tilted law; more than {TILTED_STEPS_MAX:e}): its step is bounded by 6 M/eta and 2 sqrt(M/(K + kappa N)) (2 eta/(K + kappa N) when M = 0); shorten the run, use plate.mass = 0 for the limit M/eta -> 0, or junctions.force_law = \"linear\" (closed form)"
+                    ),
+                ));
+            }
+        }
+
         let output = OutputParams {
             sample_dt,
             trace: o.trace.unwrap_or(true),

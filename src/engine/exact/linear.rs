@@ -240,6 +240,13 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
     /// Attaches a uniformly chosen detached junction now; if its rupture rate overflows
     /// (weak bonds), it ruptures at once.
     fn form_one<O: Observer>(&mut self, obs: &mut O) {
+        // Weak bonds: the new anchor's weights exp(+-a c) must be representable. With no
+        // junction attached there is no horizon, so the plate may have moved far since the
+        // last re-basing (a |y| > EXPONENT_CAP would make `attached` refuse the junction as
+        // if its own rate, which depends only on x = y - c, had overflowed): re-base first.
+        if self.rupture.needs_rebase(self.y, self.tau) {
+            self.maybe_rebase(obs);
+        }
         let slot = self.next_formation.take(self.bags.n_detached(), &mut self.rng);
         let d = self.bags.take_detached(slot);
         let x = match self.reattach {
@@ -259,7 +266,7 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
     /// Re-bases the frame if positions or times have grown (amortised O(1) per event).
     fn maybe_rebase<O: Observer>(&mut self, obs: &mut O) {
         let (ya, ta) = (self.y.abs(), self.tau.abs());
-        let hard = ya > HARD_Y || ta > HARD_TAU || self.rupture.needs_rebase(self.y);
+        let hard = ya > HARD_Y || ta > HARD_TAU || self.rupture.needs_rebase(self.y, self.tau);
         let soft = (ya > SOFT_Y || ta > SOFT_TAU) && self.events_since_rebase >= (self.n as u64 / 4).max(1);
         if !(hard || soft) {
             return;

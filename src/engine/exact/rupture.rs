@@ -33,6 +33,13 @@ pub const FRAME_EXPONENT_LIMIT: f64 = 64.0;
 const SPREAD: f64 = 1.0;
 /// Longest horizon (local time units).
 const HORIZON_MAX: f64 = 1e6;
+/// Shortest horizon: a plate that moves by more than `SPREAD / a` within it (the rates
+/// change by more than a factor `e` within `1e-300` time units) ruptures every attached
+/// junction at once, as an overflowing rate does.
+const HORIZON_MIN: f64 = 1e-300;
+/// Re-base the time origin when the horizon is shorter than this fraction of the local
+/// time: `tau + horizon` must stay distinguishable from `tau` (2^-40, so 12 bits remain).
+const TIME_RESOLUTION: f64 = 9.094947017729282e-13;
 
 /// Rupture rate of the candidate channel until the next restart, and how long it holds.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,8 +66,9 @@ pub trait RuptureModel: Clone + std::fmt::Debug + Serialize + DeserializeOwned {
     /// The coordinates were re-based: recompute everything from `attached`. Returns the
     /// slots whose rate is beyond [`EXPONENT_CAP`].
     fn rebuild(&mut self, attached: &[Attached]) -> Vec<usize>;
-    /// Whether `a |y|` is large enough that the frame must be re-based now.
-    fn needs_rebase(&self, y: f64) -> bool;
+    /// Whether the frame must be re-based now: `a |y|` too large for the weights, or
+    /// (weak bonds) a thinning horizon too short to be resolved at the local time `tau`.
+    fn needs_rebase(&self, y: f64, tau: f64) -> bool;
     /// Prefetches the memory the next pick will touch.
     #[inline]
     fn prefetch(&self, _attached: &[Attached]) {}
@@ -104,7 +112,7 @@ impl RuptureModel for StrongRupture {
         Vec::new()
     }
     #[inline]
-    fn needs_rebase(&self, _y: f64) -> bool {
+    fn needs_rebase(&self, _y: f64, _tau: f64) -> bool {
         false
     }
 }
@@ -125,6 +133,13 @@ pub struct WeakRupture {
     /// Last candidate rate: the horizon need not cover many more candidates than
     /// [`CANDIDATES_PER_HORIZON`], because the bound is renewed at every event anyway.
     last_rate: f64,
+    /// The rates cannot be bounded over even the shortest horizon ([`HORIZON_MIN`]): every
+    /// attached junction ruptures at once, one candidate each, all accepted.
+    #[serde(default)]
+    immediate: bool,
+    /// The last plan bounded attached junctions (its horizon is meaningful).
+    #[serde(default)]
+    bounding: bool,
 }
 
 /// A horizon longer than this many expected candidates only loosens the bound.
@@ -132,7 +147,17 @@ const CANDIDATES_PER_HORIZON: f64 = 32.0;
 
 impl WeakRupture {
     pub fn new(k0: f64, a: f64, n: usize) -> WeakRupture {
-        WeakRupture { k0, a, tree: SumTree2::new(n), y_lo: 0.0, y_hi: 0.0, horizon: 1.0, last_rate: 0.0 }
+        WeakRupture {
+            k0,
+            a,
+            tree: SumTree2::new(n),
+            y_lo: 0.0,
+            y_hi: 0.0,
+            horizon: 1.0,
+            last_rate: 0.0,
+            immediate: false,
+            bounding: false,
+        }
     }
     #[inline]
     fn weights(&self, c: f64) -> [f64; 2] {
@@ -168,6 +193,8 @@ impl RuptureModel for WeakRupture {
         self.tree.set(last, [0.0; 2]);
     }
     fn plan(&mut self, traj: &Trajectory, n_att: usize) -> Plan {
+        self.immediate = false;
+        self.bounding = false;
         if n_att == 0 || self.k0 == 0.0 {
             return Plan { rate: 0.0, horizon: f64::INFINITY };
         }
@@ -182,13 +209,12 @@ impl RuptureModel for WeakRupture {
         // covers about CANDIDATES_PER_HORIZON candidates at the last rate.
         let cap =
             if self.last_rate > 0.0 { (CANDIDATES_PER_HORIZON / self.last_rate).min(HORIZON_MAX) } else { HORIZON_MAX };
-        let mut h = self.horizon.min(cap);
+        let mut h = self.horizon.min(cap).max(HORIZON_MIN);
         let mut b = traj.bounds(h);
-        for _ in 0..64 {
-            if self.a * (b.1 - b.0) <= SPREAD || h < 1e-300 {
-                break;
-            }
-            h *= 0.5;
+        // Halve until the spread is resolved (about 1000 halvings at most, from HORIZON_MAX
+        // to HORIZON_MIN; usually none, the search starts from the last horizon).
+        while self.a * (b.1 - b.0) > SPREAD && h > HORIZON_MIN {
+            h = (h * 0.5).max(HORIZON_MIN);
             b = traj.bounds(h);
         }
         while 2.0 * h <= cap {
@@ -202,12 +228,26 @@ impl RuptureModel for WeakRupture {
         self.horizon = h;
         self.y_lo = b.0;
         self.y_hi = b.1;
+        self.bounding = true;
         let (m, p) = self.terms();
-        self.last_rate = self.k0 * (m + p);
-        Plan { rate: self.last_rate, horizon: h }
+        let rate = self.k0 * (m + p);
+        if self.a * (b.1 - b.0) > SPREAD || !rate.is_finite() {
+            // Not even HORIZON_MIN resolves the rates (the plate crosses more than 1/a in
+            // 1e-300 time units), or the bound overflows: every attached junction's rate
+            // passes k0 e^EXPONENT_CAP within the horizon, so all rupture now (MODEL.md
+            // item 6: a rate that overflows means immediate rupture).
+            self.immediate = true;
+            self.last_rate = 0.0;
+            return Plan { rate: f64::INFINITY, horizon: HORIZON_MIN };
+        }
+        self.last_rate = rate;
+        Plan { rate, horizon: h }
     }
     #[inline]
     fn pick(&mut self, rng: &mut Pcg64, traj: &Trajectory, s: f64, attached: &[Attached]) -> Option<usize> {
+        if self.immediate {
+            return Some(attached.len() - 1);
+        }
         let y = traj.at(s).0;
         let (m, p) = self.terms();
         let u = rng.uniform() * (m + p);
@@ -236,7 +276,7 @@ impl RuptureModel for WeakRupture {
         over
     }
     #[inline]
-    fn needs_rebase(&self, y: f64) -> bool {
-        self.a * y.abs() > FRAME_EXPONENT_LIMIT
+    fn needs_rebase(&self, y: f64, tau: f64) -> bool {
+        self.a * y.abs() > FRAME_EXPONENT_LIMIT || (self.bounding && self.horizon < TIME_RESOLUTION * tau.abs())
     }
 }

@@ -351,6 +351,13 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
         if !(hard || soft) {
             return;
         }
+        self.rebase();
+        let _ = obs;
+    }
+
+    /// Moves the local origin to the current time and position. Only at the boundary of a
+    /// piece: the caller closes the piece before and opens a new one after.
+    fn rebase(&mut self) {
         let (dtau, dy) = (self.tau, self.state[0]);
         self.frame.shift(dtau, dy);
         self.bags.rebase(dtau, dy);
@@ -359,7 +366,6 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
         self.state[0] = 0.0;
         self.events_since_rebase = 0;
         *self.counters.rebases.as_mut().expect("set") += 1;
-        let _ = obs;
     }
 
     fn after_event<O: Observer>(&mut self, fired: Option<usize>, obs: &mut O) {
@@ -434,7 +440,32 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> Engine for ExactTilted<B> {
                 let mut sys = System { attached: &self.bags.attached, p };
                 let result = self.ode.step(&mut sys, &mut tau, &mut state, target);
                 self.state = state;
-                result.map_err(|e| ode_error(e, self.frame.time(t_before), rtol))?;
+                if let Err(e) = result {
+                    // Weak bonds: a rupture rate that grows on a time scale below the
+                    // resolution of the local time (the step floor is 10 eps |tau|, and the
+                    // step is rejected ever smaller near tau = 0) is
+                    // resolved by moving the time origin here (a new piece; the hazard
+                    // level is redrawn, which memorylessness allows). At tau = 0 it is
+                    // beyond any resolution: as for an overflowing rate, the rupture is
+                    // immediate (MODEL.md item 6), the junction chosen by its rate now.
+                    let unresolved =
+                        matches!(e, OdeError::StepSizeUnderflow { .. } | OdeError::TooManyRejections { .. });
+                    if B::IS_WEAK && unresolved && self.bags.n_attached() > 0 {
+                        self.check()?;
+                        self.close_piece(obs);
+                        if self.tau != 0.0 {
+                            self.rebase();
+                            self.open_piece();
+                        } else {
+                            *self.counters.candidates.as_mut().expect("set") += 1;
+                            let slot = self.pick_weak();
+                            self.rupture_slot(slot, obs);
+                            self.after_event(None, obs);
+                        }
+                        continue;
+                    }
+                    return Err(ode_error(e, self.frame.time(t_before), rtol));
+                }
                 self.tau = tau;
                 self.sync_ode_counters();
                 // Weak bonds: did the hazard reach its level inside this step?
