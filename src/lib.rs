@@ -13,11 +13,13 @@ pub mod observe;
 pub mod ode;
 pub mod output;
 pub mod physics;
+pub mod plot;
 pub mod propagator;
 pub mod rng;
 pub mod runner;
 pub mod scene;
 pub mod stability;
+pub mod studies;
 #[doc(hidden)]
 pub mod testkit;
 

@@ -7,6 +7,7 @@ mod compare;
 mod resume;
 mod run;
 mod stability;
+mod sweep;
 mod validate;
 
 use std::path::PathBuf;
@@ -67,6 +68,8 @@ pub enum Command {
     },
     /// Continue a killed run from the checkpoint in its output directory.
     Resume(resume::ResumeArgs),
+    /// Sweep one scene field over values, with replicas, in parallel; writes sweep.csv and sweep.svg.
+    Sweep(sweep::SweepArgs),
     /// Check a scene and print its resolved parameters.
     Validate {
         #[command(flatten)]
@@ -93,7 +96,8 @@ pub(crate) fn fail(code: u8, message: impl std::fmt::Display) -> ExitCode {
 fn clap_one_line(e: &clap::Error) -> String {
     use clap::error::ErrorKind;
     if matches!(e.kind(), ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand) {
-        return "a command is required: `run`, `resume`, `validate`, `stability` or `compare` (try --help)".to_string();
+        return "a command is required: `run`, `resume`, `validate`, `stability`, `sweep` or `compare` (try --help)"
+            .to_string();
     }
     let text = e.to_string();
     let first: Vec<&str> = text.lines().map(str::trim).take_while(|l| !l.is_empty()).collect();
@@ -123,5 +127,6 @@ pub fn main() -> ExitCode {
         Command::Validate { scene } => validate::validate(&scene),
         Command::Stability { scene } => stability::stability(&scene),
         Command::Compare(args) => compare::compare(&args),
+        Command::Sweep(args) => sweep::sweep(&args),
     }
 }

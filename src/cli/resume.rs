@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::run::{prepare_out_dir, print_summary};
+use super::run::{draw_plot, prepare_out_dir, print_summary};
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, fail};
 use crate::runner::{self, Resumed, RunOptions};
 
@@ -46,6 +46,9 @@ pub(crate) fn resume(args: &ResumeArgs) -> ExitCode {
             ExitCode::SUCCESS
         }
         Ok(Resumed::Completed { from_t, summary }) => {
+            if let Err(e) = draw_plot(&summary.parameters, &args.dir) {
+                return fail(EXIT_RUN_FAILED, e);
+            }
             println!("resumed from the checkpoint at t = {from_t}");
             print_summary(&summary, &args.dir);
             ExitCode::SUCCESS

@@ -73,7 +73,7 @@ pub(crate) fn run(
         eprintln!("{w}");
     }
     let opts = RunOptions { checkpoint_every, progress: true };
-    match run_scene_with(&scene, Some(&out), &opts) {
+    match run_scene_with(&scene, Some(&out), &opts).and_then(|s| draw_plot(&scene, &out).map(|()| s)) {
         Ok(s) => {
             print_summary(&s, &out);
             ExitCode::SUCCESS
@@ -84,6 +84,16 @@ pub(crate) fn run(
             fail(EXIT_RUN_FAILED, e)
         }
     }
+}
+
+/// Draws `trace.svg` from the finished `trace.csv` when the scene asks for it
+/// (`output.plot`, which needs `output.trace`).
+pub(crate) fn draw_plot(scene: &Scene, out: &Path) -> Result<(), crate::runner::RunError> {
+    if !scene.output.plot {
+        return Ok(());
+    }
+    crate::plot::trace::write_trace_svg(out, scene)
+        .map_err(|e| crate::runner::RunError::Output { path: out.join("trace.svg"), source: std::io::Error::other(e) })
 }
 
 /// The four summary lines `run` and `resume` print.

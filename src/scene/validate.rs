@@ -194,6 +194,13 @@ impl SceneFile {
             events: o.events.unwrap_or(false),
             plot: o.plot.unwrap_or(false),
         };
+        if output.plot && !output.trace {
+            return Err(SceneError::invalid(
+                "output.plot",
+                true,
+                "needs output.trace = true (trace.svg is drawn from trace.csv after the run)",
+            ));
+        }
         Ok(Scene { name: name.to_string(), junctions, plate, run, fixed, exact, output })
     }
 }

@@ -1,0 +1,340 @@
+//! Plots as SVG text (plotters' SVG backend): panels of line series with error bars, log or
+//! linear axes, and shaded, labelled bands along the x axis. Used by `sweep.svg` and
+//! `trace.svg`; general enough for other studies.
+//!
+//! A [`Panel`] is one chart; [`render_svg`] stacks panels vertically into one SVG. Axis
+//! ranges are taken from the data (error bars included) unless an [`Axis`] fixes them.
+//! Output is deterministic: the same panels give the same bytes.
+
+pub mod sweep;
+pub mod trace;
+
+use plotters::coord::Shift;
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+/// Series colours, in order (a colour-blind-safe palette).
+pub const PALETTE: [RGBColor; 6] = [
+    RGBColor(0, 114, 178),
+    RGBColor(213, 94, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(204, 121, 167),
+    RGBColor(230, 159, 0),
+    RGBColor(86, 180, 233),
+];
+/// Band colours: sliding (smooth) and stick-slip regions.
+pub const BAND_SMOOTH: RGBColor = RGBColor(0, 114, 178);
+pub const BAND_STICK_SLIP: RGBColor = RGBColor(213, 94, 0);
+
+const FONT: &str = "sans-serif";
+
+/// Why a plot could not be drawn.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot draw the plot: {0}")]
+pub struct PlotError(pub String);
+
+fn err(e: impl std::fmt::Display) -> PlotError {
+    PlotError(e.to_string())
+}
+
+/// One axis: its label, scale and (optionally) fixed range.
+#[derive(Clone, Debug)]
+pub struct Axis {
+    pub label: String,
+    /// Logarithmic scale (every value drawn must then be > 0).
+    pub log: bool,
+    /// Fixed `(lo, hi)`; `None` takes the data's range with a margin.
+    pub range: Option<(f64, f64)>,
+}
+
+impl Axis {
+    pub fn linear(label: impl Into<String>) -> Self {
+        Axis { label: label.into(), log: false, range: None }
+    }
+    pub fn log(label: impl Into<String>) -> Self {
+        Axis { label: label.into(), log: true, range: None }
+    }
+    pub fn with_range(mut self, lo: f64, hi: f64) -> Self {
+        self.range = Some((lo, hi));
+        self
+    }
+    /// The point a fraction `frac` of the way from `lo` to `hi` on this axis's scale.
+    pub fn at(&self, lo: f64, hi: f64, frac: f64) -> f64 {
+        if self.log { (lo.ln() + frac * (hi.ln() - lo.ln())).exp() } else { lo + frac * (hi - lo) }
+    }
+    /// The middle of `[a, b]` on this axis's scale (geometric mean on a log axis).
+    pub fn mid(&self, a: f64, b: f64) -> f64 {
+        self.at(a, b, 0.5)
+    }
+    /// The range to draw for values `vals`: the fixed one, or the data's with a 5% margin.
+    fn resolve(&self, vals: impl Iterator<Item = f64>) -> (f64, f64) {
+        if let Some(r) = self.range {
+            return r;
+        }
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for v in vals.filter(|v| v.is_finite() && (!self.log || *v > 0.0)) {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+        // No finite value: `lo` is still +inf (never NaN, the values were filtered).
+        if lo > hi {
+            return if self.log { (0.1, 10.0) } else { (0.0, 1.0) };
+        }
+        if lo == hi {
+            return if self.log {
+                (lo / 2.0, hi * 2.0)
+            } else {
+                (lo - 0.5 * lo.abs().max(1.0), hi + 0.5 * hi.abs().max(1.0))
+            };
+        }
+        (self.at(lo, hi, -0.05), self.at(lo, hi, 1.05))
+    }
+}
+
+/// A line and/or markers through points, with optional symmetric error bars.
+#[derive(Clone, Debug)]
+pub struct Series {
+    /// Legend text (no legend entry when empty).
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+    /// Half-widths of vertical error bars, one per point (NaN: no bar).
+    pub error: Option<Vec<f64>>,
+    pub color: RGBColor,
+    pub line: bool,
+    pub markers: bool,
+}
+
+impl Series {
+    /// A plain line.
+    pub fn line(label: impl Into<String>, points: Vec<(f64, f64)>, color: RGBColor) -> Self {
+        Series { label: label.into(), points, error: None, color, line: true, markers: false }
+    }
+    /// A line with markers and error bars.
+    pub fn with_errors(label: impl Into<String>, points: Vec<(f64, f64)>, error: Vec<f64>, color: RGBColor) -> Self {
+        Series { label: label.into(), points, error: Some(error), color, line: true, markers: true }
+    }
+}
+
+/// A shaded vertical band `[from, to]` with a label near the top.
+#[derive(Clone, Debug)]
+pub struct Band {
+    pub from: f64,
+    pub to: f64,
+    pub label: String,
+    pub color: RGBColor,
+}
+
+/// One chart.
+#[derive(Clone, Debug)]
+pub struct Panel {
+    pub title: String,
+    pub x: Axis,
+    pub y: Axis,
+    pub series: Vec<Series>,
+    pub bands: Vec<Band>,
+}
+
+impl Panel {
+    fn x_values(&self) -> impl Iterator<Item = f64> + '_ {
+        let pts = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
+        pts.chain(self.bands.iter().flat_map(|b| [b.from, b.to]))
+    }
+    fn y_values(&self) -> impl Iterator<Item = f64> + '_ {
+        self.series.iter().flat_map(|s| {
+            s.points.iter().enumerate().flat_map(move |(i, p)| {
+                let e = s.error.as_ref().map_or(0.0, |e| e.get(i).copied().filter(|e| e.is_finite()).unwrap_or(0.0));
+                [p.1 - e, p.1 + e]
+            })
+        })
+    }
+}
+
+/// Draws `panels` stacked vertically, each `width x panel_height` pixels; returns the SVG.
+pub fn render_svg(panels: &[Panel], width: u32, panel_height: u32) -> Result<String, PlotError> {
+    let mut buf = String::new();
+    {
+        let root =
+            SVGBackend::with_string(&mut buf, (width, panel_height * panels.len().max(1) as u32)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let areas = root.split_evenly((panels.len().max(1), 1));
+        for (area, panel) in areas.iter().zip(panels) {
+            draw_panel(area, panel)?;
+        }
+        root.present().map_err(err)?;
+    }
+    Ok(buf)
+}
+
+fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> Result<(), PlotError> {
+    let (x0, x1) = p.x.resolve(p.x_values());
+    let (y0, y1) = p.y.resolve(p.y_values());
+    match (p.x.log, p.y.log) {
+        (false, false) => draw_in(area, p, x0..x1, y0..y1, (y0, y1)),
+        (true, false) => draw_in(area, p, (x0..x1).log_scale(), y0..y1, (y0, y1)),
+        (false, true) => draw_in(area, p, x0..x1, (y0..y1).log_scale(), (y0, y1)),
+        (true, true) => draw_in(area, p, (x0..x1).log_scale(), (y0..y1).log_scale(), (y0, y1)),
+    }
+}
+
+fn draw_in<DB, X, Y>(
+    area: &DrawingArea<DB, Shift>,
+    p: &Panel,
+    xr: X,
+    yr: Y,
+    (y0, y1): (f64, f64),
+) -> Result<(), PlotError>
+where
+    DB: DrawingBackend,
+    X: AsRangedCoord<Value = f64>,
+    Y: AsRangedCoord<Value = f64>,
+    X::CoordDescType: ValueFormatter<f64>,
+    Y::CoordDescType: ValueFormatter<f64>,
+{
+    let mut chart = ChartBuilder::on(area)
+        .caption(&p.title, (FONT, 18))
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d(xr, yr)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(p.x.label.as_str())
+        .y_desc(p.y.label.as_str())
+        .light_line_style(RGBColor(235, 235, 235))
+        .bold_line_style(RGBColor(215, 215, 215))
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 15))
+        .draw()
+        .map_err(err)?;
+
+    let label_y = p.y.at(y0, y1, 0.93);
+    for b in &p.bands {
+        chart
+            .draw_series(std::iter::once(Rectangle::new([(b.from, y0), (b.to, y1)], b.color.mix(0.14).filled())))
+            .map_err(err)?;
+        if !b.label.is_empty() {
+            let style = TextStyle::from((FONT, 18).into_font()).color(&b.color).pos(Pos::new(HPos::Center, VPos::Top));
+            chart
+                .draw_series(std::iter::once(Text::new(b.label.clone(), (p.x.mid(b.from, b.to), label_y), style)))
+                .map_err(err)?;
+        }
+    }
+
+    let clamp = |y: f64| y.clamp(y0, y1);
+    let mut legend = false;
+    for s in &p.series {
+        let color = s.color;
+        let style = color.stroke_width(2);
+        if let Some(errors) = &s.error {
+            for (&(x, y), &e) in s.points.iter().zip(errors) {
+                if !(e.is_finite() && e > 0.0 && y.is_finite()) {
+                    continue;
+                }
+                let (lo, hi) = (clamp(y - e), clamp(y + e));
+                chart.draw_series(std::iter::once(PathElement::new(vec![(x, lo), (x, hi)], color))).map_err(err)?;
+                let cap = |at: f64| EmptyElement::at((x, at)) + PathElement::new(vec![(-4, 0), (4, 0)], color);
+                chart.draw_series([cap(lo), cap(hi)]).map_err(err)?;
+            }
+        }
+        if s.line {
+            let ann = chart.draw_series(LineSeries::new(s.points.iter().copied(), style)).map_err(err)?;
+            if !s.label.is_empty() {
+                legend = true;
+                ann.label(s.label.as_str())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+            }
+        }
+        if s.markers {
+            chart.draw_series(s.points.iter().map(|&(x, y)| Circle::new((x, y), 3, color.filled()))).map_err(err)?;
+        }
+    }
+    if legend {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .label_font((FONT, 13))
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(160, 160, 160))
+            .draw()
+            .map_err(err)?;
+    }
+    Ok(())
+}
+
+/// Bands from consecutive classified points: each run of equal classes becomes one band,
+/// with boundaries halfway (on `axis`'s scale) between neighbouring points of different
+/// class, and the outer edges half a spacing beyond the first and last points. `class`
+/// gives a point's label and colour, or `None` for a point that belongs to no band.
+pub fn bands_from_classes(xs: &[f64], axis: &Axis, class: impl Fn(usize) -> Option<(String, RGBColor)>) -> Vec<Band> {
+    let n = xs.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    // Edges between point i-1 and i; the outer ones extend half a spacing.
+    let edge = |i: usize| -> f64 {
+        if n == 1 {
+            return if i == 0 { axis.at(xs[0], xs[0] * 2.0, -0.5) } else { axis.at(xs[0], xs[0] * 2.0, 0.5) };
+        }
+        if i == 0 {
+            axis.at(xs[0], xs[1], -0.5)
+        } else if i == n {
+            axis.at(xs[n - 2], xs[n - 1], 1.5)
+        } else {
+            axis.mid(xs[i - 1], xs[i])
+        }
+    };
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < n {
+        let c = class(i);
+        let mut j = i + 1;
+        while j < n && class(j) == c {
+            j += 1;
+        }
+        if let Some((label, color)) = c {
+            out.push(Band { from: edge(i), to: edge(j), label, color });
+        }
+        i = j;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bands_split_halfway_between_classes() {
+        let xs = [1.0, 2.0, 3.0, 4.0];
+        let a = Axis::linear("x");
+        let b = bands_from_classes(&xs, &a, |i| Some((if i < 2 { "A" } else { "B" }.to_string(), BLACK)));
+        assert_eq!(b.len(), 2);
+        assert_eq!((b[0].from, b[0].to, b[1].from, b[1].to), (0.5, 2.5, 2.5, 4.5));
+        let l = Axis::log("x");
+        let xs = [1.0, 100.0];
+        let b = bands_from_classes(&xs, &l, |i| (i == 1).then(|| ("B".to_string(), BLACK)));
+        assert_eq!(b.len(), 1);
+        assert!((b[0].from - 10.0).abs() < 1e-12 && (b[0].to - 1000.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn svg_is_deterministic_and_well_formed() {
+        let p = Panel {
+            title: "t".into(),
+            x: Axis::log("x"),
+            y: Axis::linear("y"),
+            series: vec![Series::with_errors("s", vec![(1.0, 1.0), (10.0, 2.0)], vec![0.1, f64::NAN], PALETTE[0])],
+            bands: vec![Band { from: 0.5, to: 3.0, label: "SI".into(), color: BAND_SMOOTH }],
+        };
+        let a = render_svg(std::slice::from_ref(&p), 400, 300).unwrap();
+        let b = render_svg(&[p], 400, 300).unwrap();
+        assert_eq!(a, b);
+        assert!(a.starts_with("<svg") && a.trim_end().ends_with("</svg>"));
+        // plotters writes a text element's content on its own line: `<text ...>\nSI\n</text>`.
+        let texts: Vec<&str> =
+            a.split("</text>").filter_map(|chunk| chunk.rsplit_once('>').map(|(_, t)| t.trim())).collect();
+        assert!(texts.contains(&"SI"), "{texts:?}");
+    }
+}

@@ -1,0 +1,286 @@
+//! `stickslip sweep`, the regime criterion on simulated traces, and `trace.svg`.
+//!
+//! - the sweep's tables are byte-identical with 1 and 2 threads, and every run has its own seed;
+//! - bad `--values`, `--log-range`, `--range`, `--param`, `--replicas` give one line on
+//!   stderr, exit code 2, and no output directory;
+//! - the regime criterion labels the fig2 scene smooth at V = 0.1 and stick-slip at V = 1
+//!   (fixed seeds), and the first version of the criterion (velocity hysteresis alone) would
+//!   have called the V = 0.1 trace stick-slip;
+//! - `stickslip run` writes a well-formed `trace.svg` when `output.plot = true`, and none
+//!   otherwise; `plot = true` with `trace = false` is refused.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use stickslip::Scene;
+use stickslip::engine::{Engine, EngineVisitor, with_engine};
+use stickslip::observe::regime::{MIN_CYCLES, Regime, RegimeDetector};
+use stickslip::runner::{OutputGrid, drive};
+
+const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
+
+fn fig2() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/fig2.toml")
+}
+
+fn stickslip(args: &[&str], dir: &Path) -> std::process::Output {
+    Command::new(BIN).args(args).current_dir(dir).output().expect("the binary runs")
+}
+
+/// A short sweep of the fig2 scene with `threads` threads into `dir/out`.
+fn short_sweep(dir: &Path, threads: &str) -> (String, String, serde_json::Value) {
+    let scene = fig2();
+    let out = dir.join("out");
+    let o = stickslip(
+        &[
+            "sweep",
+            scene.to_str().unwrap(),
+            "--param",
+            "plate.v",
+            "--values",
+            "0.1,1,8",
+            "--replicas",
+            "3",
+            "--set",
+            "run.t_end=300",
+            "--set",
+            "run.t_warmup=50",
+            "--threads",
+            threads,
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        dir,
+    );
+    assert!(o.status.success(), "sweep failed: {}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.stderr.is_empty(), "no progress bar when stderr is not a terminal");
+    let read = |n: &str| std::fs::read_to_string(out.join(n)).unwrap();
+    let svg = read("sweep.svg");
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    let json: serde_json::Value = serde_json::from_str(&read("sweep.json")).unwrap();
+    let names: Vec<String> =
+        std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    assert!(names.iter().all(|n| !n.ends_with(".part")), "{names:?}");
+    (read("sweep.csv"), read("runs.csv"), json)
+}
+
+#[test]
+fn sweep_tables_do_not_depend_on_the_thread_count() {
+    let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let (csv1, runs1, json1) = short_sweep(a.path(), "1");
+    let (csv2, runs2, json2) = short_sweep(b.path(), "2");
+    assert_eq!(csv1, csv2);
+    assert_eq!(runs1, runs2);
+    assert_eq!(json1["threads"], 1);
+    assert_eq!(json2["threads"], 2);
+    assert_eq!(json1["seeds"], json2["seeds"]);
+    let lines: Vec<&str> = csv1.lines().collect();
+    assert_eq!(lines.len(), 4);
+    assert!(lines[0].starts_with("plate.v,replicas,friction_mean,friction_mean_ci95,"));
+    assert!(lines[1].starts_with("0.1,3,") && lines[2].starts_with("1,3,") && lines[3].starts_with("8,3,"));
+    assert_eq!(runs1.lines().count(), 1 + 9);
+}
+
+#[test]
+fn every_run_has_its_own_seed() {
+    let d = tempfile::tempdir().unwrap();
+    let (_, runs, json) = short_sweep(d.path(), "2");
+    let seeds: Vec<u64> = json["seeds"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|r| r.as_array().unwrap().clone())
+        .map(|s| s.as_u64().unwrap())
+        .collect();
+    assert_eq!(seeds.len(), 9);
+    let mut u = seeds.clone();
+    u.sort_unstable();
+    u.dedup();
+    assert_eq!(u.len(), 9, "{seeds:?}");
+    // runs.csv holds the same seeds in the same order (value-major).
+    let from_csv: Vec<u64> = runs.lines().skip(1).map(|l| l.split(',').nth(2).unwrap().parse().unwrap()).collect();
+    assert_eq!(from_csv, seeds);
+    // None is the scene's own seed reused.
+    assert!(!seeds.contains(&1));
+}
+
+/// Runs the binary in a fresh directory and checks the bad-input contract.
+fn expect_bad_input(args: &[&str], mentions: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(fig2(), dir.path().join("fig2.toml")).unwrap();
+    let mut all = vec!["sweep", "fig2.toml"];
+    all.extend_from_slice(args);
+    let o = stickslip(&all, dir.path());
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{args:?}: one line expected, got {stderr:?}");
+    assert!(stderr.starts_with("error: ") && !stderr.contains("panicked"), "{stderr}");
+    for m in mentions {
+        assert!(stderr.contains(m), "{args:?}: {stderr:?} does not mention {m:?}");
+    }
+    assert!(o.stdout.is_empty());
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(left, vec![std::ffi::OsString::from("fig2.toml")], "{args:?}: something was written");
+}
+
+#[test]
+fn bad_sweep_arguments_are_refused() {
+    let v = ["--param", "plate.v"];
+    let with =
+        |extra: &[&'static str]| -> Vec<&'static str> { v.iter().copied().chain(extra.iter().copied()).collect() };
+    expect_bad_input(&with(&["--values", "0.1,abc"]), &["--values", "abc"]);
+    expect_bad_input(&with(&["--values", "0.1,,1"]), &["--values"]);
+    expect_bad_input(&with(&["--values", ""]), &["--values"]);
+    expect_bad_input(&with(&["--values", "1,inf"]), &["--values", "inf"]);
+    expect_bad_input(&with(&["--values", "0.1,-2"]), &["plate.v", "-2", ">= 0"]);
+    expect_bad_input(&with(&["--log-range", "0:1:5"]), &["--log-range", "0:1:5", "> 0"]);
+    expect_bad_input(&with(&["--log-range", "1:0.1:5"]), &["--log-range", "less than"]);
+    expect_bad_input(&with(&["--log-range", "-1:1:5"]), &["--log-range", "-1:1:5", "> 0"]);
+    expect_bad_input(&with(&["--log-range", "0.1:1:1"]), &["--log-range", "COUNT"]);
+    expect_bad_input(&with(&["--log-range", "0.1:1:0"]), &["--log-range", "COUNT"]);
+    expect_bad_input(&with(&["--log-range", "0.1:x:3"]), &["--log-range", "HI"]);
+    expect_bad_input(&with(&["--log-range", "0.1:1"]), &["--log-range"]);
+    expect_bad_input(&with(&["--range", "a:1:3"]), &["--range", "LO"]);
+    expect_bad_input(&with(&["--values", "1", "--replicas", "0"]), &["--replicas"]);
+    expect_bad_input(&with(&["--values", "1", "--threads", "0"]), &["--threads"]);
+    expect_bad_input(&with(&["--values", "-1,1", "--log-x"]), &["--log-x", "-1"]);
+    expect_bad_input(&with(&["--values", "1", "--log-range", "1:2:3"]), &["--values"]);
+    expect_bad_input(&with(&[]), &["--values"]);
+    expect_bad_input(&["--param", "plate", "--values", "1"], &["--param", "plate", "SECTION.KEY"]);
+    expect_bad_input(&["--param", "plate.vv", "--values", "1"], &["--param", "plate.vv", "fields"]);
+    expect_bad_input(&["--param", "plates.v", "--values", "1"], &["--param", "plates"]);
+    expect_bad_input(&["--param", "run.seed", "--values", "1,2"], &["run.seed"]);
+    expect_bad_input(&["--param", "junctions.n", "--values", "10.5"], &["junctions.n", "10.5"]);
+    expect_bad_input(&["--param", "junctions.temperature", "--values", "1,0"], &["junctions.temperature", "0"]);
+}
+
+/// The regime detector fed by a run of `scene`.
+fn detector(scene: &Scene) -> RegimeDetector {
+    struct V<'a>(&'a Scene);
+    impl EngineVisitor for V<'_> {
+        type Output = RegimeDetector;
+        fn visit<E: Engine>(self, mut e: E) -> RegimeDetector {
+            let mut d = RegimeDetector::new(self.0.run.t_warmup, self.0.plate.v);
+            let grid = OutputGrid::new(self.0, e.time_step());
+            drive(&mut e, &grid, &mut d).expect("run");
+            d
+        }
+    }
+    with_engine(scene, V(scene)).expect("engine")
+}
+
+fn fig2_at(v: &str) -> Scene {
+    let o: Vec<String> = [
+        format!("plate.v={v}"),
+        "run.t_end=1000".into(),
+        "run.t_warmup=200".into(),
+        "output.trace=false".into(),
+        "output.plot=false".into(),
+    ]
+    .to_vec();
+    Scene::from_file(&fig2(), &o).unwrap()
+}
+
+#[test]
+fn fig2_is_smooth_at_low_velocity_although_its_velocity_fluctuates_by_more_than_v() {
+    // Below V0 = 0.5 the plate's velocity jitters by about +-2 V (event noise), so the
+    // velocity hysteresis alone sees many "slips"; the friction drops little and the plate
+    // sticks rarely, so the run is smooth.
+    for seed in [1u64, 2, 3] {
+        let mut s = fig2_at("0.1");
+        s.run.seed = seed;
+        let d = detector(&s);
+        assert!(d.slips() >= 10 * MIN_CYCLES, "seed {seed}: {} slips", d.slips());
+        assert!(2 * d.cycles() < d.slips(), "seed {seed}: {} large of {} slips", d.cycles(), d.slips());
+        assert_eq!(d.regime(), Regime::Smooth, "seed {seed}");
+    }
+}
+
+#[test]
+fn fig2_is_stick_slip_at_intermediate_velocity_and_smooth_at_high_velocity() {
+    for seed in [1u64, 2, 3] {
+        let mut s = fig2_at("1");
+        s.run.seed = seed;
+        let d = detector(&s);
+        // About one cycle per 11 time units, every slip large, stuck a third of the time.
+        assert!(d.cycles() >= 40, "seed {seed}: {} cycles", d.cycles());
+        assert!(d.cycles() + 2 >= d.slips(), "seed {seed}: {} large of {} slips", d.cycles(), d.slips());
+        assert!(d.stuck_fraction() > 0.2, "seed {seed}: stuck {}", d.stuck_fraction());
+        assert_eq!(d.regime(), Regime::StickSlip, "seed {seed}");
+        let summary = stickslip::run_scene(&s, None).unwrap();
+        assert_eq!(summary.regime, Regime::StickSlip);
+        assert_eq!(summary.stick_slip_cycles, d.cycles());
+
+        let mut s = fig2_at("10");
+        s.run.seed = seed;
+        let d = detector(&s);
+        assert_eq!((d.slips(), d.regime()), (0, Regime::Smooth), "seed {seed}");
+    }
+}
+
+/// Element names of `svg` balance (a minimal well-formedness check: every start tag is
+/// closed in order, attributes quoted, nothing after the root).
+fn assert_well_formed_svg(svg: &str) {
+    let mut stack: Vec<String> = Vec::new();
+    let mut rest = svg.trim();
+    assert!(rest.starts_with("<svg"), "{}", &rest[..rest.len().min(80)]);
+    let mut closed_root = false;
+    while let Some(i) = rest.find('<') {
+        assert!(!closed_root || rest[..i].trim().is_empty(), "content after the root element");
+        let j = rest[i..].find('>').expect("unterminated tag") + i;
+        let tag = &rest[i + 1..j];
+        assert_eq!(tag.matches('"').count() % 2, 0, "unbalanced quotes in <{tag}>");
+        if let Some(name) = tag.strip_prefix('/') {
+            assert_eq!(stack.pop().as_deref(), Some(name.trim()), "mismatched </{name}>");
+            closed_root = stack.is_empty();
+        } else if !tag.starts_with('?') && !tag.starts_with('!') && !tag.ends_with('/') {
+            stack.push(tag.split_whitespace().next().unwrap().to_string());
+        }
+        rest = &rest[j + 1..];
+    }
+    assert!(stack.is_empty() && closed_root, "unclosed: {stack:?}");
+}
+
+#[test]
+fn trace_svg_is_written_when_asked_and_only_then() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = fig2();
+    let scene = scene.to_str().unwrap();
+    let short = ["--set", "run.t_end=100", "--set", "run.t_warmup=10"];
+    let run = |out: &str, extra: &[&str]| {
+        let mut a = vec!["run", scene, "--out", out];
+        a.extend_from_slice(&short);
+        a.extend_from_slice(extra);
+        stickslip(&a, dir.path())
+    };
+    let o = run("plot", &[]); // fig2.toml sets output.plot = true
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let svg = std::fs::read_to_string(dir.path().join("plot/trace.svg")).unwrap();
+    assert_well_formed_svg(&svg);
+    assert!(svg.contains("friction per junction") && svg.contains("attached fraction"));
+    assert!(!dir.path().join("plot/trace.svg.part").exists());
+    // Same scene and seed: the same bytes.
+    assert!(run("plot2", &[]).status.success());
+    assert_eq!(svg, std::fs::read_to_string(dir.path().join("plot2/trace.svg")).unwrap());
+
+    let o = run("noplot", &["--set", "output.plot=false"]);
+    assert!(o.status.success());
+    assert!(dir.path().join("noplot/trace.csv").exists());
+    assert!(!dir.path().join("noplot/trace.svg").exists());
+
+    let o = run("refused", &["--set", "output.trace=false"]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("output.plot") && stderr.contains("output.trace"), "{stderr}");
+    assert!(!dir.path().join("refused").exists());
+}
+
+#[test]
+fn the_fig1_trace_plot_is_well_formed() {
+    // The letter's own scene at its own step, with the fixed engine.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/fig1.toml");
+    let o = stickslip(&["run", scene.to_str().unwrap(), "--set", "output.plot=true", "--out", "f"], dir.path());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_well_formed_svg(&std::fs::read_to_string(dir.path().join("f/trace.svg")).unwrap());
+}
