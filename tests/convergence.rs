@@ -47,7 +47,7 @@ fn fixed_step_bias_shrinks_in_proportion_to_dt() {
     for (i, b) in bias.iter().enumerate() {
         cov[i][i] = b.2 * b.2;
     }
-    let inv = invert(&cov);
+    let inv = stickslip::compare::fit::invert(&cov).expect("a covariance matrix is positive definite");
     let x: Vec<f64> = bias.iter().map(|b| b.0).collect();
     let y: Vec<f64> = bias.iter().map(|b| b.1).collect();
     let quad =
@@ -64,28 +64,4 @@ fn fixed_step_bias_shrinks_in_proportion_to_dt() {
     assert!(chi2 < crit, "bias not proportional to dt: {report}");
     assert!(c.abs() > z * se_c, "no detectable O(dt) bias at these dt (the test would be vacuous): {report}");
     eprintln!("{report}");
-}
-
-/// Inverse of a small symmetric positive-definite matrix (Gauss–Jordan).
-fn invert(a: &[Vec<f64>]) -> Vec<Vec<f64>> {
-    let n = a.len();
-    let mut m: Vec<Vec<f64>> = a.to_vec();
-    let mut inv: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect()).collect();
-    for col in 0..n {
-        let p = m[col][col];
-        for j in 0..n {
-            m[col][j] /= p;
-            inv[col][j] /= p;
-        }
-        for row in 0..n {
-            if row != col {
-                let f = m[row][col];
-                for j in 0..n {
-                    m[row][j] -= f * m[col][j];
-                    inv[row][j] -= f * inv[col][j];
-                }
-            }
-        }
-    }
-    inv
 }

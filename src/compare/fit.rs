@@ -44,7 +44,7 @@ impl BiasFit {
 }
 
 /// Inverse of a symmetric positive-definite matrix (Gauss–Jordan); `None` if singular.
-fn invert(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
+pub fn invert(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
     let n = a.len();
     let mut m = a.to_vec();
     let mut inv: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| f64::from(u8::from(i == j))).collect()).collect();
