@@ -360,6 +360,11 @@ pub fn num(x: f64) -> String {
     if x.is_infinite() {
         return if x > 0.0 { "inf".into() } else { "-inf".into() };
     }
+    if x.is_nan() {
+        // Parameters at the edge of the floating-point range (e.g. a subnormal mass) can
+        // leave a limit undefined; say so rather than print a number.
+        return "undefined".into();
+    }
     if x == 0.0 {
         return "0".into();
     }
