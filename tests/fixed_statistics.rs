@@ -14,6 +14,7 @@
 //! independent junctions. Every test uses a two-sided significance level `ALPHA` per test,
 //! fixed seeds, and checks its own power: the same data must reject a nearby wrong rule.
 
+mod common;
 mod fixed_common;
 
 use fixed_common::scene;
@@ -204,24 +205,8 @@ fn chi_square(counts: &[u64], n: u64, p: f64) -> (f64, f64) {
         observed[c as usize] += 1.0;
     }
     let expected: Vec<f64> = (0..=n).map(|k| m * dist.pmf(k)).collect();
-    // Merge bins left to right until each expects >= 5; the remainder joins the last bin.
-    let mut bins: Vec<(f64, f64)> = Vec::new();
-    let (mut o, mut e) = (0.0, 0.0);
-    for k in 0..=n as usize {
-        o += observed[k];
-        e += expected[k];
-        if e >= 5.0 {
-            bins.push((o, e));
-            o = 0.0;
-            e = 0.0;
-        }
-    }
-    if let Some(last) = bins.last_mut() {
-        last.0 += o;
-        last.1 += e;
-    }
-    let stat = bins.iter().map(|(o, e)| (o - e) * (o - e) / e).sum();
-    (stat, bins.len() as f64 - 1.0)
+    let (stat, df) = common::chi_square(&observed, &expected);
+    (stat, df as f64)
 }
 
 #[test]
