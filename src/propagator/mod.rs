@@ -64,11 +64,11 @@ const RECIP: [f64; 2 * NT + 3] = {
     t
 };
 
-/// `1/(n (n-1))` for `n = 2..NT` (entries 0, 1 unused).
-const RECIP2: [f64; NT + 1] = {
-    let mut t = [0.0; NT + 1];
+/// `1/(n (n-1))` for `n = 2..NT + 2` (entries 0, 1 unused).
+const RECIP2: [f64; NT + 3] = {
+    let mut t = [0.0; NT + 3];
     let mut n = 2;
-    while n <= NT {
+    while n <= NT + 2 {
         t[n] = 1.0 / (n * (n - 1)) as f64;
         n += 1;
     }
@@ -192,19 +192,50 @@ fn phis(z: f64) -> (f64, f64, f64, f64) {
     }
 }
 
-/// `h * sum_{i,j} a_i a_j / (i + j + 1)` for `a[0..n]`: `int_0^h (sum a_i (t/h)^i)^2 dt`.
+/// `h * sum_{i,j} a_i a_j / (i + j + 1 + 2 off)` for `a[0..n]`:
+/// `int_0^h (t/h)^(2 off) (sum a_i (t/h)^i)^2 dt`.
 #[inline]
-fn hilbert_square(a: &[f64], h: f64) -> f64 {
+fn hilbert_square(a: &[f64], h: f64, off: usize) -> f64 {
     let n = a.len();
     let mut acc = 0.0;
     for i in 0..n {
         let mut cross = 0.0;
         for j in (i + 1)..n {
-            cross += a[j] * RECIP[i + j + 1];
+            cross += a[j] * RECIP[i + j + 1 + 2 * off];
         }
-        acc += a[i] * (a[i] * RECIP[2 * i + 1] + 2.0 * cross);
+        acc += a[i] * (a[i] * RECIP[2 * i + 1 + 2 * off] + 2.0 * cross);
     }
     (acc * h).max(0.0)
+}
+
+/// `h * sum_{i,j>=1} a_i a_j / (i + j + 1)` for Taylor terms `a[0..n]` (`a[0] = 0` is not
+/// read): [`hilbert_square`] from index 1, with the common lengths unrolled (the loop
+/// bounds and table indices become constants).
+#[inline]
+fn hilbert_tail(a: &[f64], h: f64) -> f64 {
+    #[inline(always)]
+    fn fixed<const L: usize>(a: &[f64], h: f64) -> f64 {
+        let a: &[f64; L] = a.try_into().expect("length checked by the caller");
+        let mut acc = 0.0;
+        let mut i = 1;
+        while i < L {
+            let mut cross = 0.0;
+            let mut j = i + 1;
+            while j < L {
+                cross += a[j] * RECIP[i + j + 1];
+                j += 1;
+            }
+            acc += a[i] * (a[i] * RECIP[2 * i + 1] + 2.0 * cross);
+            i += 1;
+        }
+        (acc * h).max(0.0)
+    }
+    match a.len() {
+        6 => fixed::<6>(a, h),
+        8 => fixed::<8>(a, h),
+        10 => fixed::<10>(a, h),
+        _ => hilbert_square(&a[1..], h, 1),
+    }
 }
 
 impl LinearPlate {
@@ -294,16 +325,32 @@ impl LinearPlate {
     /// For `M = 0`, `v0` is ignored (the velocity is `(a + b tau - k y)/eta`).
     #[inline]
     pub fn trajectory(&self, y0: f64, v0: f64, a: f64, b: f64) -> Trajectory {
-        let p = *self;
+        let mut t = Trajectory { plate: *self, y0, v0, f0: 0.0, b, c: [0.0; 4], d: [0.0; 2] };
+        t.restart(self, y0, v0, a, b);
+        t
+    }
+}
+
+impl Trajectory {
+    /// Makes `self` the trajectory of `plate` from `(y0, v0)` under forcing `a + b tau`,
+    /// in place (the same result as [`LinearPlate::trajectory`], without building and
+    /// moving a new value: the engine restarts its trajectory at every event).
+    #[inline]
+    pub fn restart(&mut self, plate: &LinearPlate, y0: f64, v0: f64, a: f64, b: f64) {
+        let p = plate;
         let f0 = a - p.k * y0;
-        let mut t = Trajectory { plate: p, y0, v0, f0, b, c: [0.0; 4], d: [0.0; 2] };
+        self.plate = *p;
+        self.y0 = y0;
+        self.v0 = v0;
+        self.f0 = f0;
+        self.b = b;
         match p.branch {
             Branch::FirstOrder => {
                 let g0 = f0 * p.inv_mu;
                 let g1 = b * p.inv_mu;
-                t.v0 = g0;
-                t.c = [0.0, g0, g1, 0.0];
-                t.d = [g0, 0.0];
+                self.v0 = g0;
+                self.c = [0.0, g0, g1, 0.0];
+                self.d = [g0, 0.0];
             }
             Branch::Separated => {
                 // (D - r_s) u = g0 + g1 tau + (v0 - g0) e^{r_f tau}.
@@ -311,19 +358,18 @@ impl LinearPlate {
                 let g0 = (f0 - p.mass * g1) * p.inv_mu;
                 let cf = -(v0 - g0) * p.m_over_sq;
                 let sigma = -cf;
-                t.c = [sigma, g0, g1, cf];
-                t.d = [p.r_s * sigma + g0, p.r_f * cf];
+                self.c = [sigma, g0, g1, cf];
+                self.d = [p.r_s * sigma + g0, p.r_f * cf];
             }
             Branch::Clustered => {
                 let c1 = b * p.inv_k;
                 let c0 = (f0 - p.eta * c1) * p.inv_k;
                 let e1 = -c0;
                 let e2 = (v0 - c1) - p.m * e1;
-                t.c = [c0, c1, e1, e2];
-                t.d = [e1 * p.m + e2, e1 * p.q + e2 * p.m];
+                self.c = [c0, c1, e1, e2];
+                self.d = [e1 * p.m + e2, e1 * p.q + e2 * p.m];
             }
         }
-        t
     }
 }
 
@@ -338,6 +384,14 @@ struct Series {
 impl Series {
     fn new() -> Series {
         Series { t: [const { std::mem::MaybeUninit::uninit() }; NT], len: 0 }
+    }
+    /// Writes terms `0..6`.
+    #[inline]
+    fn set_head(&mut self, head: [f64; 6]) {
+        for (slot, v) in self.t.iter_mut().zip(head) {
+            *slot = std::mem::MaybeUninit::new(v);
+        }
+        self.len = 6;
     }
     /// Writes term `n`; terms must be written in order `0, 1, 2, ...`.
     #[inline]
@@ -380,42 +434,20 @@ impl Trajectory {
         self.plate.mass > 0.0 && self.plate.rho * tau <= TAYLOR_MAX
     }
 
-    /// Taylor terms of `u` at `tau` (requires `M > 0`, `rho tau <= 1`).
-    #[inline]
-    fn series(&self, tau: f64) -> Series {
-        let p = &self.plate;
-        let mut s = Series::new();
-        let aa = p.eta_m * tau;
-        let bb = p.k_m * tau * tau;
-        let t1 = self.v0 * tau;
-        let t2 = (self.f0 - p.eta * self.v0) * p.inv_m * (0.5 * tau * tau);
-        let t3 = self.b * p.inv_m * (tau * tau * tau * RECIP[6]) - (aa * t2 * RECIP[3] + bb * t1 * RECIP[6]);
-        s.push(0, 0.0);
-        s.push(1, t1);
-        s.push(2, t2);
-        s.push(3, t3);
-        let mut dabs = 2.0 * t2.abs() + 3.0 * t3.abs();
-        let (mut tm1, mut tm2) = (t3, t2);
-        let mut n = 4;
-        while n < NT {
-            let tn = -(tm1 * (aa * RECIP[n]) + tm2 * (bb * RECIP2[n]));
-            s.push(n, tn);
-            let nf = n as f64;
-            dabs += nf * tn.abs();
-            n += 1;
-            if (tn.abs() + tm1.abs()) * nf <= TAIL * dabs {
-                break;
-            }
-            tm2 = tm1;
-            tm1 = tn;
-        }
-        s
-    }
-
-    /// `(u, u')` at `tau > 0` from the Taylor series (same terms and stopping rule as
-    /// [`Self::series`], summed on the fly).
-    #[inline]
-    fn taylor_at(&self, tau: f64) -> (f64, f64) {
+    /// The Taylor series of `u` at `tau` (requires `M > 0`, `rho tau <= 1`): returns
+    /// `(u, u')`; with `KEEP` the terms `t_n = u^(n)(0) tau^n / n!` are also stored in `ser`
+    /// and `i1 = sum t_n / (n + 1)` (so that `int_0^tau u = tau i1`) is returned.
+    ///
+    /// Terms come from `t_n = -(A/n) t_{n-1} - (B/(n(n-1))) t_{n-2}`, `A = eta tau/M`,
+    /// `B = k tau^2/M` (`n >= 4`), two per step: `t_{n+1} = (a2 a1 - b2) t_{n-1} + a2 b1 t_{n-2}`
+    /// does not wait for `t_n`, which halves the latency of the loop. The sum stops when a
+    /// bound of the remainder is below `2^-56` of `sum n |t_n|` (`n >= 2`): the next two terms
+    /// are bounded by the recurrence in absolute values (`c1`, `c2`), and since `A <= 2 rho tau
+    /// <= 2` and `B <= (rho tau)^2 <= 1`, every later term is at most `0.27` times the larger of
+    /// the two before it, so the weighted remainder is below `4 (n + 2) (c1 + c2)`. The same
+    /// arithmetic runs with and without `KEEP`, so `u, u'` agree bit for bit.
+    #[inline(always)]
+    fn taylor<const KEEP: bool>(&self, tau: f64, ser: &mut Series) -> (f64, f64, f64) {
         let p = &self.plate;
         let inv_tau = 1.0 / tau;
         let aa = p.eta_m * tau;
@@ -423,30 +455,72 @@ impl Trajectory {
         let t1 = self.v0 * tau;
         let t2 = (self.f0 - p.eta * self.v0) * p.inv_m * (0.5 * tau * tau);
         let t3 = self.b * p.inv_m * (tau * tau * tau * RECIP[6]) - (aa * t2 * RECIP[3] + bb * t1 * RECIP[6]);
-        let mut dabs = 2.0 * t2.abs() + 3.0 * t3.abs();
-        let mut u = t2 + t3;
-        let mut du = 2.0 * t2 + 3.0 * t3;
-        let (mut tm1, mut tm2) = (t3, t2);
-        // Two terms per step: t_{n+1} = (a2 a1 - b2) t_{n-1} + a2 b1 t_{n-2} does not wait for
-        // t_n, which halves the latency of the loop.
-        let mut n = 4;
-        while n + 1 < NT {
-            let (a1, b1) = (aa * RECIP[n], bb * RECIP2[n]);
-            let (a2, b2) = (aa * RECIP[n + 1], bb * RECIP2[n + 1]);
-            let tn = -(tm1 * a1 + tm2 * b1);
-            let tn1 = tm1 * (a2 * a1 - b2) + tm2 * (a2 * b1);
-            let (nf, nf1) = (n as f64, (n + 1) as f64);
-            u += tn + tn1;
-            du += nf * tn + nf1 * tn1;
-            dabs += nf * tn.abs() + nf1 * tn1.abs();
-            n += 2;
-            if (tn.abs() + tn1.abs()) * nf1 <= TAIL * dabs {
-                break;
-            }
-            tm2 = tn;
-            tm1 = tn1;
+        // The first step (t4, t5) in straight-line code: at large N the steps are so short
+        // (rho tau ~ 1e-5) that the sum usually stops here.
+        let (a1, b1) = (aa * RECIP[4], bb * RECIP2[4]);
+        let (a2, b2) = (aa * RECIP[5], bb * RECIP2[5]);
+        let t4 = -(t3 * a1 + t2 * b1);
+        let t5 = t3 * (a2 * a1 - b2) + t2 * (a2 * b1);
+        let mut u = (t2 + t3) + (t4 + t5);
+        let mut du = (2.0 * t2 + 3.0 * t3) + (4.0 * t4 + 5.0 * t5);
+        let mut dabs = (2.0 * t2.abs() + 3.0 * t3.abs()) + (4.0 * t4.abs() + 5.0 * t5.abs());
+        let mut i1 = if KEEP {
+            (t1 * RECIP[2] + t2 * RECIP[3]) + (t3 * RECIP[4] + (t4 * RECIP[5] + t5 * RECIP[6]))
+        } else {
+            0.0
+        };
+        if KEEP {
+            ser.set_head([0.0, t1, t2, t3, t4, t5]);
         }
-        (t1 + u, self.v0 + du * inv_tau)
+        let c1 = (aa * RECIP[6]) * t5.abs() + (bb * RECIP2[6]) * t4.abs();
+        let c2 = (aa * RECIP[7]) * c1 + (bb * RECIP2[7]) * t5.abs();
+        if 4.0 * 8.0 * (c1 + c2) > TAIL * dabs {
+            let (mut tm1, mut tm2) = (t5, t4);
+            let mut n = 6;
+            while n + 1 < NT {
+                let (a1, b1) = (aa * RECIP[n], bb * RECIP2[n]);
+                let (a2, b2) = (aa * RECIP[n + 1], bb * RECIP2[n + 1]);
+                let tn = -(tm1 * a1 + tm2 * b1);
+                let tn1 = tm1 * (a2 * a1 - b2) + tm2 * (a2 * b1);
+                if KEEP {
+                    ser.push(n, tn);
+                    ser.push(n + 1, tn1);
+                    i1 += tn * RECIP[n + 1] + tn1 * RECIP[n + 2];
+                }
+                let (nf, nf1) = (n as f64, (n + 1) as f64);
+                u += tn + tn1;
+                du += nf * tn + nf1 * tn1;
+                dabs += nf * tn.abs() + nf1 * tn1.abs();
+                // Bounds of the next two terms.
+                let c1 = (aa * RECIP[n + 2]) * tn1.abs() + (bb * RECIP2[n + 2]) * tn.abs();
+                let c2 = (aa * RECIP[n + 3]) * c1 + (bb * RECIP2[n + 3]) * tn1.abs();
+                n += 2;
+                if 4.0 * (n + 2) as f64 * (c1 + c2) <= TAIL * dabs {
+                    break;
+                }
+                tm2 = tn;
+                tm1 = tn1;
+            }
+        }
+        (t1 + u, self.v0 + du * inv_tau, i1)
+    }
+
+    /// `(u, u')` at `tau > 0` from the Taylor series.
+    #[inline]
+    fn taylor_at(&self, tau: f64) -> (f64, f64) {
+        let (u, du, _) = self.taylor::<false>(tau, &mut Series::new());
+        (u, du)
+    }
+
+    /// `(u, u', integrals)` at `h > 0` from the Taylor series.
+    #[inline]
+    fn taylor_with_integrals(&self, h: f64, s: f64) -> (f64, f64, Integrals) {
+        let mut ser = Series::new();
+        let (u, du, i1) = self.taylor::<true>(h, &mut ser);
+        // w = u - s tau: only the linear term changes; t_0 = 0, so the sum starts at n = 1.
+        ser.terms_mut()[1] -= s * h;
+        let i2 = hilbert_tail(ser.terms(), h);
+        (u, du, Integrals { i1: i1 * h, i2 })
     }
 
     /// `(y(tau), y'(tau))` for `tau >= 0`.
@@ -515,16 +589,8 @@ impl Trajectory {
     /// Taylor path, where large-N engines spend their time, shares the set-up).
     pub fn at_with_integrals(&self, h: f64, s: f64) -> (f64, f64, Integrals) {
         if h > 0.0 && self.use_taylor(h) {
-            let (u, du) = self.taylor_at(h);
-            let mut ser = self.series(h);
-            let len = ser.len;
-            let mut i1 = 0.0;
-            for n in (1..len).rev() {
-                i1 += ser.terms()[n] * RECIP[n + 1];
-            }
-            ser.terms_mut()[1] -= s * h;
-            let i2 = hilbert_square(ser.terms(), h);
-            return (self.y0 + u, du, Integrals { i1: i1 * h, i2 });
+            let (u, du, ints) = self.taylor_with_integrals(h, s);
+            return (self.y0 + u, du, ints);
         }
         let (y, v) = self.at(h);
         (y, v, self.integrals(h, s))
@@ -542,14 +608,7 @@ impl Trajectory {
             return Integrals { i1: 0.0, i2: 0.0 };
         }
         if self.use_taylor(h) {
-            let mut ser = self.series(h);
-            let mut i1 = 0.0;
-            for n in (1..ser.len).rev() {
-                i1 += ser.terms()[n] * RECIP[n + 1];
-            }
-            ser.terms_mut()[1] -= s * h;
-            let i2 = hilbert_square(ser.terms(), h);
-            return Integrals { i1: i1 * h, i2 };
+            return self.taylor_with_integrals(h, s).2;
         }
         match self.plate.branch {
             Branch::FirstOrder | Branch::Separated => self.slow_fast_integrals(h, s),
@@ -584,7 +643,7 @@ impl Trajectory {
                     break;
                 }
             }
-            hilbert_square(&a[..n], h)
+            hilbert_square(&a[..n], h, 0)
         } else {
             // S_w = P + c e^{r tau}, P = p0 + p1 tau (well conditioned: |r h| > 1).
             let ir = 1.0 / r;

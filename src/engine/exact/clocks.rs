@@ -75,16 +75,22 @@ impl<Q: ChannelQueue> Channels<Q> {
     pub fn new(n: usize) -> Self {
         Channels { clocks: vec![Clock::default(); n], queue: Q::new(n) }
     }
-    /// Sets the rates of channels `0..rates.len()` at `now`. Pending times are rescaled;
-    /// channel `fired`, and any channel coming back from rate 0, draws a fresh exponential.
+    /// Sets the rates of channels `0..R` at `now`. Pending times are rescaled; channel
+    /// `fired`, and any channel coming back from rate 0, draws a fresh exponential.
     #[inline]
-    pub fn set_rates(&mut self, now: f64, rates: &[f64], fired: Option<usize>, rng: &mut Pcg64) {
-        for (ch, &rate) in rates.iter().enumerate() {
-            let fresh = self.clocks[ch].set_rate(now, rate);
-            if fresh || fired == Some(ch) {
-                self.clocks[ch].fire(now, Exp1.sample(rng));
+    pub fn set_rates<const R: usize>(&mut self, now: f64, rates: [f64; R], fired: Option<usize>, rng: &mut Pcg64) {
+        let clocks = &mut self.clocks[..R];
+        for (ch, (clock, rate)) in clocks.iter_mut().zip(rates).enumerate() {
+            let fresh = if fired == Some(ch) {
+                clock.rate = rate;
+                true
+            } else {
+                clock.set_rate(now, rate)
+            };
+            if fresh {
+                clock.fire(now, Exp1.sample(rng));
             }
-            self.queue.set(ch, self.clocks[ch].next);
+            self.queue.set(ch, clock.next);
         }
     }
     /// A fresh time after `now` for channel `ch` at its current rate (after a rejected

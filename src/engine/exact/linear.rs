@@ -87,25 +87,22 @@ pub struct ExactLinear<R: RuptureModel, Q: ChannelQueue> {
 /// (a square root and several divisions) on almost every event.
 #[derive(Clone, Debug, Default)]
 struct PlateCache {
-    entries: Vec<Option<(usize, LinearPlate)>>,
+    /// `(n, plate)`; `n = usize::MAX` marks an empty slot (no count reaches it).
+    entries: Vec<(usize, LinearPlate)>,
 }
 
 impl PlateCache {
     const SLOTS: usize = 64;
     #[inline]
-    fn get(&mut self, p: &Plate, kappa: f64, n_att: usize) -> LinearPlate {
-        if self.entries.is_empty() {
-            self.entries = vec![None; Self::SLOTS];
+    fn get(&mut self, p: &Plate, kappa: f64, n_att: usize) -> &LinearPlate {
+        if self.entries.len() != Self::SLOTS {
+            self.entries = vec![(usize::MAX, LinearPlate::new(1.0, 1.0, 1.0)); Self::SLOTS];
         }
-        let slot = n_att % Self::SLOTS;
-        match self.entries[slot] {
-            Some((n, plate)) if n == n_att => plate,
-            _ => {
-                let plate = LinearPlate::new(p.mass, p.eta, p.k + kappa * n_att as f64);
-                self.entries[slot] = Some((n_att, plate));
-                plate
-            }
+        let slot = &mut self.entries[n_att % Self::SLOTS];
+        if slot.0 != n_att {
+            *slot = (n_att, LinearPlate::new(p.mass, p.eta, p.k + kappa * n_att as f64));
         }
+        &slot.1
     }
 }
 
@@ -163,8 +160,11 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
         // M y'' + eta y' + k y = K (V (tau + s) - lag_ref) + kappa C.
         let a = p.k * (p.v * self.tau - self.frame.lag_ref) + self.kappa * self.bags.anchor_sum();
         let b = p.k * p.v;
-        let traj = self.plates.get(p, self.kappa, self.bags.n_attached()).trajectory(self.y, self.yd, a, b);
-        self.piece = Piece { tau0: self.tau, y0: self.y, v0: self.yd, traj };
+        let plate = self.plates.get(p, self.kappa, self.bags.n_attached());
+        self.piece.traj.restart(plate, self.y, self.yd, a, b);
+        self.piece.tau0 = self.tau;
+        self.piece.y0 = self.y;
+        self.piece.v0 = self.yd;
     }
 
     /// Moves along the piece to local time `tau1` and reports `[piece.tau0, tau1]` as a
@@ -209,7 +209,7 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
         let now = self.tau;
         let plan = self.rupture.plan(&self.piece.traj, self.bags.n_attached());
         let rates = [self.formation.kon0 * self.bags.n_detached() as f64, plan.rate];
-        self.channels.set_rates(now, &rates, fired, &mut self.rng);
+        self.channels.set_rates(now, rates, fired, &mut self.rng);
         self.channels.set_time(HORIZON, if R::WEAK { now + plan.horizon } else { f64::INFINITY });
     }
 
@@ -266,6 +266,9 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
     /// Re-bases the frame if positions or times have grown (amortised O(1) per event).
     fn maybe_rebase<O: Observer>(&mut self, obs: &mut O) {
         let (ya, ta) = (self.y.abs(), self.tau.abs());
+        if ya <= SOFT_Y && ta <= SOFT_TAU && !self.rupture.needs_rebase(self.y, self.tau) {
+            return;
+        }
         let hard = ya > HARD_Y || ta > HARD_TAU || self.rupture.needs_rebase(self.y, self.tau);
         let soft = (ya > SOFT_Y || ta > SOFT_TAU) && self.events_since_rebase >= (self.n as u64 / 4).max(1);
         if !(hard || soft) {

@@ -1,42 +1,67 @@
 //! Uniform picks drawn ahead of use, so the memory they will touch can be prefetched.
 //!
 //! At large N a uniform pick from a bag is a cache miss (the bag is far larger than the
-//! cache). Each channel therefore draws its *next* pick as a 64-bit number `u` right after
-//! it fires; the index is `floor(u n / 2^64)` for the bag size `n` at the time of use
-//! (a widening multiply: every index has probability within `n / 2^64` of `1/n`, far below
-//! double-precision round-off), and the line at the index for the current size is
-//! prefetched after every event, so the miss overlaps the work of the events in between.
+//! cache). Each channel therefore keeps its next [`AHEAD`] picks as 64-bit numbers `u`,
+//! drawn in order as earlier picks are used; the index is `floor(u n / 2^64)` for the bag
+//! size `n` at the time of use (a widening multiply: every index has probability within
+//! `n / 2^64` of `1/n`, far below double-precision round-off). After every event the lines
+//! at the indices of the front and the back pick, for the current size, are prefetched, so
+//! a miss overlaps the work of several events (one event is shorter than a memory access
+//! at N = 1e6). The picks are independent uniforms whatever their order of drawing, so this
+//! changes no distribution.
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::rng::Pcg64;
 
-/// A pre-drawn uniform pick.
+/// Picks drawn ahead of use (a power of two: positions are taken modulo it with a mask,
+/// so even a damaged `head` read from a checkpoint cannot index out of range).
+pub const AHEAD: usize = 4;
+const MASK: usize = AHEAD - 1;
+
+/// A queue of [`AHEAD`] pre-drawn uniform picks: the front one is used next, the back one
+/// [`AHEAD`] uses later, so its memory can be prefetched several events before it is needed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Pick(u64);
+pub struct Pick {
+    q: [u64; AHEAD],
+    head: u8,
+}
+
+/// The index in `0..n` of the 64-bit uniform `u`: `floor(u n / 2^64)` (`n >= 1`).
+#[inline]
+fn index(u: u64, n: usize) -> usize {
+    ((u128::from(u) * n as u128) >> 64) as usize
+}
 
 impl Pick {
     pub fn draw(rng: &mut Pcg64) -> Pick {
-        Pick(rng.next_u64())
+        Pick { q: std::array::from_fn(|_| rng.next_u64()), head: 0 }
     }
-    /// The index in `0..n` (`n >= 1`).
+    /// The index in `0..n` (`n >= 1`) of the next pick.
     #[inline]
     pub fn index(self, n: usize) -> usize {
-        ((u128::from(self.0) * n as u128) >> 64) as usize
+        index(self.q[self.head as usize & MASK], n)
     }
-    /// Uses this pick for a bag of size `n` and draws the next one.
+    /// Uses the front pick for a bag of size `n` and draws a new one at the back.
     #[inline]
     pub fn take(&mut self, n: usize, rng: &mut Pcg64) -> usize {
-        let i = self.index(n);
-        *self = Pick::draw(rng);
+        let h = self.head as usize & MASK;
+        let i = index(self.q[h], n);
+        self.q[h] = rng.next_u64();
+        self.head = ((h + 1) & MASK) as u8;
         i
     }
-    /// Prefetches the element this pick would choose in `bag`.
+    /// Prefetches the elements of `bag` that the front pick and the back pick would choose
+    /// now (the bag's size changes by about one per event, which moves an index by at
+    /// most one element per event).
     #[inline]
     pub fn prefetch<T>(self, bag: &[T]) {
-        if !bag.is_empty() {
-            prefetch(&bag[self.index(bag.len())]);
+        let n = bag.len();
+        if n != 0 {
+            let h = self.head as usize & MASK;
+            prefetch(&bag[index(self.q[h], n)]);
+            prefetch(&bag[index(self.q[(h + MASK) & MASK], n)]);
         }
     }
 }
@@ -61,13 +86,13 @@ mod tests {
 
     #[test]
     fn index_covers_the_range_uniformly() {
-        assert_eq!(Pick(0).index(7), 0);
-        assert_eq!(Pick(u64::MAX).index(7), 6);
+        assert_eq!(index(0, 7), 0);
+        assert_eq!(index(u64::MAX, 7), 6);
         let mut rng = pcg(3);
         let n = 10;
         let mut counts = [0u32; 10];
         for _ in 0..100_000 {
-            counts[Pick::draw(&mut rng).index(n)] += 1;
+            counts[index(rng.next_u64(), n)] += 1;
         }
         // Chi-square with 9 degrees of freedom; 27.88 is its 0.999 quantile.
         let chi2: f64 = counts.iter().map(|&c| (c as f64 - 1e4).powi(2) / 1e4).sum();

@@ -125,9 +125,11 @@ pub struct WeakRupture {
     pub a: f64,
     /// Weights `[exp(-a c), exp(a c)]` per attached slot.
     tree: SumTree2,
-    /// Bounds of the current horizon.
+    /// Bounds of the current horizon, and `exp(a y_hi)`, `exp(-a y_lo)`.
     y_lo: f64,
     y_hi: f64,
+    e_hi: f64,
+    e_lo: f64,
     /// Last horizon length (the next search starts there).
     horizon: f64,
     /// Last candidate rate: the horizon need not cover many more candidates than
@@ -153,6 +155,8 @@ impl WeakRupture {
             tree: SumTree2::new(n),
             y_lo: 0.0,
             y_hi: 0.0,
+            e_hi: 1.0,
+            e_lo: 1.0,
             horizon: 1.0,
             last_rate: 0.0,
             immediate: false,
@@ -164,11 +168,19 @@ impl WeakRupture {
         let e = (self.a * c).exp();
         [1.0 / e, e]
     }
+    /// Sets the bounds of the horizon.
+    #[inline]
+    fn set_bounds(&mut self, y_lo: f64, y_hi: f64) {
+        self.y_lo = y_lo;
+        self.y_hi = y_hi;
+        self.e_hi = (self.a * y_hi).exp();
+        self.e_lo = (-self.a * y_lo).exp();
+    }
     /// `exp(a y_hi) W-` and `exp(-a y_lo) W+`.
     #[inline]
     fn terms(&self) -> (f64, f64) {
         let w = self.tree.total();
-        ((self.a * self.y_hi).exp() * w[0], (-self.a * self.y_lo).exp() * w[1])
+        (self.e_hi * w[0], self.e_lo * w[1])
     }
 }
 
@@ -200,8 +212,7 @@ impl RuptureModel for WeakRupture {
         }
         if self.a == 0.0 {
             // Constant rate k0: the bound is exact up to the factor 2 of the two terms.
-            self.y_lo = 0.0;
-            self.y_hi = 0.0;
+            self.set_bounds(0.0, 0.0);
             let (m, p) = self.terms();
             return Plan { rate: self.k0 * (m + p), horizon: f64::INFINITY };
         }
@@ -226,8 +237,7 @@ impl RuptureModel for WeakRupture {
             b = b2;
         }
         self.horizon = h;
-        self.y_lo = b.0;
-        self.y_hi = b.1;
+        self.set_bounds(b.0, b.1);
         self.bounding = true;
         let (m, p) = self.terms();
         let rate = self.k0 * (m + p);
@@ -251,16 +261,19 @@ impl RuptureModel for WeakRupture {
         let y = traj.at(s).0;
         let (m, p) = self.terms();
         let u = rng.uniform() * (m + p);
-        let slot = if u < m {
-            self.tree.find(0, u / (self.a * self.y_hi).exp())
-        } else {
-            self.tree.find(1, (u - m) / (-self.a * self.y_lo).exp())
-        };
-        let c = attached[slot.min(attached.len() - 1)].c;
-        // Accept with r_i / b_i = exp(a|y-c|) / (exp(a(y_hi-c)) + exp(a(c-y_lo))).
-        let r = (self.a * (y - c).abs()).exp();
-        let b = (self.a * (self.y_hi - c)).exp() + (self.a * (c - self.y_lo)).exp();
-        (rng.uniform() * b < r).then_some(slot.min(attached.len() - 1))
+        let slot = if u < m { self.tree.find(0, u / self.e_hi) } else { self.tree.find(1, (u - m) / self.e_lo) };
+        let slot = slot.min(attached.len() - 1);
+        // The junction is read only if the candidate is accepted: start loading it now.
+        super::pick::prefetch(&attached[slot]);
+        // Accept with r_i / b_i = exp(a|y-c|) / (exp(a(y_hi-c)) + exp(a(c-y_lo))), from the
+        // leaf weights [exp(-a c), exp(a c)] just read by the descent (no access to the
+        // junction, one exponential): exp(a(y-c)) = exp(a y) w0, exp(a(c-y)) = w1 / exp(a y).
+        // All factors stay finite: |a y| <= FRAME_EXPONENT_LIMIT and |a c| <= EXPONENT_CAP.
+        let w = self.tree.get(slot);
+        let ey = (self.a * y).exp();
+        let r = (ey * w[0]).max(w[1] / ey);
+        let b = self.e_hi * w[0] + self.e_lo * w[1];
+        (rng.uniform() * b < r).then_some(slot)
     }
     fn rebuild(&mut self, attached: &[Attached]) -> Vec<usize> {
         let over: Vec<usize> = (0..attached.len()).filter(|&s| self.a * attached[s].c.abs() > EXPONENT_CAP).collect();

@@ -282,7 +282,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
     fn refresh_clocks(&mut self, fired: Option<usize>) {
         let strong_rate = if B::IS_WEAK { 0.0 } else { self.bond.k_off(0.0) * self.bags.n_attached() as f64 };
         let rates = [self.formation.kon0 * self.bags.n_detached() as f64, strong_rate];
-        self.channels.set_rates(self.tau, &rates, fired, &mut self.rng);
+        self.channels.set_rates(self.tau, rates, fired, &mut self.rng);
     }
 
     fn emit<O: Observer>(&self, obs: &mut O, kind: EventKind, id: u32, x: f64) {
