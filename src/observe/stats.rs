@@ -25,8 +25,9 @@ impl Moments {
         }
         let total = self.weight + w;
         let delta = m - self.mean;
-        self.mean += delta * (w / total);
-        self.m2 += m2 + delta * delta * (self.weight * w / total);
+        let share = w / total;
+        self.mean += delta * share;
+        self.m2 += m2 + delta * delta * (self.weight * share);
         self.weight = total;
     }
     /// Time-weighted standard deviation.

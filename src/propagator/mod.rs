@@ -444,7 +444,8 @@ impl Trajectory {
     /// bound of the remainder is below `2^-56` of `sum n |t_n|` (`n >= 2`): the next two terms
     /// are bounded by the recurrence in absolute values (`c1`, `c2`), and since `A <= 2 rho tau
     /// <= 2` and `B <= (rho tau)^2 <= 1`, every later term is at most `0.27` times the larger of
-    /// the two before it, so the weighted remainder is below `4 (n + 2) (c1 + c2)`. The same
+    /// the two before it, so the weighted remainder is below `4 (n + 3) (c1 + c2)`, `n` the
+    /// last term computed (docs/propagator.md). The
     /// arithmetic runs with and without `KEEP`, so `u, u'` agree bit for bit.
     #[inline(always)]
     fn taylor<const KEEP: bool>(&self, tau: f64, ser: &mut Series) -> (f64, f64, f64) {

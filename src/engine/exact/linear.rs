@@ -184,18 +184,19 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
             let p = &self.plate;
             // Lag w.r.t. the driver: lag(s) = lag0 + (y(s) - y0 - V s).
             let lag0 = self.frame.lag(pc.y0, pc.tau0);
+            let inv_h = 1.0 / h;
             let w1 = ints.i1 - 0.5 * p.v * h * h;
-            let mean_lag = lag0 + w1 / h;
-            let m2 = (ints.i2 - w1 * w1 / h).max(0.0);
+            let mean_lag = lag0 + w1 * inv_h;
+            let m2 = (ints.i2 - w1 * w1 * inv_h).max(0.0);
             let n_att = self.bags.n_attached();
-            let bond = self.kappa * (n_att as f64 * (pc.y0 + ints.i1 / h) - self.bags.anchor_sum());
+            let bond = self.kappa * (n_att as f64 * (pc.y0 + ints.i1 * inv_h) - self.bags.anchor_sum());
             obs.segment(&Segment {
                 t0: self.frame.time(pc.tau0),
                 t1: self.frame.time(tau1),
                 friction: -p.k * mean_lag,
                 friction_m2: p.k * p.k * m2,
                 bond_force: bond,
-                viscous: p.eta * (y1 - pc.y0) / h,
+                viscous: p.eta * (y1 - pc.y0) * inv_h,
                 attached: n_att as u64,
             });
         }
@@ -264,6 +265,7 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
     }
 
     /// Re-bases the frame if positions or times have grown (amortised O(1) per event).
+    #[inline]
     fn maybe_rebase<O: Observer>(&mut self, obs: &mut O) {
         let (ya, ta) = (self.y.abs(), self.tau.abs());
         if ya <= SOFT_Y && ta <= SOFT_TAU && !self.rupture.needs_rebase(self.y, self.tau) {
