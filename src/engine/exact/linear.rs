@@ -268,9 +268,6 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
     #[inline]
     fn maybe_rebase<O: Observer>(&mut self, obs: &mut O) {
         let (ya, ta) = (self.y.abs(), self.tau.abs());
-        if ya <= SOFT_Y && ta <= SOFT_TAU && !self.rupture.needs_rebase(self.y, self.tau) {
-            return;
-        }
         let hard = ya > HARD_Y || ta > HARD_TAU || self.rupture.needs_rebase(self.y, self.tau);
         let soft = (ya > SOFT_Y || ta > SOFT_TAU) && self.events_since_rebase >= (self.n as u64 / 4).max(1);
         if !(hard || soft) {
