@@ -30,7 +30,7 @@ pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
 }
 
 pub(crate) fn resume(args: &ResumeArgs) -> ExitCode {
-    let opts = RunOptions { checkpoint_every: args.checkpoint_every, progress: true };
+    let opts = RunOptions { checkpoint_every: args.checkpoint_every, progress: true, stop: None };
     // A directory that cannot be written is reported before anything else is done.
     if args.dir.is_dir() {
         if let Err(m) = prepare_out_dir(&args.dir) {

@@ -72,7 +72,7 @@ pub(crate) fn run(
     if let Some(w) = crate::stability::warning(&scene) {
         eprintln!("{w}");
     }
-    let opts = RunOptions { checkpoint_every, progress: true };
+    let opts = RunOptions { checkpoint_every, progress: true, stop: None };
     match run_scene_with(&scene, Some(&out), &opts).and_then(|s| draw_plot(&scene, &out).map(|()| s)) {
         Ok(s) => {
             print_summary(&s, &out);

@@ -49,7 +49,7 @@ pub struct Plan {
 }
 
 /// How attached junctions rupture.
-pub trait RuptureModel: Clone + std::fmt::Debug + Serialize + DeserializeOwned {
+pub trait RuptureModel: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static {
     /// `true` for force-dependent rates.
     const WEAK: bool;
     /// A junction was attached into `slot` with anchor `c`. Returns `false` when its rate

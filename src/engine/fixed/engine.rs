@@ -30,8 +30,8 @@ pub trait Rupture: Bond + Serialize + DeserializeOwned {}
 impl<T: Bond + Serialize + DeserializeOwned> Rupture for T {}
 
 /// A uniform generator the engine can be built with (and checkpointed).
-pub trait Generator: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned {}
-impl<T: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned> Generator for T {}
+pub trait Generator: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static {}
+impl<T: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static> Generator for T {}
 
 /// Magnitude beyond which the plate is declared diverged.
 pub const DIVERGENCE_LIMIT: f64 = 1e100;
