@@ -1,5 +1,4 @@
-//! The fixed-step engine's state and its step (MODEL.md, "The fixed-step compatibility
-//! scheme"; docs/engines.md, "The fixed-step engine").
+//! The fixed-step engine's state and its step (docs/engines.md, "The fixed-step engine").
 //!
 //! State is stored as structure of arrays (`q: Vec<u8>`, `x: Vec<f64>`). Step `n`'s
 //! junction update (4) is not applied at the end of step `n` but recorded as a pending
