@@ -218,7 +218,7 @@ mod tests {
     #[test]
     fn a_recorder_keeps_everything_in_order_until_cleared() {
         let mut r = Recorder::new();
-        assert!(<Recorder as Observer>::EVENTS, "engines must report events to a recorder");
+        const { assert!(<Recorder as Observer>::EVENTS, "engines must report events to a recorder") };
         let e = |t| JunctionEvent { t, junction: 3, kind: EventKind::Rupture, extension: 0.5, tension: 0.1 };
         let seg = |t0| Segment { t0, t1: t0 + 1.0, ..Default::default() };
         let s = Sample { t: 2.0, x: 1.0, v: 0.5, friction: 3.0, bond_force: 2.0, attached: 4, n: 8 };

@@ -3,7 +3,7 @@
 //! the summary.
 //!
 //! - [`grid`]: the output grid and a walk along it;
-//! - [`drive`]: THE loop, [`drive_walk`], which returns why it stopped ([`Termination`]:
+//! - [`mod@drive`]: THE loop, [`drive_walk`], which returns why it stopped ([`Termination`]:
 //!   the end, or a request on a [`StopFlag`]) with the final state and counters;
 //! - [`observers`]: the core observers, the writers and the event observers of a run;
 //! - [`control`]: what a run does at grid stops (progress, flushes, checkpoints);
@@ -11,7 +11,7 @@
 //! - [`checkpoint`]: checkpoints and [`resume`]; [`progress`]: progress on stderr;
 //! - [`simulation`]: [`Simulation`], an engine whose type is chosen from the scene behind
 //!   one handle; [`record`](mod@record): [`record()`], everything a run reports, in memory;
-//! - [`error`]: [`RunError`].
+//! - [`mod@error`]: why a run failed ([`RunError`]).
 //!
 //! Long runs (docs/runs.md): outputs are streamed to `NAME.part` and flushed at line
 //! boundaries at least every [`FLUSH_EVERY`]; with [`RunOptions::checkpoint_every`] the

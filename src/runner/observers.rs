@@ -1,6 +1,6 @@
 //! The observers of a run: the core observers every run has, the writers (`trace.csv` and
 //! `events.csv` are observers that write), the event observers chosen once per run, and
-//! [`RunObservers`], all of them together.
+//! `RunObservers`, all of them together.
 
 use std::path::Path;
 
