@@ -4,8 +4,9 @@
 //!
 //! The engine's type is erased at the call boundary only: each [`Simulation::advance`] or
 //! [`Simulation::drive`] is one virtual call into code monomorphised for the engine and
-//! the observers ([`Observed`] is matched once per call), so the event loop inside is the
-//! same machine code a run executes.
+//! the observers ([`Observed`] is matched once per call), so the event loop inside is
+//! compiled as for a direct call on an engine behind a pointer (instruction counts and
+//! timings: docs/performance.md, "The Simulation handle").
 
 use std::any::type_name;
 
