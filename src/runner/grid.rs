@@ -141,11 +141,6 @@ impl Walk {
         self.position
     }
 
-    /// The grid walked.
-    pub fn grid(&self) -> &OutputGrid {
-        &self.stops.grid
-    }
-
     /// The next stop, without moving.
     pub fn peek(&mut self) -> Option<Stop> {
         *self.next.get_or_insert_with(|| self.stops.next())

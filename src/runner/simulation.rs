@@ -264,6 +264,7 @@ mod tests {
             let (direct, sample, counters, ty, dt) = with_engine(&scene, Direct(&stops)).unwrap();
             let mut sim = Simulation::new(&scene).unwrap();
             assert_eq!((sim.engine_type(), sim.kind(), sim.time_step()), (ty, scene.run.engine, dt));
+            assert_eq!(*sim.grid(), OutputGrid::new(&scene, dt));
             assert_eq!(sim.time(), 0.0);
             let mut rec = Recorder::default();
             for &t in &stops {
@@ -275,6 +276,20 @@ mod tests {
             assert_eq!(seen(&rec), direct, "{overrides:?}");
             assert_eq!((sim.sample(), sim.counters()), (sample, counters), "{overrides:?}");
         }
+    }
+
+    /// A handle can be moved to another thread (a binding's worker, a Python thread).
+    #[test]
+    fn a_simulation_is_send() {
+        fn send<T: Send>(_: &T) {}
+        let sim = Simulation::new(&fig1_with(&[])).unwrap();
+        send(&sim);
+        let t = std::thread::spawn(move || {
+            let mut sim = sim;
+            sim.advance(3.0).unwrap();
+            sim.time()
+        });
+        assert_eq!(t.join().unwrap(), 3.0);
     }
 
     #[test]
