@@ -1,5 +1,5 @@
-//! Statistical tests of the exact engine against exact results (MODEL.md, "Useful exact
-//! facts"). Fixed seeds; every tolerance is a critical value at level `ALPHA`.
+//! Statistical tests of the exact engine against exact results (docs/model.md, "Exact
+//! facts used as checks"). Fixed seeds; every tolerance is a critical value at level `ALPHA`.
 //! Run with `cargo test --release --test exact_stats`.
 
 mod common;

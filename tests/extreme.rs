@@ -182,10 +182,10 @@ fn stiff_plates_tend_to_the_overdamped_limit() {
     }
 }
 
-/// Driving spring `K = 1e9`: the plate moves at exactly `V`, where the exact fact of
-/// MODEL.md holds: mean bond force per junction `kappa n* (V/k0)(1 + kon/lambda)` (strong
-/// bonds, linear law, residual re-attachment; `kon = kon0` below `V0`). Replicas over seeds
-/// give a Student-t interval.
+/// Driving spring `K = 1e9`: the plate moves at exactly `V`, where an exact fact holds
+/// (docs/model.md, "Exact facts used as checks", item 5): mean bond force per junction
+/// `kappa n* (V/k0)(1 + kon/lambda)` (strong bonds, linear law, residual re-attachment;
+/// `kon = kon0` below `V0`). Replicas over seeds give a Student-t interval.
 #[test]
 fn stiff_driving_spring_gives_the_constant_velocity_bond_force() {
     let (kappa, k0, kon0, lambda, v) = (0.1, 0.1, 0.1, 0.1, 0.2);
@@ -497,9 +497,9 @@ fn relaxation_rates_zero_and_1e9() {
 
 /// Weak bonds whose rate `k0 exp(beta f dx)` overflows at any tension (`dx = 1e300`,
 /// `temperature = 1e-300`, `kappa = 1e300`, and `a = beta dx kappa = inf`): every
-/// junction ruptures as soon as it is stretched (MODEL.md item 6), so no bond force is
-/// carried and the friction is the viscous `eta V` of a free plate. Formation is
-/// unaffected (30 per time unit), so the engine must stay fast and finite.
+/// junction ruptures as soon as it is stretched (docs/model.md, "Equations", item 6), so no
+/// bond force is carried and the friction is the viscous `eta V` of a free plate. Formation
+/// is unaffected (30 per time unit), so the engine must stay fast and finite.
 #[test]
 fn overflowing_weak_bonds_rupture_at_once() {
     let cases: &[(&str, &[&str])] = &[

@@ -1,6 +1,7 @@
-//! The fixed-step engine against the scheme of MODEL.md: hand-computed flips, an eager
-//! reference implementation (bit for bit), chain invariants over many seeds and every option
-//! combination, step/stop semantics, the window force balance, determinism and divergence.
+//! The fixed-step engine against its scheme (docs/engines.md, "The fixed-step engine"):
+//! hand-computed flips, an eager reference implementation (bit for bit), chain invariants
+//! over many seeds and every option combination, step/stop semantics, the window force
+//! balance, determinism and divergence.
 
 mod fixed_common;
 
@@ -68,7 +69,8 @@ fn park_miller_draws_reproduce_hand_computed_flips() {
 }
 
 // ---------------------------------------------------------------------------------------
-// An eager, unoptimised reference implementation of MODEL.md's scheme.
+// An eager, unoptimised reference implementation of the scheme (docs/engines.md, "One step,
+// from `t_n` to `t_{n+1} = (n + 1) dt`").
 
 struct Reference {
     s: Scene,

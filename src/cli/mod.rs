@@ -1,12 +1,15 @@
 //! The command line: `stickslip run`, `stickslip resume`, `stickslip validate`, `stickslip compare`.
 //!
 //! Exit codes: 0 success; 1 the run failed (numerical trouble, a write that failed
-//! mid-run); 2 bad input (command line, scene file, `--set`, output directory).
+//! mid-run, a report that could not be written to standard output); 2 bad input (command
+//! line, scene file, `--set`, output directory). A closed pipe on standard output ends the
+//! process by `SIGPIPE`, quietly ([`stdout`]).
 
 mod compare;
 mod resume;
 mod run;
 mod stability;
+pub mod stdout;
 mod sweep;
 mod validate;
 
@@ -106,17 +109,18 @@ fn clap_one_line(e: &clap::Error) -> String {
     if line.is_empty() { "invalid arguments (try --help)".to_string() } else { line.to_string() }
 }
 
-/// Entry point of the binary.
+/// Entry point of the binary. Restores the default action of `SIGPIPE` ([`stdout`]).
 pub fn main() -> ExitCode {
+    stdout::restore_sigpipe();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
+        Err(e) if e.use_stderr() => return fail(EXIT_BAD_INPUT, clap_one_line(&e)),
+        // --help, --version: clap's text on stdout.
         Err(e) => {
-            let code = if e.use_stderr() { EXIT_BAD_INPUT } else { 0 };
-            if code == 0 {
-                let _ = e.print();
-                return ExitCode::SUCCESS;
-            }
-            return fail(code, clap_one_line(&e));
+            return match e.print() {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(err) => stdout::write_failed(&err),
+            };
         }
     };
     match cli.command {

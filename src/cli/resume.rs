@@ -4,7 +4,8 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use super::run::{draw_plot, prepare_out_dir, print_summary};
+use super::run::{draw_plot, prepare_out_dir, summary_lines};
+use super::stdout::emit;
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, fail};
 use crate::runner::{self, Resumed, RunOptions};
 
@@ -30,7 +31,7 @@ pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
 }
 
 pub(crate) fn resume(args: &ResumeArgs) -> ExitCode {
-    let opts = RunOptions { checkpoint_every: args.checkpoint_every, progress: true };
+    let opts = RunOptions { checkpoint_every: args.checkpoint_every, progress: true, stop: None };
     // A directory that cannot be written is reported before anything else is done.
     if args.dir.is_dir() {
         if let Err(m) = prepare_out_dir(&args.dir) {
@@ -38,20 +39,15 @@ pub(crate) fn resume(args: &ResumeArgs) -> ExitCode {
         }
     }
     match runner::resume(&args.dir, &opts) {
-        Ok(Resumed::Finished) => {
-            println!(
-                "the run in {} is finished (summary.json is there, no checkpoint is left): nothing to resume",
-                args.dir.display()
-            );
-            ExitCode::SUCCESS
-        }
+        Ok(Resumed::Finished) => emit(&format!(
+            "the run in {} is finished (summary.json is there, no checkpoint is left): nothing to resume\n",
+            args.dir.display()
+        )),
         Ok(Resumed::Completed { from_t, summary }) => {
             if let Err(e) = draw_plot(&summary.parameters, &args.dir) {
                 return fail(EXIT_RUN_FAILED, e);
             }
-            println!("resumed from the checkpoint at t = {from_t}");
-            print_summary(&summary, &args.dir);
-            ExitCode::SUCCESS
+            emit(&format!("resumed from the checkpoint at t = {from_t}\n{}", summary_lines(&summary, &args.dir)))
         }
         Err(e) if e.is_bad_input() => fail(EXIT_BAD_INPUT, e),
         Err(e) => fail(EXIT_RUN_FAILED, e),

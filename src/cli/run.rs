@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use super::stdout::emit;
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, EngineArg, SceneArgs, fail};
 use crate::output::Summary;
 use crate::runner::{RunOptions, run_scene_with};
@@ -72,12 +73,9 @@ pub(crate) fn run(
     if let Some(w) = crate::stability::warning(&scene) {
         eprintln!("{w}");
     }
-    let opts = RunOptions { checkpoint_every, progress: true };
+    let opts = RunOptions { checkpoint_every, progress: true, stop: None };
     match run_scene_with(&scene, Some(&out), &opts).and_then(|s| draw_plot(&scene, &out).map(|()| s)) {
-        Ok(s) => {
-            print_summary(&s, &out);
-            ExitCode::SUCCESS
-        }
+        Ok(s) => emit(&summary_lines(&s, &out)),
         Err(e) => {
             // A failed run leaves no empty output directory behind.
             remove_if_empty(&created);
@@ -97,29 +95,32 @@ pub(crate) fn draw_plot(scene: &Scene, out: &Path) -> Result<(), crate::runner::
 }
 
 /// The four summary lines `run` and `resume` print.
-pub(crate) fn print_summary(s: &Summary, out: &Path) {
-    let per = s.friction_per_junction;
-    println!("scene {} ({} engine, seed {}, N = {}, t_end = {})", s.scene, s.engine_name(), s.seed, s.n, s.t_end);
-    println!(
-        "friction per junction {:.6} (std of total {:.6}) over [{}, {}]",
-        per, s.friction_std, s.t_warmup, s.t_end
-    );
-    println!(
-        "attached fraction {:.4}; regime {} ({} stick-slip cycles)",
-        s.attached_fraction_mean,
-        s.regime.as_str(),
-        s.stick_slip_cycles
-    );
+pub(crate) fn summary_lines(s: &Summary, out: &Path) -> String {
     let work = match (s.counters.steps, s.counters.events) {
         (Some(n), _) => format!("{n} steps"),
         (_, Some(n)) => format!("{n} events"),
         _ => String::new(),
     };
-    println!(
-        "{work}, {} ruptures, {} formations in {:.3} s; output in {}",
+    format!(
+        "scene {} ({} engine, seed {}, N = {}, t_end = {})\n\
+         friction per junction {:.6} (std of total {:.6}) over [{}, {}]\n\
+         attached fraction {:.4}; regime {} ({} stick-slip cycles)\n\
+         {work}, {} ruptures, {} formations in {:.3} s; output in {}\n",
+        s.scene,
+        s.engine_name(),
+        s.seed,
+        s.n,
+        s.t_end,
+        s.friction_per_junction,
+        s.friction_std,
+        s.t_warmup,
+        s.t_end,
+        s.attached_fraction_mean,
+        s.regime.as_str(),
+        s.stick_slip_cycles,
         s.counters.ruptures,
         s.counters.formations,
         s.wall_seconds,
         out.display()
-    );
+    )
 }

@@ -5,12 +5,12 @@ use std::process::ExitCode;
 
 use super::SceneArgs;
 use super::run::load_scene;
+use super::stdout::emit;
 
 pub(crate) fn stability(args: &SceneArgs) -> ExitCode {
     let scene = match load_scene(args, &[]) {
         Ok(s) => s,
         Err(code) => return code,
     };
-    print!("{}", crate::stability::analyse(&scene).table(&scene.name));
-    ExitCode::SUCCESS
+    emit(&crate::stability::analyse(&scene).table(&scene.name))
 }

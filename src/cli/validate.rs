@@ -1,29 +1,33 @@
 //! `stickslip validate`: checks a scene and prints every resolved parameter.
 
+use std::fmt::Write as _;
 use std::process::ExitCode;
 
 use super::SceneArgs;
 use super::run::load_scene;
+use super::stdout::emit;
 
 pub(crate) fn validate(args: &SceneArgs) -> ExitCode {
     let scene = match load_scene(args, &[]) {
         Ok(s) => s,
         Err(code) => return code,
     };
-    let text = toml::to_string(&scene.to_file()).expect("a scene always serializes");
-    println!("# scene {} is valid; resolved parameters:", scene.name);
-    print!("{text}");
+    let toml = toml::to_string(&scene.to_file()).expect("a scene always serializes");
+    let mut text = String::new();
+    // Writing to a String cannot fail.
+    let _ = writeln!(text, "# scene {} is valid; resolved parameters:", scene.name);
+    text.push_str(&toml);
     let j = &scene.junctions;
     let p = &scene.plate;
-    println!("# derived: V0 = alpha/tau0 = {}, beta dx = {}", j.v0(), j.beta_dx());
+    let _ = writeln!(text, "# derived: V0 = alpha/tau0 = {}, beta dx = {}", j.v0(), j.beta_dx());
     if p.mass > 0.0 {
         let k_tot = p.k;
         let omega = (k_tot / p.mass).sqrt();
         let zeta = if k_tot > 0.0 { p.eta / (2.0 * (k_tot * p.mass).sqrt()) } else { f64::INFINITY };
-        println!("# plate (no junctions attached): omega = sqrt(K/M) = {omega}, damping ratio = {zeta}");
+        let _ = writeln!(text, "# plate (no junctions attached): omega = sqrt(K/M) = {omega}, damping ratio = {zeta}");
     }
     for line in crate::stability::analyse(&scene).validate_block(scene.run.engine) {
-        println!("{line}");
+        let _ = writeln!(text, "{line}");
     }
-    ExitCode::SUCCESS
+    emit(&text)
 }

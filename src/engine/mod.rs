@@ -61,8 +61,9 @@ pub enum EngineError {
     Unsupported { engine: &'static str, reason: &'static str },
 }
 
-/// A method that advances a scene in time.
-pub trait Engine: Serialize + DeserializeOwned {
+/// A method that advances a scene in time. (`Send + 'static`: an engine can be kept behind a
+/// `runner::Simulation` handle.)
+pub trait Engine: Serialize + DeserializeOwned + Send + 'static {
     /// Which engine this is.
     const KIND: EngineKind;
     /// Current time.

@@ -171,12 +171,31 @@ impl<A: Observer + ?Sized> Observer for &mut A {
     }
 }
 
-/// Collects everything in memory (for tests).
-#[derive(Clone, Debug, Default)]
+/// Collects everything an engine reports, in memory and in order: the public way to look
+/// at a trajectory (`runner::record` runs a whole scene into one; `runner::Simulation`
+/// feeds one advance by advance). It wants events, so engines report them to it. Memory
+/// grows with the run: one entry per event, segment and sample.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Recorder {
+    /// Junction events, in the order they happened.
     pub events: Vec<JunctionEvent>,
+    /// Segments, tiling the time advanced over.
     pub segments: Vec<Segment>,
+    /// Samples fed by the runner (or pushed by the caller).
     pub samples: Vec<Sample>,
+}
+
+impl Recorder {
+    /// An empty recorder.
+    pub fn new() -> Self {
+        Recorder::default()
+    }
+    /// Forgets everything recorded (keeping the memory).
+    pub fn clear(&mut self) {
+        self.events.clear();
+        self.segments.clear();
+        self.samples.clear();
+    }
 }
 
 impl Observer for Recorder {
@@ -189,5 +208,29 @@ impl Observer for Recorder {
     }
     fn sample(&mut self, s: &Sample) {
         self.samples.push(*s);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_recorder_keeps_everything_in_order_until_cleared() {
+        let mut r = Recorder::new();
+        const { assert!(<Recorder as Observer>::EVENTS, "engines must report events to a recorder") };
+        let e = |t| JunctionEvent { t, junction: 3, kind: EventKind::Rupture, extension: 0.5, tension: 0.1 };
+        let seg = |t0| Segment { t0, t1: t0 + 1.0, ..Default::default() };
+        let s = Sample { t: 2.0, x: 1.0, v: 0.5, friction: 3.0, bond_force: 2.0, attached: 4, n: 8 };
+        r.event(&e(0.5));
+        r.segment(&seg(0.0));
+        r.event(&e(1.5));
+        r.segment(&seg(1.0));
+        r.sample(&s);
+        assert_eq!(r.events, [e(0.5), e(1.5)]);
+        assert_eq!(r.segments, [seg(0.0), seg(1.0)]);
+        assert_eq!(r.samples, [s]);
+        r.clear();
+        assert_eq!(r, Recorder::default());
     }
 }

@@ -1,4 +1,4 @@
-//! Junction force laws (MODEL.md item 3). Pure functions of the extension `x`.
+//! Junction force laws (docs/model.md, "Equations", item 3). Pure functions of the extension `x`.
 
 use serde::{Deserialize, Serialize};
 

@@ -1,4 +1,4 @@
-//! The plate's equation of motion (MODEL.md item 1):
+//! The plate's equation of motion (docs/model.md, "Equations", item 1):
 //! `M Xdd + eta Xd + F_b + K (X - V t) = 0`.
 
 use serde::{Deserialize, Serialize};

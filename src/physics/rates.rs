@@ -1,4 +1,4 @@
-//! Rupture and formation rates (MODEL.md items 6 and 7). Pure functions.
+//! Rupture and formation rates (docs/model.md, "Equations", items 6 and 7). Pure functions.
 
 use serde::{Deserialize, Serialize};
 

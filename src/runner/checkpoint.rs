@@ -20,7 +20,10 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::{Ctx, Extra, GridPosition, Observers, RunError, RunOptions, Start, output_error, run_extra};
+use super::error::{RunError, output_error};
+use super::grid::GridPosition;
+use super::observers::{EventObservers, RunObservers, Writers};
+use super::run::{RunOptions, RunPlan, RunStart, run_from};
 use crate::engine::{Engine, EngineVisitor, with_engine};
 use crate::observe::regime::RegimeDetector;
 use crate::observe::stats::{RuptureForces, WindowStats};
@@ -88,30 +91,23 @@ fn remove_files(dir: &Path, names: &[String]) -> Result<(), RunError> {
 
 /// Writes a checkpoint of the run into `dir`: the outputs are flushed and synced first,
 /// so the checkpoint never refers to bytes that are not on disk.
-pub(super) fn save<E: Engine, X: Extra>(
+pub(super) fn save<E: Engine, X: EventObservers>(
     dir: &Path,
-    ctx: &Ctx,
+    plan: &RunPlan,
     engine: &E,
-    obs: &mut Observers<X>,
+    obs: &mut RunObservers<X>,
     pos: &GridPosition,
     wall_seconds: f64,
     checkpoints: u64,
 ) -> Result<u64, RunError> {
-    let ((stats, regime), (trace, (extra, _))) = obs;
-    let trace = match trace {
-        Some(t) => Some(t.0.position().map_err(output_error(dir, TraceWriter::NAME))?),
-        None => None,
-    };
-    let events = match extra.events() {
-        Some(ev) => Some(ev.0.position().map_err(output_error(dir, EventWriter::NAME))?),
-        None => None,
-    };
+    let (trace, events) = obs.file_positions(dir)?;
+    let (stats, regime) = &obs.core;
     let header = Header {
         program: PROGRAM.to_string(),
         program_version: env!("CARGO_PKG_VERSION").to_string(),
         engine_type: type_name::<E>().to_string(),
-        checkpoint_every: ctx.opts.checkpoint_every.unwrap_or(f64::INFINITY),
-        scene: ctx.scene.clone(),
+        checkpoint_every: plan.opts.checkpoint_every.unwrap_or(f64::INFINITY),
+        scene: plan.scene.clone(),
         runner: RunnerState {
             t: engine.time(),
             grid: *pos,
@@ -119,7 +115,7 @@ pub(super) fn save<E: Engine, X: Extra>(
             checkpoints,
             stats: stats.clone(),
             regime: regime.clone(),
-            ruptures: extra.rupture_forces().cloned(),
+            ruptures: obs.events.rupture_forces().cloned(),
             trace,
             events,
         },
@@ -199,23 +195,24 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<Resumed, ResumeError> {
         return Err(incompatible("its scene changes when validated again".to_string()));
     }
     let every = opts.checkpoint_every.or(Some(h.checkpoint_every).filter(|s| s.is_finite() && *s > 0.0));
-    let opts = RunOptions { checkpoint_every: every, ..*opts };
-    let visitor = ResumeVisitor { ctx: Ctx { scene: &scene, out: Some(dir), opts }, loaded: &loaded };
+    let opts = RunOptions { checkpoint_every: every, ..opts.clone() };
+    let visitor = ResumedRun { plan: RunPlan { scene: &scene, out: Some(dir), opts: &opts }, loaded: &loaded };
     let summary = with_engine(&scene, visitor).map_err(RunError::from)??;
     Ok(Resumed::Completed { from_t: loaded.header.runner.t, summary: Box::new(summary) })
 }
 
-struct ResumeVisitor<'a> {
-    ctx: Ctx<'a>,
+/// A run continued from a checkpoint, once the engine type is known.
+struct ResumedRun<'a> {
+    plan: RunPlan<'a>,
     loaded: &'a Loaded<Header>,
 }
 
-impl EngineVisitor for ResumeVisitor<'_> {
+impl EngineVisitor for ResumedRun<'_> {
     type Output = Result<Summary, ResumeError>;
 
     fn visit<E: Engine>(self, fresh: E) -> Self::Output {
-        let (ctx, loaded) = (&self.ctx, self.loaded);
-        let (scene, dir) = (ctx.scene, ctx.out.expect("resume has a directory"));
+        let (plan, loaded) = (&self.plan, self.loaded);
+        let (scene, dir) = (plan.scene, plan.out.expect("resume has a directory"));
         let (h, r) = (&loaded.header, &loaded.header.runner);
         let incompatible = |reason: String| ResumeError::Incompatible { path: loaded.path.clone(), reason };
         if h.engine_type != type_name::<E>() {
@@ -245,30 +242,16 @@ impl EngineVisitor for ResumeVisitor<'_> {
                     .map_err(|source| ResumeError::Outputs { path: loaded.path.clone(), source })?;
             }
         }
-        let reopen = |name: &str, pos: &FilePos| CsvFile::resume(dir, name, pos).map_err(output_error(dir, name));
-        let trace = match &r.trace {
-            Some(p) => Some(TraceWriter(reopen(TraceWriter::NAME, p)?)),
-            None => None,
-        };
-        let events = match &r.events {
-            Some(p) => match reopen(EventWriter::NAME, p) {
-                Ok(f) => Some(EventWriter(f)),
-                Err(e) => {
-                    drop(trace);
-                    return Err(e.into());
-                }
-            },
-            None => None,
-        };
-        let start = Start {
-            pos: r.grid,
+        let start = RunStart {
+            position: r.grid,
             core: (r.stats.clone(), r.regime.clone()),
-            trace,
+            writers: Writers::reopen(dir, r.trace.as_ref(), r.events.as_ref())?,
+            ruptures: r.ruptures.clone(),
             wall_seconds: r.wall_seconds,
             checkpoints: r.checkpoints,
             checkpoint_t: Some(r.t),
         };
-        Ok(run_extra(engine, ctx, events, r.ruptures.clone(), start)?)
+        Ok(run_from(engine, plan, start)?)
     }
 }
 
@@ -276,7 +259,7 @@ impl EngineVisitor for ResumeVisitor<'_> {
 mod tests {
     use super::*;
     use crate::observe::Recorder;
-    use crate::runner::{OutputGrid, drive_from};
+    use crate::runner::{OutputGrid, drive_walk};
     use crate::testkit::fig1_with;
 
     /// Everything a recorder saw, with every bit of every number.
@@ -376,19 +359,20 @@ mod tests {
         fn visit<E: Engine>(self, e: E) -> usize {
             let grid = OutputGrid::new(self.0, e.time_step());
             let mut whole = e;
-            let (mut rec, mut pos) = (Recorder::default(), GridPosition::default());
+            let (mut rec, mut walk) = (Recorder::default(), grid.walk_from(GridPosition::default()));
             let mut copies = Vec::new();
-            drive_from(&mut whole, &grid, &mut rec, &mut pos, |e, r, p| {
+            drive_walk(&mut whole, &mut walk, &mut rec, None, |e, r, p| {
                 let copy: E = rmp_serde::from_slice(&state_bytes(e)).unwrap();
                 copies.push((copy, r.clone(), *p));
-                Ok(())
+                Ok::<(), RunError>(())
             })
             .unwrap();
             let n = copies.len();
-            for (mut e, mut r, mut p) in copies {
-                drive_from(&mut e, &grid, &mut r, &mut p, |_, _, _| Ok(())).unwrap();
+            for (mut e, mut r, p) in copies {
+                let mut w = grid.walk_from(p);
+                drive_walk(&mut e, &mut w, &mut r, None, |_, _, _| Ok::<(), RunError>(())).unwrap();
                 assert_eq!(seen(&r), seen(&rec));
-                assert_eq!(p, pos);
+                assert_eq!(w.position(), walk.position());
             }
             n
         }

@@ -7,7 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Bond kind, MODEL.md item 6.
+/// Bond kind (docs/model.md, "Equations", item 6).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum BondKind {
@@ -17,7 +17,7 @@ pub enum BondKind {
     Weak,
 }
 
-/// Junction force law, MODEL.md item 3.
+/// Junction force law (docs/model.md, "Equations", item 3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ForceLawKind {
@@ -27,7 +27,7 @@ pub enum ForceLawKind {
     Linear,
 }
 
-/// What a junction's extension is when it re-forms, MODEL.md item 4.
+/// What a junction's extension is when it re-forms (docs/model.md, "Equations", item 4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Reattach {
@@ -69,7 +69,7 @@ pub enum RngKind {
     Pcg,
 }
 
-/// Flip rule of the fixed-step engine (MODEL.md, fixed-step scheme, step 1).
+/// Flip rule of the fixed-step engine (docs/engines.md, "The fixed-step engine", step 1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum FlipRule {

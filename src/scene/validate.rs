@@ -131,7 +131,7 @@ impl SceneFile {
             }
             // The relaxation step `x *= 1 - lambda dt` of detached junctions amplifies their
             // extensions by |1 - lambda dt| > 1 per step beyond this: refused, never run
-            // (docs/stability.md; docs/scenes.md, "Scenes that validate but strain an engine").
+            // (docs/stability.md; docs/scenes.md, "Errors").
             if junctions.lambda * fixed.dt > 2.0 {
                 return Err(SceneError::invalid(
                     "fixed.dt",

@@ -119,7 +119,7 @@ impl<Q: ChannelQueue> Channels<Q> {
 }
 
 /// The queue of pending channel times.
-pub trait ChannelQueue: Clone + std::fmt::Debug + Serialize + DeserializeOwned {
+pub trait ChannelQueue: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static {
     fn new(channels: usize) -> Self;
     /// Sets channel `ch`'s next time.
     fn set(&mut self, ch: usize, time: f64);

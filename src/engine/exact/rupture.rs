@@ -25,7 +25,8 @@ use crate::propagator::Trajectory;
 use crate::rng::{Pcg64, UniformSource};
 
 /// Rates whose exponent `a |x|` exceeds this are treated as infinite: the junction
-/// ruptures at once (MODEL.md item 6: a rate that overflows means immediate rupture).
+/// ruptures at once (docs/model.md, "Equations", item 6: a rate that overflows means
+/// immediate rupture).
 pub const EXPONENT_CAP: f64 = 600.0;
 /// Re-base the coordinates before `a |y|` exceeds this, so weights stay finite.
 pub const FRAME_EXPONENT_LIMIT: f64 = 64.0;
@@ -49,7 +50,7 @@ pub struct Plan {
 }
 
 /// How attached junctions rupture.
-pub trait RuptureModel: Clone + std::fmt::Debug + Serialize + DeserializeOwned {
+pub trait RuptureModel: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static {
     /// `true` for force-dependent rates.
     const WEAK: bool;
     /// A junction was attached into `slot` with anchor `c`. Returns `false` when its rate
@@ -244,8 +245,8 @@ impl RuptureModel for WeakRupture {
         if self.a * (b.1 - b.0) > SPREAD || !rate.is_finite() {
             // Not even HORIZON_MIN resolves the rates (the plate crosses more than 1/a in
             // 1e-300 time units), or the bound overflows: every attached junction's rate
-            // passes k0 e^EXPONENT_CAP within the horizon, so all rupture now (MODEL.md
-            // item 6: a rate that overflows means immediate rupture).
+            // passes k0 e^EXPONENT_CAP within the horizon, so all rupture now (docs/model.md,
+            // "Equations", item 6: a rate that overflows means immediate rupture).
             self.immediate = true;
             self.last_rate = 0.0;
             return Plan { rate: f64::INFINITY, horizon: HORIZON_MIN };

@@ -447,7 +447,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> Engine for ExactTilted<B> {
                     // resolved by moving the time origin here (a new piece; the hazard
                     // level is redrawn, which memorylessness allows). At tau = 0 it is
                     // beyond any resolution: as for an overflowing rate, the rupture is
-                    // immediate (MODEL.md item 6), the junction chosen by its rate now.
+                    // immediate (docs/model.md, "Equations", item 6), the junction chosen by its rate now.
                     let unresolved =
                         matches!(e, OdeError::StepSizeUnderflow { .. } | OdeError::TooManyRejections { .. });
                     if B::IS_WEAK && unresolved && self.bags.n_attached() > 0 {

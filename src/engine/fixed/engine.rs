@@ -1,5 +1,4 @@
-//! The fixed-step engine's state and its step (MODEL.md, "The fixed-step compatibility
-//! scheme"; docs/engines.md, "The fixed-step engine").
+//! The fixed-step engine's state and its step (docs/engines.md, "The fixed-step engine").
 //!
 //! State is stored as structure of arrays (`q: Vec<u8>`, `x: Vec<f64>`). Step `n`'s
 //! junction update (4) is not applied at the end of step `n` but recorded as a pending
@@ -30,8 +29,8 @@ pub trait Rupture: Bond + Serialize + DeserializeOwned {}
 impl<T: Bond + Serialize + DeserializeOwned> Rupture for T {}
 
 /// A uniform generator the engine can be built with (and checkpointed).
-pub trait Generator: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned {}
-impl<T: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned> Generator for T {}
+pub trait Generator: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static {}
+impl<T: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static> Generator for T {}
 
 /// Magnitude beyond which the plate is declared diverged.
 pub const DIVERGENCE_LIMIT: f64 = 1e100;

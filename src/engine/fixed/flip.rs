@@ -1,4 +1,4 @@
-//! Flip rules of the fixed-step scheme (MODEL.md, fixed-step scheme, step 1).
+//! Flip rules of the fixed-step scheme (docs/engines.md, "The fixed-step engine", step 1).
 //!
 //! A junction whose rate is `k` flips in a step of size `dt` when its uniform `xi` in
 //! `(0, 1)` passes a test against `k dt`. Each rule splits the test into a per-rate

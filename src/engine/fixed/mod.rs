@@ -1,5 +1,5 @@
-//! The fixed-step compatibility engine: the letter's eq. 5 scheme (MODEL.md, "The
-//! fixed-step compatibility scheme"; docs/engines.md, "The fixed-step engine").
+//! The fixed-step compatibility engine: the letter's eq. 5 scheme (docs/engines.md, "The
+//! fixed-step engine").
 //!
 //! - [`dispatch`] resolves the scene's options into type parameters once per run;
 //! - [`engine`] holds the state and the step;

@@ -1,0 +1,310 @@
+//! A run from start to end: builds the engine and the observers, drives the engine along
+//! the grid with [`drive_walk`], and finishes (files renamed into place, `summary.json`),
+//! or abandons the outputs when it fails. A resume enters here too, from a checkpoint.
+
+use std::path::Path;
+use std::time::Instant;
+
+use super::checkpoint;
+use super::control::Housekeeping;
+use super::drive::{StopFlag, Termination, drive_walk};
+use super::error::{RunError, output_error};
+use super::grid::{GridPosition, OutputGrid};
+use super::observers::{CoreObservers, EventObservers, RunObservers, Writers, core_observers};
+use super::progress;
+use crate::engine::{Engine, EngineError, EngineVisitor, with_engine};
+use crate::observe::Nothing;
+use crate::observe::stats::RuptureForces;
+use crate::output::Summary;
+use crate::output::atomic::write_whole;
+use crate::scene::{BondKind, Scene};
+
+/// How a run is carried out, beyond its scene. The default (no checkpoints, no progress,
+/// no stop flag) is [`run_scene`]'s.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Write a checkpoint at output-grid stops, at most every this many seconds of wall
+    /// time (> 0). Needs an output directory.
+    pub checkpoint_every: Option<f64>,
+    /// Show progress on stderr when stderr is a terminal and the run lasts more than
+    /// [`progress::SHOW_AFTER`].
+    pub progress: bool,
+    /// Stop at the next grid stop once this flag is set: the run returns
+    /// [`RunError::Stopped`], after writing a checkpoint into the output directory (if it
+    /// has one) from which `stickslip resume` continues it.
+    pub stop: Option<StopFlag>,
+}
+
+/// Runs a scene to its end. With `out = Some(dir)` (an existing, writable directory) the
+/// files the scene asks for and `summary.json` are written there, each whole or not at all.
+pub fn run_scene(scene: &Scene, out: Option<&Path>) -> Result<Summary, RunError> {
+    run_scene_with(scene, out, &RunOptions::default())
+}
+
+/// As [`run_scene`], with checkpoints, progress and a stop flag as `opts` asks. A
+/// checkpoint and partial outputs left in `out` by an earlier, killed run are removed first.
+pub fn run_scene_with(scene: &Scene, out: Option<&Path>, opts: &RunOptions) -> Result<Summary, RunError> {
+    if let Some(dir) = out {
+        checkpoint::remove_stale(dir)?;
+    }
+    with_engine(scene, FreshRun(RunPlan { scene, out, opts }))?
+}
+
+/// What a run is: its scene, where it writes, and how it is carried out.
+#[derive(Clone, Copy)]
+pub(super) struct RunPlan<'a> {
+    pub scene: &'a Scene,
+    pub out: Option<&'a Path>,
+    pub opts: &'a RunOptions,
+}
+
+/// Where a run starts: `t = 0`, or a checkpoint.
+pub(super) struct RunStart {
+    pub position: GridPosition,
+    pub core: CoreObservers,
+    pub writers: Writers,
+    /// Rupture-force statistics so far (weak bonds; `None` starts them afresh).
+    pub ruptures: Option<RuptureForces>,
+    /// Wall time spent before this process.
+    pub wall_seconds: f64,
+    /// Checkpoints written before this process.
+    pub checkpoints: u64,
+    /// Time of the checkpoint the run was resumed from.
+    pub checkpoint_t: Option<f64>,
+}
+
+/// A run from `t = 0`, once the engine type is known.
+struct FreshRun<'a>(RunPlan<'a>);
+
+impl EngineVisitor for FreshRun<'_> {
+    type Output = Result<Summary, RunError>;
+    fn visit<E: Engine>(self, engine: E) -> Self::Output {
+        let plan = self.0;
+        let writers = match plan.out {
+            Some(dir) => Writers::create(plan.scene, dir)?,
+            None => Writers::none(),
+        };
+        let start = RunStart {
+            position: GridPosition::default(),
+            core: core_observers(plan.scene),
+            writers,
+            ruptures: None,
+            wall_seconds: 0.0,
+            checkpoints: 0,
+            checkpoint_t: None,
+        };
+        run_from(engine, &plan, start)
+    }
+}
+
+/// Chooses the event observers (statically: a run that logs no events and has no weak
+/// bonds compiles the event path out of the engine) and runs from `start`.
+pub(super) fn run_from<E: Engine>(engine: E, plan: &RunPlan, mut start: RunStart) -> Result<Summary, RunError> {
+    let run = &plan.scene.run;
+    let weak = plan.scene.junctions.bond == BondKind::Weak;
+    let ruptures = start.ruptures.take().unwrap_or_else(|| RuptureForces::new(run.t_warmup, run.t_end));
+    match (start.writers.events.take(), weak) {
+        (None, false) => run_engine(engine, plan, Nothing, start),
+        (None, true) => run_engine(engine, plan, ruptures, start),
+        (Some(ev), false) => run_engine(engine, plan, ev, start),
+        (Some(ev), true) => run_engine(engine, plan, (ev, ruptures), start),
+    }
+}
+
+/// The engine's work counter: steps (fixed engine) or events (exact engine).
+pub(super) fn work(engine: &impl Engine) -> (u64, &'static str) {
+    let c = engine.counters();
+    match (c.steps, c.events) {
+        (Some(s), _) => (s, "steps"),
+        (None, e) => (e.unwrap_or(0), "events"),
+    }
+}
+
+fn run_engine<E: Engine, X: EventObservers>(
+    mut engine: E,
+    plan: &RunPlan,
+    events: X,
+    start: RunStart,
+) -> Result<Summary, RunError> {
+    let scene = plan.scene;
+    let started = Instant::now();
+    let (work0, unit) = work(&engine);
+    let span = progress::Span { t0: engine.time(), t_end: scene.run.t_end, work0, unit };
+    let (progress, probe) = progress::Progress::start(plan.opts.progress, span);
+    let mut housekeeping = Housekeeping::new(plan, started, &start, progress);
+    let mut walk = OutputGrid::new(scene, engine.time_step()).walk_from(start.position);
+    let mut obs = RunObservers { core: start.core, trace: start.writers.trace, events, probe };
+    let driven =
+        drive_walk(&mut engine, &mut walk, &mut obs, plan.opts.stop.as_ref(), |e, o, p| housekeeping.at_stop(e, o, p));
+    let wall_seconds = housekeeping.wall_seconds();
+    let result = driven.and_then(|outcome| match outcome.termination {
+        Termination::ReachedEnd => {
+            let ruptures = obs.events.rupture_forces();
+            let summary = summarize(scene, &engine, &obs.core, ruptures, wall_seconds)?;
+            // Flush everything before anything is renamed, so that a write error leaves
+            // the run as it was (resumable, if it has a checkpoint).
+            if let Some(dir) = plan.out {
+                obs.flush(dir)?;
+            }
+            Ok(summary)
+        }
+        Termination::StopRequested => {
+            if let Some(dir) = plan.out {
+                housekeeping.checkpoint(dir, &engine, &mut obs, &outcome.position)?;
+            }
+            Err(RunError::Stopped { t: engine.time(), dir: plan.out.map(Path::to_path_buf) })
+        }
+    });
+    let checkpoint_t = housekeeping.finish();
+    let summary = match result {
+        Ok(s) => s,
+        Err(e) => return Err(abandon(e, plan.out, checkpoint_t, obs)),
+    };
+    if let Some(dir) = plan.out {
+        obs.commit_files(dir)?;
+        // summary.json comes last: its presence says the run is complete.
+        let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
+        write_whole(dir, "summary.json", json.as_bytes()).map_err(output_error(dir, "summary.json"))?;
+        checkpoint::remove(dir)?;
+    }
+    Ok(summary)
+}
+
+/// A run that failed or was stopped: an output error after a checkpoint, or a stop, keeps
+/// the partial outputs and the checkpoint (the run can be resumed); any other failure
+/// removes them.
+fn abandon<X: EventObservers>(
+    e: RunError,
+    out: Option<&Path>,
+    checkpoint_t: Option<f64>,
+    obs: RunObservers<X>,
+) -> RunError {
+    if let RunError::Stopped { dir: Some(_), .. } = e {
+        return e;
+    }
+    if let (RunError::Output { .. }, Some(dir), Some(t)) = (&e, out, checkpoint_t) {
+        return RunError::Resumable { source: Box::new(e), dir: dir.to_path_buf(), t };
+    }
+    obs.discard_files();
+    if let Some(dir) = out {
+        let _ = checkpoint::remove(dir);
+    }
+    e
+}
+
+/// Assembles the summary from the core observers and the engine's counters.
+pub fn summarize<E: Engine>(
+    scene: &Scene,
+    engine: &E,
+    core: &CoreObservers,
+    ruptures: Option<&RuptureForces>,
+    wall_seconds: f64,
+) -> Result<Summary, EngineError> {
+    let (stats, regime) = core;
+    let summary = Summary {
+        scene: scene.name.clone(),
+        engine: E::KIND,
+        seed: scene.run.seed,
+        n: scene.junctions.n as u64,
+        t_end: scene.run.t_end,
+        t_warmup: scene.run.t_warmup,
+        friction_mean: stats.friction_mean(),
+        friction_std: stats.friction_std(),
+        friction_per_junction: stats.friction_mean() / scene.junctions.n as f64,
+        bond_force_mean: stats.bond_force_mean(),
+        viscous_force_mean: stats.viscous_mean(),
+        attached_fraction_mean: stats.attached_fraction_mean(),
+        rupture_force_mean: ruptures.filter(|r| r.count > 0).map(|r| r.mean()),
+        rupture_force_sem: ruptures.filter(|r| r.count > 1).map(|r| r.standard_error()),
+        regime: regime.regime(),
+        stick_slip_cycles: regime.cycles(),
+        counters: engine.counters(),
+        wall_seconds,
+        parameters: scene.clone(),
+    };
+    let t = engine.time();
+    for (quantity, value) in [
+        ("friction_mean", summary.friction_mean),
+        ("friction_std", summary.friction_std),
+        ("bond_force_mean", summary.bond_force_mean),
+        ("viscous_force_mean", summary.viscous_force_mean),
+        ("attached_fraction_mean", summary.attached_fraction_mean),
+    ] {
+        if !value.is_finite() {
+            return Err(EngineError::NonFinite { t, quantity, value });
+        }
+    }
+    Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::runner::{Resumed, resume};
+    use crate::testkit::fig1_with;
+
+    fn summary_without_wall_time(s: &Summary) -> serde_json::Value {
+        let mut v = serde_json::to_value(s).unwrap();
+        assert!(v.as_object_mut().unwrap().remove("wall_seconds").is_some());
+        v
+    }
+
+    #[test]
+    fn a_run_stopped_on_request_resumes_to_the_same_files() {
+        for overrides in [
+            &["junctions.bond=weak", "fixed.dt=0.5"][..],
+            &["run.engine=exact", "junctions.force_law=linear", "junctions.bond=weak", "run.t_warmup=20"],
+        ] {
+            let mut o = vec!["output.events=true"];
+            o.extend_from_slice(overrides);
+            let scene = fig1_with(&o);
+            let whole = tempfile::tempdir().unwrap();
+            let expected = run_scene(&scene, Some(whole.path())).unwrap();
+
+            let dir = tempfile::tempdir().unwrap();
+            let stop = StopFlag::new();
+            stop.request();
+            let opts = RunOptions { stop: Some(stop.clone()), ..RunOptions::default() };
+            let t = match run_scene_with(&scene, Some(dir.path()), &opts) {
+                Err(RunError::Stopped { t, dir: Some(d) }) => {
+                    assert_eq!(d, dir.path());
+                    t
+                }
+                other => panic!("{o:?}: expected a stop, got {other:?}"),
+            };
+            // Stopped after the first grid stop, resumable, nothing complete.
+            assert!(t > 0.0 && t <= 1.0 + 1e-9, "{o:?}: stopped at {t}");
+            let has = |name: &str| dir.path().join(name).exists();
+            assert!(has("checkpoint.bin") && has("trace.csv.part") && has("events.csv.part"), "{o:?}");
+            assert!(!has("summary.json") && !has("trace.csv") && !has("events.csv"), "{o:?}");
+
+            match resume(dir.path(), &RunOptions::default()).unwrap() {
+                Resumed::Completed { from_t, summary } => {
+                    assert_eq!(from_t, t);
+                    assert_eq!(summary_without_wall_time(&summary), summary_without_wall_time(&expected), "{o:?}");
+                }
+                Resumed::Finished => panic!("{o:?}: nothing was resumed"),
+            }
+            for name in ["trace.csv", "events.csv"] {
+                let (a, b) = (std::fs::read(whole.path().join(name)).unwrap(), std::fs::read(dir.path().join(name)));
+                assert!(a.len() > 1000 && Ok(a) == b.map_err(|_| ()), "{o:?}: {name} differs");
+            }
+            assert!(!has("checkpoint.bin"));
+
+            // Without an output directory there is nothing to resume.
+            let e = run_scene_with(&scene, None, &opts).unwrap_err();
+            assert!(matches!(e, RunError::Stopped { dir: None, .. }), "{e:?}");
+            assert_eq!(e.to_string(), format!("the run was stopped on request at t = {t}"));
+        }
+    }
+
+    #[test]
+    fn a_run_without_a_stop_request_is_not_stopped() {
+        // The flag is only read: an unset flag changes nothing.
+        let scene = fig1_with(&["run.t_end=30"]);
+        let opts = RunOptions { stop: Some(StopFlag::new()), ..RunOptions::default() };
+        let a = run_scene_with(&scene, None, &opts).unwrap();
+        let b = run_scene(&scene, None).unwrap();
+        assert_eq!(summary_without_wall_time(&a), summary_without_wall_time(&b));
+    }
+}
