@@ -82,7 +82,10 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
     if let Some(p) = &progress {
         p.finish_and_clear();
     }
-    let outcome = match result.and_then(|o| o.write(&sweep, &out).map(|()| o)) {
+    let outcome = match result
+        .map_err(|e| e.to_string())
+        .and_then(|o| o.write(&sweep, &out).map(|()| o).map_err(|e| e.to_string()))
+    {
         Ok(o) => o,
         Err(e) => {
             remove_if_empty(&created);

@@ -1,11 +1,18 @@
-//! Plots as SVG text (plotters' SVG backend): panels of line series with error bars, log or
-//! linear axes, and shaded, labelled bands along the x axis. Used by `sweep.svg` and
-//! `trace.svg`; general enough for other studies.
+//! Every figure the program draws, as SVG text (plotters' SVG backend): [`sweep`]
+//! (`sweep.svg`), [`compare`] (`compare.svg`) and [`trace`] (`trace.svg`), sharing the
+//! helpers of this file: panels of line series with error bars, log or linear axes, and
+//! shaded, labelled bands along the x axis.
 //!
 //! A [`Panel`] is one chart; [`render_svg`] stacks panels vertically into one SVG. Axis
 //! ranges are taken from the data (error bars included) unless an [`Axis`] fixes them.
 //! Output is deterministic: the same panels give the same bytes.
+//!
+//! Figures read the results of the runs and studies they draw (`crate::studies`,
+//! `crate::scene`) and return text, and nothing they read depends on them. A study's figure
+//! is written by the study's `files` module (the layer above both); a run's `trace.svg` is
+//! drawn from its `trace.csv` after the run, by [`trace::write_trace_svg`].
 
+pub mod compare;
 pub mod sweep;
 pub mod trace;
 
@@ -27,7 +34,8 @@ pub const PALETTE: [RGBColor; 6] = [
 pub const BAND_SMOOTH: RGBColor = RGBColor(0, 114, 178);
 pub const BAND_STICK_SLIP: RGBColor = RGBColor(213, 94, 0);
 
-const FONT: &str = "sans-serif";
+/// The font family of every text in a figure.
+pub const FONT: &str = "sans-serif";
 
 /// Why a plot could not be drawn.
 #[derive(Debug, thiserror::Error)]
