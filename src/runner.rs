@@ -138,10 +138,7 @@ pub type CoreObservers = (WindowStats, RegimeDetector);
 
 /// Builds the core observers for a scene.
 pub fn core_observers(scene: &Scene) -> CoreObservers {
-    (
-        WindowStats::new(scene.run.t_warmup, scene.run.t_end, scene.junctions.n as u64),
-        RegimeDetector::new(scene.run.t_warmup, scene.plate.v),
-    )
+    (WindowStats::new(scene.run.t_warmup, scene.run.t_end, scene.junctions.n as u64), RegimeDetector::for_scene(scene))
 }
 
 /// Checks that a sampled state holds only finite numbers.
@@ -238,6 +235,7 @@ pub fn summarize<E: Engine>(
     wall_seconds: f64,
 ) -> Result<Summary, EngineError> {
     let (stats, regime) = core;
+    let verdict = regime.verdict();
     let summary = Summary {
         scene: scene.name.clone(),
         engine: E::KIND,
@@ -253,8 +251,9 @@ pub fn summarize<E: Engine>(
         attached_fraction_mean: stats.attached_fraction_mean(),
         rupture_force_mean: ruptures.filter(|r| r.count > 0).map(|r| r.mean()),
         rupture_force_sem: ruptures.filter(|r| r.count > 1).map(|r| r.standard_error()),
-        regime: regime.regime(),
-        stick_slip_cycles: regime.cycles(),
+        regime: verdict.regime,
+        stick_slip_cycles: verdict.cycles,
+        oscillation: verdict.oscillation,
         counters: engine.counters(),
         wall_seconds,
         parameters: scene.clone(),

@@ -4,8 +4,9 @@
 //! - bad `--values`, `--log-range`, `--range`, `--param`, `--replicas` give one line on
 //!   stderr, exit code 2, and no output directory;
 //! - the regime criterion labels the fig2 scene smooth at V = 0.1 and stick-slip at V = 1
-//!   (fixed seeds), and the first version of the criterion (velocity hysteresis alone) would
-//!   have called the V = 0.1 trace stick-slip;
+//!   (fixed seeds; its period, amplitude and cycles as `summary.json` reports them), and the
+//!   velocity hysteresis alone (the first criterion, now a supporting sign) would have
+//!   called the V = 0.1 trace stick-slip;
 //! - `stickslip run` writes a well-formed `trace.svg` when `output.plot = true`, and none
 //!   otherwise; `plot = true` with `trace = false` is refused.
 
@@ -14,7 +15,7 @@ use std::process::Command;
 
 use stickslip::Scene;
 use stickslip::engine::{Engine, EngineVisitor, with_engine};
-use stickslip::observe::regime::{MIN_CYCLES, Regime, RegimeDetector};
+use stickslip::observe::regime::{MIN_COHERENCE, Regime, RegimeDetector, Verdict};
 use stickslip::runner::{OutputGrid, drive};
 
 const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
@@ -154,16 +155,16 @@ fn bad_sweep_arguments_are_refused() {
     expect_bad_input(&["--param", "junctions.temperature", "--values", "1,0"], &["junctions.temperature", "0"]);
 }
 
-/// The regime detector fed by a run of `scene`.
-fn detector(scene: &Scene) -> RegimeDetector {
+/// The regime detector's verdict on a run of `scene`.
+fn verdict(scene: &Scene) -> Verdict {
     struct V<'a>(&'a Scene);
     impl EngineVisitor for V<'_> {
-        type Output = RegimeDetector;
-        fn visit<E: Engine>(self, mut e: E) -> RegimeDetector {
-            let mut d = RegimeDetector::new(self.0.run.t_warmup, self.0.plate.v);
+        type Output = Verdict;
+        fn visit<E: Engine>(self, mut e: E) -> Verdict {
+            let mut d = RegimeDetector::for_scene(self.0);
             let grid = OutputGrid::new(self.0, e.time_step());
             drive(&mut e, &grid, &mut d).expect("run");
-            d
+            d.verdict()
         }
     }
     with_engine(scene, V(scene)).expect("engine")
@@ -184,15 +185,15 @@ fn fig2_at(v: &str) -> Scene {
 #[test]
 fn fig2_is_smooth_at_low_velocity_although_its_velocity_fluctuates_by_more_than_v() {
     // Below V0 = 0.5 the plate's velocity jitters by about +-2 V (event noise), so the
-    // velocity hysteresis alone sees many "slips"; the friction drops little and the plate
-    // sticks rarely, so the run is smooth.
+    // velocity hysteresis (a supporting sign only) sees many "slips"; the friction has no
+    // coherent period, so the run is smooth.
     for seed in [1u64, 2, 3] {
         let mut s = fig2_at("0.1");
         s.run.seed = seed;
-        let d = detector(&s);
-        assert!(d.slips() >= 10 * MIN_CYCLES, "seed {seed}: {} slips", d.slips());
-        assert!(2 * d.cycles() < d.slips(), "seed {seed}: {} large of {} slips", d.cycles(), d.slips());
-        assert_eq!(d.regime(), Regime::Smooth, "seed {seed}");
+        let d = verdict(&s);
+        assert!(d.oscillation.slips >= 20, "seed {seed}: {} slips", d.oscillation.slips);
+        assert!(d.oscillation.oscillation_coherence < MIN_COHERENCE, "seed {seed}: {d:?}");
+        assert_eq!(d.regime, Regime::Smooth, "seed {seed}");
     }
 }
 
@@ -201,20 +202,24 @@ fn fig2_is_stick_slip_at_intermediate_velocity_and_smooth_at_high_velocity() {
     for seed in [1u64, 2, 3] {
         let mut s = fig2_at("1");
         s.run.seed = seed;
-        let d = detector(&s);
-        // About one cycle per 11 time units, every slip large, stuck a third of the time.
-        assert!(d.cycles() >= 40, "seed {seed}: {} cycles", d.cycles());
-        assert!(d.cycles() + 2 >= d.slips(), "seed {seed}: {} large of {} slips", d.cycles(), d.slips());
-        assert!(d.stuck_fraction() > 0.2, "seed {seed}: stuck {}", d.stuck_fraction());
-        assert_eq!(d.regime(), Regime::StickSlip, "seed {seed}");
+        let d = verdict(&s);
+        // About one cycle per 11 time units, the friction swinging by about +-0.2 per
+        // junction around 0.65, the plate stuck a third of the time (a sawtooth).
+        let o = &d.oscillation;
+        assert_eq!(d.regime, Regime::StickSlip, "seed {seed}: {d:?}");
+        assert!((10.0..12.5).contains(&o.oscillation_period.unwrap()), "seed {seed}: {o:?}");
+        assert!((0.12..0.3).contains(&(o.oscillation_amplitude / 300.0)), "seed {seed}: {o:?}");
+        assert!(o.stuck_fraction > 0.2, "seed {seed}: stuck {}", o.stuck_fraction);
+        assert!(d.cycles >= 60, "seed {seed}: {} cycles", d.cycles);
         let summary = stickslip::run_scene(&s, None).unwrap();
         assert_eq!(summary.regime, Regime::StickSlip);
-        assert_eq!(summary.stick_slip_cycles, d.cycles());
+        assert_eq!(summary.stick_slip_cycles, d.cycles);
+        assert_eq!(&summary.oscillation, o);
 
         let mut s = fig2_at("10");
         s.run.seed = seed;
-        let d = detector(&s);
-        assert_eq!((d.slips(), d.regime()), (0, Regime::Smooth), "seed {seed}");
+        let d = verdict(&s);
+        assert_eq!((d.oscillation.slips, d.regime), (0, Regime::Smooth), "seed {seed}");
     }
 }
 
