@@ -4,8 +4,8 @@
 
 use std::path::Path;
 
-use super::Sweep;
 use super::outcome::SweepOutcome;
+use super::plan::Sweep;
 use crate::output::atomic::write_whole;
 use crate::plot::PlotError;
 

@@ -1,15 +1,62 @@
-//! Parameter sweeps: one scene field (`section.key`) takes a list of values; each value is
-//! run `replicas` times with seeds derived from the scene's seed ([`super::seeds`]); the
-//! runs execute in parallel (rayon) and are aggregated per value: means with 95% Student-t
-//! confidence half-widths across replicas, the majority regime, totals.
+//! Parameter sweeps (`stickslip sweep`): one scene field, or two for a map, each over a list
+//! of values; every grid point is run `replicas` times with seeds derived from the scene's
+//! seed, the grid point index and the replica ([`crate::studies::seeds`]); the runs are
+//! aggregated per grid point (means with 95 % Student-t half-widths across replicas, the
+//! majority regime, the oscillation's amplitude and period, totals).
 //!
-//! Every run is independent and seeded by its value index and replica, and the results are
-//! gathered in index order, so the tables (`sweep.csv`, `runs.csv`) are byte-identical
-//! whatever the number of threads. Wall-clock times, which are not reproducible, go to
-//! `sweep.json` only.
+//! # Library API
+//!
+//! The CLI goes through exactly these functions, so a caller that runs the scenes elsewhere
+//! (a Python/Dask layer, a cluster) and hands back the summaries gets byte-identical tables:
+//!
+//! ```no_run
+//! use stickslip::studies::sweep::{Sweep, SweepAxis, SweepSpec, ValueSpec, parse_values};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let base = stickslip::Scene::from_file("scenarios/fig2.toml".as_ref(), &[])?;
+//! // 1. Describe and prepare: every grid point's scene is validated, every seed derived;
+//! //    nothing runs.
+//! let v = SweepAxis { param: "plate.v".into(), values: parse_values(ValueSpec::LogRange("0.1:10:9"))?, log: true };
+//! let t = SweepAxis { param: "junctions.temperature".into(), values: parse_values(ValueSpec::List("0.5,1,2"))?, log: false };
+//! let sweep = Sweep::prepare(base, SweepSpec { axes: vec![v, t], replicas: 2, set: vec![] })?;
+//! // 2. The runs, in order: (grid point index, replica, scene with its derived seed).
+//! let summaries: Vec<stickslip::output::Summary> = sweep
+//!     .runs()
+//!     .map(|run| stickslip::run_scene(run.scene, None)) // or anywhere else; JSON travels
+//!     .collect::<Result<_, _>>()?;
+//! // 3. The outcome from all summaries, in the order of `runs()` (checked by seed).
+//! let outcome = sweep.outcome(summaries)?;
+//! // 4. The tables (and `write` for the files, sweep.svg included).
+//! let (table, runs, record) = (outcome.sweep_csv(&sweep), outcome.runs_csv(&sweep), outcome.sweep_json(&sweep));
+//! outcome.write(&sweep, "out/map".as_ref())?;
+//! # Ok(()) }
+//! ```
+//!
+//! - [`Sweep::prepare`]`(base, spec)`: `base` is the scene with the `--set` overrides applied;
+//!   `spec` lists one or two [`SweepAxis`] (field `section.key`, values, log scale for the
+//!   figure), the replicas per grid point and the overrides (for the record). Errors are
+//!   one line ([`SpecError`]).
+//! - [`Sweep::runs`]: every run as a [`RunSpec`] `{ point, replica, scene }`, grid point by
+//!   grid point (row-major: the first field varies slowest), replicas in order.
+//!   [`Sweep::points`] holds the same scenes per grid point.
+//! - [`Sweep::outcome`]`(summaries)`: the [`SweepOutcome`] from the runs' summaries in that
+//!   order (`output::Summary` is Serialize + Deserialize: summaries can travel as JSON). A
+//!   summary whose seed is not its run's is refused ([`OutcomeError`]).
+//! - [`SweepOutcome::sweep_csv`], [`SweepOutcome::runs_csv`], [`SweepOutcome::sweep_json`]
+//!   (wall times only if [`SweepOutcome::timing`] is set), [`SweepOutcome::write`]
+//!   (`sweep.csv`, `runs.csv`, `sweep.svg`, `sweep.json`, each atomically).
+//! - [`Sweep::run`]: runs every scene here, on a rayon pool, then calls `outcome`.
+//!
+//! Every run is independent and seeded by its grid point and replica, so the tables are
+//! byte-identical whatever runs them and on however many threads; wall-clock times, which
+//! are not reproducible, are only in `sweep.json`.
+//!
+//! Files: [`plan`] (spec, preparation, runs), [`values`] (value lists from the command line),
+//! [`outcome`] (aggregation), [`tables`] (the text of the files), [`files`] (writing them,
+//! with the figure of [`crate::plot::sweep`]).
 
 pub mod files;
 pub mod outcome;
+pub mod plan;
 pub mod tables;
 pub mod values;
 
@@ -19,148 +66,47 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 pub use files::WriteError;
-pub use outcome::{Majority, Row, SweepOutcome};
+pub use outcome::{Majority, OutcomeError, Row, SweepOutcome, Timing};
+pub use plan::{GridPoint, MAX_AXES, MAX_RUNS, RunSpec, SpecError, Sweep, SweepAxis, SweepSpec};
 pub use tables::{RUNS_COLUMNS, SWEEP_COLUMNS};
-pub use values::{MAX_VALUES, SweepValue, ValueSpec, parse_values, round_sig, value_text};
+pub use values::{MAX_VALUES, RangeProblem, SweepValue, ValueSpec, ValuesError, parse_values, round_sig, value_text};
 
-use super::seeds::{self, SeedRange};
 use crate::output::Summary;
 use crate::runner::{RunError, run_scene};
-use crate::scene::{EngineKind, RngKind, Scene};
 
-/// Most runs (values x replicas) a sweep may have.
-pub const MAX_RUNS: usize = 1_000_000;
-
-/// A sweep ready to run: the scenes of all runs, built and validated.
-#[derive(Clone, Debug)]
-pub struct Sweep {
-    /// The scene with the `--set` overrides, before the swept value.
-    pub base: Scene,
-    /// The swept field, `section.key`.
-    pub param: String,
-    pub values: Vec<SweepValue>,
-    pub replicas: usize,
-    /// Draw `sweep.svg` with a log x axis.
-    pub log_x: bool,
-    /// `runs[i][r]`: the scene of value `i`, replica `r` (its seed set).
-    pub runs: Vec<Vec<Scene>>,
-    /// The `--set` overrides, for the record.
-    pub set: Vec<String>,
+/// Why a sweep failed while running.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    #[error("cannot start the thread pool: {0}")]
+    Pool(String),
+    #[error("the run for {point}, replica {replica} (seed {seed}) failed: {source}")]
+    Run {
+        /// `P = V` for each swept field.
+        point: String,
+        replica: usize,
+        seed: u64,
+        #[source]
+        source: RunError,
+    },
+    #[error(transparent)]
+    Outcome(#[from] OutcomeError),
 }
 
 impl Sweep {
-    /// Checks the field and every value (applied to `base` and validated like the scene
-    /// file) and derives every run's seed. Nothing runs. The error is one line.
-    pub fn prepare(
-        base: Scene,
-        param: &str,
-        values: Vec<SweepValue>,
-        replicas: usize,
-        log_x: bool,
-        set: Vec<String>,
-    ) -> Result<Sweep, String> {
-        let printable = crate::scene::error::printable;
-        let (section, key) = param
-            .split_once('.')
-            .filter(|(s, k)| !s.is_empty() && !k.is_empty() && !k.contains('.') && !param.contains('='))
-            .ok_or_else(|| {
-                format!("--param {}: expected a scene field as SECTION.KEY, e.g. plate.v", printable(param))
-            })?;
-        let table = toml::Table::try_from(base.to_file()).expect("a scene always serializes");
-        let fields = |t: &toml::Table| t.keys().cloned().collect::<Vec<_>>().join(", ");
-        match table.get(section).and_then(|s| s.as_table()) {
-            None => {
-                return Err(format!(
-                    "--param {}: no section [{}] in a scene (sections: {})",
-                    printable(param),
-                    printable(section),
-                    fields(&table)
-                ));
-            }
-            Some(t) if !t.contains_key(key) => {
-                return Err(format!(
-                    "--param {}: [{}] has no field '{}' (fields: {})",
-                    printable(param),
-                    section,
-                    printable(key),
-                    fields(t)
-                ));
-            }
-            _ => {}
-        }
-        if param == "run.seed" {
-            return Err("--param run.seed: cannot be swept: each run's seed is derived from run.seed, the value index and the replica (use --replicas, or --set run.seed=...)".to_string());
-        }
-        if values.is_empty() {
-            return Err("--values: no values given".to_string());
-        }
-        if replicas == 0 || values.len().saturating_mul(replicas) > MAX_RUNS {
-            return Err(format!(
-                "--replicas {replicas}: must be at least 1, with values x replicas at most {MAX_RUNS} ({} values)",
-                values.len()
-            ));
-        }
-        if let Some(v) = values.iter().find(|v| log_x && v.x <= 0.0) {
-            return Err(format!(
-                "--log-x: value {} of {param} is not > 0 (a log axis needs positive values)",
-                printable(&v.text)
-            ));
-        }
-        let mut scenes = Vec::with_capacity(values.len());
-        for v in &values {
-            let s = base
-                .with_overrides(&[format!("{param}={}", v.text)])
-                .map_err(|e| format!("value {} for {param}: {}", printable(&v.text), e))?;
-            scenes.push(s);
-        }
-        let range = |i: usize| {
-            let s: &Scene = &scenes[i];
-            if s.run.engine == EngineKind::Fixed && s.fixed.rng == RngKind::ParkMiller {
-                SeedRange::ParkMiller
-            } else {
-                SeedRange::Full
-            }
-        };
-        let seeds = seeds::derive_all(base.run.seed, values.len(), replicas, range);
-        let runs = scenes
-            .iter()
-            .zip(&seeds)
-            .map(|(s, row)| {
-                row.iter()
-                    .map(|&seed| {
-                        let mut r = s.clone();
-                        r.run.seed = seed;
-                        r
-                    })
-                    .collect()
-            })
-            .collect();
-        Ok(Sweep { base, param: param.to_string(), values, replicas, log_x, runs, set })
-    }
-
-    /// Number of runs.
-    pub fn len(&self) -> usize {
-        self.values.len() * self.replicas
-    }
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Runs every (value, replica) on a pool of `threads` threads (`0`: all cores).
-    /// `progress` is advanced by one per finished run. The first failed run, in value
-    /// and replica order, is the error.
+    /// Runs every scene of [`Sweep::runs`] on a pool of `threads` threads (`0`: all cores)
+    /// and builds the outcome with [`Sweep::outcome`]; `progress` is advanced by one per
+    /// finished run. The first failed run, in the order of `runs`, is the error.
     pub fn run(&self, threads: usize, progress: Option<&ProgressBar>) -> Result<SweepOutcome, SweepError> {
         let started = Instant::now();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .map_err(|e| SweepError::Pool(e.to_string()))?;
-        let jobs: Vec<(usize, usize)> =
-            (0..self.values.len()).flat_map(|i| (0..self.replicas).map(move |r| (i, r))).collect();
+        let runs: Vec<RunSpec<'_>> = self.runs().collect();
         let results: Vec<Result<Summary, RunError>> = pool.install(|| {
-            jobs.par_iter()
-                .map(|&(i, r)| {
-                    let out = run_scene(&self.runs[i][r], None);
+            runs.par_iter()
+                .map(|run| {
+                    let out = run_scene(run.scene, None);
                     if let Some(p) = progress {
                         p.inc(1);
                     }
@@ -168,44 +114,28 @@ impl Sweep {
                 })
                 .collect()
         });
-        let mut summaries: Vec<Vec<Summary>> = Vec::with_capacity(self.values.len());
-        let mut it = jobs.iter().zip(results);
-        for _ in 0..self.values.len() {
-            let mut row = Vec::with_capacity(self.replicas);
-            for _ in 0..self.replicas {
-                let (&(i, r), res) = it.next().expect("one result per job");
-                row.push(res.map_err(|source| SweepError::Run {
-                    value: self.values[i].text.clone(),
-                    param: self.param.clone(),
-                    replica: r,
-                    seed: self.runs[i][r].run.seed,
-                    source,
-                })?);
-            }
-            summaries.push(row);
+        let mut summaries = Vec::with_capacity(results.len());
+        for (run, res) in runs.iter().zip(results) {
+            summaries.push(res.map_err(|source| SweepError::Run {
+                point: self.describe(run.point),
+                replica: run.replica,
+                seed: run.scene.run.seed,
+                source,
+            })?);
         }
-        let rows = summaries.iter().zip(&self.values).map(|(s, v)| Row::from_runs(v, s)).collect();
-        Ok(SweepOutcome {
-            rows,
-            summaries,
-            wall_seconds: started.elapsed().as_secs_f64(),
-            threads: pool.current_num_threads(),
-        })
+        let mut outcome = self.outcome(summaries)?;
+        outcome.timing =
+            Some(Timing { wall_seconds: started.elapsed().as_secs_f64(), threads: pool.current_num_threads() });
+        Ok(outcome)
     }
-}
 
-/// Why a sweep failed.
-#[derive(Debug, thiserror::Error)]
-pub enum SweepError {
-    #[error("cannot start the thread pool: {0}")]
-    Pool(String),
-    #[error("the run for {param} = {value}, replica {replica} (seed {seed}) failed: {source}")]
-    Run {
-        param: String,
-        value: String,
-        replica: usize,
-        seed: u64,
-        #[source]
-        source: RunError,
-    },
+    /// Grid point `g` as `P = V` for each swept field, e.g. `plate.v = 0.5, plate.k = 15`.
+    pub fn describe(&self, g: usize) -> String {
+        self.axes
+            .iter()
+            .zip(&self.points[g].values)
+            .map(|(a, v)| format!("{} = {}", a.param, v.text))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
 }

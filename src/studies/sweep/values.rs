@@ -44,57 +44,96 @@ pub fn round_sig(x: f64) -> f64 {
     format!("{x:.5e}").parse().expect("a formatted float parses")
 }
 
-/// Parses the values. The error is one line naming the argument, the value and what is
+/// Why a list of values was refused: one line naming the argument, the text and what is
 /// allowed.
-pub fn parse_values(spec: ValueSpec<'_>) -> Result<Vec<SweepValue>, String> {
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ValuesError {
+    #[error("--values {list}: '{item}' is not a finite number (expected numbers separated by commas, e.g. 0.1,0.5,2)")]
+    NotANumber { list: String, item: String },
+    #[error("--values: {count} values given, at most {MAX_VALUES} allowed")]
+    TooMany { count: usize },
+    #[error("{flag} {text}: {problem} ({})", range_form(*.flag))]
+    BadRange { flag: &'static str, text: String, problem: RangeProblem },
+}
+
+/// What is wrong with a `LO:HI:COUNT` range.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum RangeProblem {
+    #[error("not three fields separated by ':'")]
+    NotThreeFields,
+    #[error("{name} '{text}' is not a finite number")]
+    NotFinite { name: &'static str, text: String },
+    #[error("COUNT '{text}' is not a whole number from 2 to {MAX_VALUES}")]
+    BadCount { text: String },
+    #[error("LO = {lo} is not > 0")]
+    LoNotPositive { lo: f64 },
+    #[error("LO = {lo} is not less than HI = {hi}")]
+    LoNotBelowHi { lo: f64, hi: f64 },
+}
+
+fn range_form(flag: &str) -> &'static str {
+    if flag == "--log-range" {
+        "expected LO:HI:COUNT with 0 < LO < HI and COUNT from 2 to 10000, e.g. 0.1:10:9"
+    } else {
+        "expected LO:HI:COUNT with LO < HI and COUNT from 2 to 10000, e.g. 0:2:5"
+    }
+}
+
+impl ValueSpec<'_> {
+    /// The command-line flag the values were given with.
+    pub fn flag(&self) -> &'static str {
+        match self {
+            ValueSpec::List(_) => "--values",
+            ValueSpec::Range(_) => "--range",
+            ValueSpec::LogRange(_) => "--log-range",
+        }
+    }
+}
+
+/// Parses the values.
+pub fn parse_values(spec: ValueSpec<'_>) -> Result<Vec<SweepValue>, ValuesError> {
     let printable = crate::scene::error::printable;
     match spec {
         ValueSpec::List(s) => {
             let mut out = Vec::new();
             for part in s.split(',') {
                 let text = part.trim();
-                let x = text.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
-                    format!(
-                        "--values {}: '{}' is not a finite number (expected numbers separated by commas, e.g. 0.1,0.5,2)",
-                        printable(s),
-                        printable(text)
-                    )
-                })?;
+                let x = text
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| ValuesError::NotANumber { list: printable(s), item: printable(text) })?;
                 out.push(SweepValue { text: text.to_string(), x });
             }
             if out.len() > MAX_VALUES {
-                return Err(format!("--values: {} values given, at most {MAX_VALUES} allowed", out.len()));
+                return Err(ValuesError::TooMany { count: out.len() });
             }
             Ok(out)
         }
         ValueSpec::Range(s) | ValueSpec::LogRange(s) => {
             let log = matches!(spec, ValueSpec::LogRange(_));
-            let arg = if log { "--log-range" } else { "--range" };
-            let form = if log {
-                "expected LO:HI:COUNT with 0 < LO < HI and COUNT from 2 to 10000, e.g. 0.1:10:9"
-            } else {
-                "expected LO:HI:COUNT with LO < HI and COUNT from 2 to 10000, e.g. 0:2:5"
-            };
-            let bad = |why: &str| format!("{arg} {}: {why} ({form})", printable(s));
+            let bad = |problem: RangeProblem| ValuesError::BadRange { flag: spec.flag(), text: printable(s), problem };
             let parts: Vec<&str> = s.split(':').map(str::trim).collect();
             if parts.len() != 3 {
-                return Err(bad("not three fields separated by ':'"));
+                return Err(bad(RangeProblem::NotThreeFields));
             }
-            let num = |t: &str, name: &str| {
+            let num = |t: &str, name: &'static str| {
                 t.parse::<f64>()
                     .ok()
                     .filter(|x| x.is_finite())
-                    .ok_or_else(|| bad(&format!("{name} '{}' is not a finite number", printable(t))))
+                    .ok_or_else(|| bad(RangeProblem::NotFinite { name, text: printable(t) }))
             };
             let (lo, hi) = (num(parts[0], "LO")?, num(parts[1], "HI")?);
-            let count: usize = parts[2].parse().ok().filter(|c| (2..=MAX_VALUES).contains(c)).ok_or_else(|| {
-                bad(&format!("COUNT '{}' is not a whole number from 2 to {MAX_VALUES}", printable(parts[2])))
-            })?;
+            let count: usize = parts[2]
+                .parse()
+                .ok()
+                .filter(|c| (2..=MAX_VALUES).contains(c))
+                .ok_or_else(|| bad(RangeProblem::BadCount { text: printable(parts[2]) }))?;
             if log && lo <= 0.0 {
-                return Err(bad(&format!("LO = {lo} is not > 0")));
+                return Err(bad(RangeProblem::LoNotPositive { lo }));
             }
             if lo >= hi {
-                return Err(bad(&format!("LO = {lo} is not less than HI = {hi}")));
+                return Err(bad(RangeProblem::LoNotBelowHi { lo, hi }));
             }
             let xs: Vec<f64> = (0..count)
                 .map(|k| {
@@ -139,7 +178,7 @@ mod tests {
             (ValueSpec::LogRange("0.1:1"), "--log-range"),
             (ValueSpec::Range("1:2:x"), "--range"),
         ] {
-            let e = parse_values(spec).unwrap_err();
+            let e = parse_values(spec).unwrap_err().to_string();
             assert!(e.starts_with(arg), "{e}");
             assert!(!e.contains('\n'));
         }
