@@ -255,3 +255,88 @@ fn the_fig2_scene_agrees_with_its_moment_equations() {
         }
     }
 }
+
+#[test]
+fn the_fig2_stability_table_of_the_results() {
+    // docs/results.md ("The roles of K, M = eta, lambda and the kinetic rates"): the range of
+    // V where fig2's steady sliding is unstable, with one parameter changed. Printed by
+    // `cargo test --release --test regime the_fig2_stability_table -- --nocapture`.
+    let fig2 =
+        Scene::from_file(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/fig2.toml"), &[]).unwrap();
+    let table: [(&[&str], Option<(f64, f64)>); 17] = [
+        (&[], Some((0.530, 3.473))),
+        (&["plate.k=1.5"], Some((0.528, 3.928))),
+        (&["plate.k=5"], Some((0.529, 3.792))),
+        (&["plate.k=50"], Some((0.536, 2.782))),
+        (&["plate.k=150"], Some((0.556, 1.930))),
+        (&["plate.k=500"], Some((0.705, 0.942))),
+        (&["plate.k=1500"], None),
+        (&["plate.mass=5", "plate.eta=5"], Some((0.511, 5.844))),
+        (&["plate.mass=8.33", "plate.eta=8.33"], Some((0.514, 5.223))),
+        (&["plate.mass=75", "plate.eta=75"], Some((0.598, 1.784))),
+        (&["plate.mass=150", "plate.eta=150"], None),
+        (&["junctions.lambda=0.01"], Some((0.509, 6.715))),
+        (&["junctions.lambda=0.1"], Some((0.671, 1.309))),
+        (&["junctions.lambda=0.3"], None),
+        (&["junctions.lambda=1"], None),
+        (&["junctions.k0=0.3", "junctions.kon0=0.3"], Some((0.565, 2.122))),
+        (&["junctions.k0=3", "junctions.kon0=3"], Some((0.524, 3.988))),
+    ];
+    for (set, range) in table {
+        let o: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+        let b = MomentModel::of(&fig2.with_overrides(&o).unwrap()).stability_boundaries(0.05, 20.0, 400);
+        println!("{set:?}: unstable for {b:?}");
+        match range {
+            Some((lo, hi)) => {
+                assert!(b.len() == 2 && (b[0] - lo).abs() < 5e-4 && (b[1] - hi).abs() < 5e-4, "{set:?}: {b:?}")
+            }
+            None => assert!(b.is_empty(), "{set:?}: {b:?}"),
+        }
+    }
+}
+
+#[test]
+fn the_bundled_limit_cycle_scene_is_the_scene_of_these_tests() {
+    let file =
+        Scene::from_file(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/limit-cycle.toml"), &[])
+            .unwrap();
+    let mut here = issue(1.0, 10_000, &["output.trace=true", "output.plot=true", "fixed.dt=0.01", "fixed.rng=pcg"]);
+    here.name = file.name.clone();
+    assert_eq!(MomentModel::of(&file), MomentModel::of(&here));
+    assert_eq!(file, here);
+}
+
+#[test]
+fn beyond_its_upper_instability_fig2_keeps_a_limit_cycle_beside_steady_sliding() {
+    // docs/results.md, regime map: at K = 32.3 steady sliding is stable again from V = 3.074,
+    // but the cycle of V = 3 continued to V = 3.27 persists (a subcritical Hopf point:
+    // bistability), while the start from the scene's initial state settles to steady sliding.
+    let fig2 = Scene::from_file(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/fig2.toml"),
+        &["plate.k=32.3165".to_string()],
+    )
+    .unwrap();
+    let m = MomentModel::of(&fig2);
+    let b = m.stability_boundaries(0.05, 20.0, 400);
+    assert!((b[1] - 3.074).abs() < 1e-3, "{b:?}");
+    let on_cycle = m.with_v(3.0).integrate(m.initial(&fig2), 1500.0, 1.0, |_, _| {});
+    let beyond = m.with_v(3.27165);
+    assert!(beyond.stable());
+    let (period, half) = beyond.limit_cycle(on_cycle, 1500.0).expect("the cycle persists");
+    assert!((period - 7.72).abs() < 0.01 && half > 0.5, "{period} {half}");
+    assert!(beyond.limit_cycle(beyond.initial(&fig2), 1500.0).is_none());
+}
+
+#[test]
+fn fig2_cycles_slow_down_with_a_softer_spring() {
+    // docs/results.md, regime map: at V = 0.81 the moment equations' cycle has a period of
+    // 18 time units at K = 7, 73 at K = 3.2 and 182 at K = 1.5 (11.5 at fig2's K = 15).
+    let fig2 =
+        Scene::from_file(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/fig2.toml"), &[]).unwrap();
+    for (k, expected) in [(1.5, 182.1), (3.23165, 72.6), (6.96238, 18.26), (15.0, 11.52)] {
+        let s = fig2.with_overrides(&[format!("plate.k={k}"), "plate.v=0.808733".into()]).unwrap();
+        let m = MomentModel::of(&s);
+        let (period, _) = m.limit_cycle(m.initial(&s), 1500.0).expect("a limit cycle");
+        assert!((period - expected).abs() < 0.01 * expected, "K = {k}: period {period}");
+    }
+}

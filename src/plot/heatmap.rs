@@ -3,8 +3,10 @@
 //! halo (visible on every colour), and each cell's class label when the grid is small
 //! enough to read.
 
+use std::ops::Range;
+
 use plotters::coord::Shift;
-use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, ValueFormatter};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -26,6 +28,21 @@ const VIRIDIS: [(u8, u8, u8); 9] = [
 const NO_VALUE: RGBColor = RGBColor(200, 200, 200);
 /// Most cells that get a class label.
 const MAX_LABELLED: usize = 400;
+/// Most tick labels along an axis (ticks sit at cell centres).
+const MAX_TICKS: usize = 12;
+
+/// Every k-th cell centre, so that at most [`MAX_TICKS`] remain.
+fn ticks(centres: &[f64]) -> Vec<f64> {
+    let step = centres.len().div_ceil(MAX_TICKS).max(1);
+    centres.iter().step_by(step).copied().collect()
+}
+
+/// A tick label: 3 significant digits, plain.
+fn tick_label(v: f64) -> String {
+    let s = format!("{:.3}", crate::studies::format::sig(v, 3).parse::<f64>().unwrap_or(v));
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s.is_empty() { "0".to_string() } else { s.to_string() }
+}
 
 /// Viridis at `f` in `[0, 1]` (clamped), linearly interpolated between stops.
 pub fn viridis(f: f64) -> RGBColor {
@@ -77,32 +94,78 @@ fn draw_grid<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, h: &HeatMap, top
     if xe.is_empty() || ye.is_empty() {
         return Err(PlotError("a heat map needs at least one cell".into()));
     }
-    let (x0, x1) = (xe[0], xe[xe.len() - 1]);
-    let (y0, y1) = (ye[0], ye[ye.len() - 1]);
-    match (h.x.log, h.y.log) {
-        (false, false) => draw_cells(area, h, top, x0..x1, y0..y1, &xe, &ye),
-        (true, false) => draw_cells(area, h, top, (x0..x1).log_scale(), y0..y1, &xe, &ye),
-        (false, true) => draw_cells(area, h, top, x0..x1, (y0..y1).log_scale(), &xe, &ye),
-        (true, true) => draw_cells(area, h, top, (x0..x1).log_scale(), (y0..y1).log_scale(), &xe, &ye),
+    let axis = |a: &Axis, e: &[f64], centres: &[f64]| CellAxis {
+        lo: e[0],
+        hi: e[e.len() - 1],
+        log: a.log,
+        ticks: ticks(centres),
+    };
+    draw_cells(area, h, top, axis(&h.x, &xe, &h.xs), axis(&h.y, &ye, &h.ys), &xe, &ye)
+}
+
+/// A linear or log axis over `[lo, hi]` whose tick marks sit at given points (the cell
+/// centres) and read as [`tick_label`]s.
+#[derive(Clone, Debug)]
+struct CellAxis {
+    lo: f64,
+    hi: f64,
+    log: bool,
+    ticks: Vec<f64>,
+}
+
+impl CellAxis {
+    fn scale(&self, v: f64) -> f64 {
+        if self.log { v.ln() } else { v }
     }
 }
 
-fn draw_cells<DB, X, Y>(
+impl Ranged for CellAxis {
+    type FormatOption = NoDefaultFormatting;
+    type ValueType = f64;
+    /// As plotters' numeric axes: the fraction of the way along the axis, in pixels.
+    fn map(&self, v: &f64, limit: (i32, i32)) -> i32 {
+        let (a, b) = (self.scale(self.lo), self.scale(self.hi));
+        let f = (self.scale(*v) - a) / (b - a);
+        let length = limit.1 - limit.0;
+        if !f.is_finite() || length == 0 {
+            return if f.is_finite() || f.is_nan() {
+                limit.0
+            } else if f > 0.0 {
+                limit.1
+            } else {
+                limit.0
+            };
+        }
+        if length > 0 {
+            limit.0 + (length as f64 * f + 1e-3).floor() as i32
+        } else {
+            limit.0 + (length as f64 * f - 1e-3).ceil() as i32
+        }
+    }
+    fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        let step = self.ticks.len().div_ceil(hint.max_num_points().max(1)).max(1);
+        self.ticks.iter().step_by(step).copied().collect()
+    }
+    fn range(&self) -> Range<f64> {
+        self.lo..self.hi
+    }
+}
+
+impl ValueFormatter<f64> for CellAxis {
+    fn format(value: &f64) -> String {
+        tick_label(*value)
+    }
+}
+
+fn draw_cells<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     h: &HeatMap,
     top: f64,
-    xr: X,
-    yr: Y,
+    xr: CellAxis,
+    yr: CellAxis,
     xe: &[f64],
     ye: &[f64],
-) -> Result<(), PlotError>
-where
-    DB: DrawingBackend,
-    X: AsRangedCoord<Value = f64>,
-    Y: AsRangedCoord<Value = f64>,
-    X::CoordDescType: ValueFormatter<f64>,
-    Y::CoordDescType: ValueFormatter<f64>,
-{
+) -> Result<(), PlotError> {
     let mut chart = ChartBuilder::on(area)
         .caption(&h.title, (FONT, 18))
         .margin(12)
@@ -193,6 +256,17 @@ fn draw_bar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, label: &str, top:
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ticks_at_cell_centres_read_well() {
+        assert_eq!(ticks(&[1.0, 2.0, 3.0]), vec![1.0, 2.0, 3.0]);
+        assert_eq!(ticks(&(0..30).map(f64::from).collect::<Vec<_>>()).len(), 10);
+        assert_eq!(tick_label(0.264438), "0.264");
+        assert_eq!(tick_label(1500.0), "1500");
+        assert_eq!(tick_label(3.23165), "3.23");
+        assert_eq!(tick_label(10.0), "10");
+        assert_eq!(tick_label(0.0), "0");
+    }
 
     #[test]
     fn viridis_ends_and_clamps() {
