@@ -263,7 +263,8 @@ fn the_fig2_stability_table_of_the_results() {
     // `cargo test --release --test regime the_fig2_stability_table -- --nocapture`.
     let fig2 =
         Scene::from_file(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/fig2.toml"), &[]).unwrap();
-    let table: [(&[&str], Option<(f64, f64)>); 17] = [
+    type Row<'a> = (&'a [&'a str], Option<(f64, f64)>);
+    let table: [Row; 17] = [
         (&[], Some((0.530, 3.473))),
         (&["plate.k=1.5"], Some((0.528, 3.928))),
         (&["plate.k=5"], Some((0.529, 3.792))),

@@ -240,6 +240,22 @@ fn a_map_has_both_fields_as_leading_columns_and_grid_point_seeds() {
         .collect();
     assert_eq!(lead, [("0.1", "15"), ("0.1", "150"), ("1", "15"), ("1", "150"), ("10", "15"), ("10", "150")]);
     assert_eq!(runs1.lines().count(), 1 + 12);
+    // Each row aggregates its own grid point's runs: the mean of runs.csv's friction_mean
+    // over the rows with the same two leading values.
+    for line in &lines[1..] {
+        let f: Vec<&str> = line.split(',').collect();
+        let mine: Vec<f64> = runs1
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .filter(|r| r[0] == f[0] && r[1] == f[1])
+            .map(|r| r[4].parse().unwrap())
+            .collect();
+        assert_eq!(mine.len(), 2);
+        let mean = mine.iter().sum::<f64>() / 2.0;
+        let row: f64 = f[3].parse().unwrap();
+        assert!((row - mean).abs() <= 1e-12 * mean.abs(), "{line}: {row} against {mean}");
+    }
     assert_eq!(json["param"], "plate.v");
     assert_eq!(json["param2"], "plate.k");
     assert_eq!(json["values2"], serde_json::json!(["15", "150"]));

@@ -105,7 +105,8 @@ pub fn period(rho: &[f64]) -> Option<(f64, f64)> {
 /// less the smallest bin minimum. With the range of each period also returned. `None` if
 /// no whole period fits.
 pub fn half_range(bins: &[(f64, f64, f64)], period: f64) -> Option<(f64, Vec<f64>)> {
-    if !(period >= 1.0) {
+    // Also refuses NaN.
+    if period.is_nan() || period < 1.0 {
         return None;
     }
     let mut ranges = Vec::new();

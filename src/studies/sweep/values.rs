@@ -52,7 +52,7 @@ pub enum ValuesError {
     NotANumber { list: String, item: String },
     #[error("--values: {count} values given, at most {MAX_VALUES} allowed")]
     TooMany { count: usize },
-    #[error("{flag} {text}: {problem} ({})", range_form(*.flag))]
+    #[error("{flag} {text}: {problem} ({})", range_form(.flag))]
     BadRange { flag: &'static str, text: String, problem: RangeProblem },
 }
 
