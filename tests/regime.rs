@@ -149,7 +149,7 @@ fn the_exact_engine_agrees_at_n_1e4() {
 }
 
 #[test]
-#[ignore = "about 40 s: cargo test --release --test regime -- --ignored"]
+#[ignore = "slow; the three ignored tests take 90 s: cargo test --release --test regime -- --ignored"]
 fn the_exact_engine_agrees_at_n_1e5() {
     agrees(100_000, 1, &[]);
 }
@@ -160,7 +160,7 @@ fn the_fixed_step_engine_agrees_at_n_1e3() {
 }
 
 #[test]
-#[ignore = "about 2 minutes: cargo test --release --test regime -- --ignored"]
+#[ignore = "slow; the three ignored tests take 90 s: cargo test --release --test regime -- --ignored"]
 fn the_fixed_step_engine_agrees_at_n_1e4() {
     agrees(10_000, 1, &["run.engine=fixed", "fixed.dt=0.01"]);
 }
@@ -227,7 +227,7 @@ fn the_exact_engine_has_the_moment_equations_friction_and_oscillation() {
 }
 
 #[test]
-#[ignore = "about 3 minutes: cargo test --release --test regime -- --ignored"]
+#[ignore = "slow; the three ignored tests take 90 s: cargo test --release --test regime -- --ignored"]
 fn the_exact_engine_has_the_moment_equations_friction_and_oscillation_at_n_1e5() {
     check_extrapolation(10_000, 8);
 }

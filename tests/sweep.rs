@@ -1,8 +1,12 @@
 //! `stickslip sweep`, the regime criterion on simulated traces, and `trace.svg`.
 //!
 //! - the sweep's tables are byte-identical with 1 and 2 threads, and every run has its own seed;
-//! - bad `--values`, `--log-range`, `--range`, `--param`, `--replicas` give one line on
-//!   stderr, exit code 2, and no output directory;
+//! - a 2-D sweep (regime map) has both fields as leading columns, row-major grid points with
+//!   the seeds of their index, rows that aggregate their own runs, and a heat map; summaries
+//!   of runs made through the library API (travelling as JSON) give the command's tables, and
+//!   summaries out of order are refused;
+//! - bad `--values`, `--log-range`, `--range`, `--param`, `--replicas`, `--log-y` (also for
+//!   maps) give one line on stderr, exit code 2, and no output directory;
 //! - the regime criterion labels the fig2 scene smooth at V = 0.1 and stick-slip at V = 1
 //!   (fixed seeds; its period, amplitude and cycles as `summary.json` reports them), and the
 //!   velocity hysteresis alone (the first criterion, now a supporting sign) would have
