@@ -1,7 +1,7 @@
 //! Low-velocity creep with weak bonds (`scenarios/creep.toml`): what the exact engine costs
 //! against the fixed-step engine over the same simulated time, and the friction's growth
 //! with the logarithm of the driving velocity, against the thermally activated (Bell)
-//! theory of `stickslip::compare::creep`.
+//! theory of `stickslip::studies::compare::creep`.
 //!
 //! ```sh
 //! cargo run --release --example creep                 # everything (about a minute of CPU)
@@ -9,18 +9,19 @@
 //! ```
 //!
 //! Prints Markdown tables on stdout. Seeds: replica `r` of velocity point `k` uses
-//! `stickslip::compare::seeds::pcg_seed(run.seed, Exact, k, r)`, so the tables do not depend
+//! `stickslip::studies::seeds::pcg_seed(run.seed, Exact, k, r)`, so the tables do not depend
 //! on the number of threads (the timing columns aside).
 
 use std::path::Path;
 use std::time::Instant;
 
 use rayon::prelude::*;
-use stickslip::compare::creep::theory;
-use stickslip::compare::report::sig;
-use stickslip::compare::seeds::{Role, pcg_seed};
-use stickslip::compare::{t_quantile, thread_cpu_seconds};
 use stickslip::output::Summary;
+use stickslip::studies::compare::creep::theory;
+use stickslip::studies::compare::thread_cpu_seconds;
+use stickslip::studies::format::sig;
+use stickslip::studies::seeds::{Role, pcg_seed};
+use stickslip::studies::stats::mean_ci95 as mean_ci;
 use stickslip::{Scene, run_scene};
 
 struct Args {
@@ -65,14 +66,6 @@ fn timed(scene: &Scene) -> (Summary, f64, f64) {
 
 fn with(scene: &Scene, o: &[String]) -> Scene {
     scene.with_overrides(o).unwrap_or_else(|e| die(&e.to_string()))
-}
-
-/// Mean and 95 % Student-t half-width.
-fn mean_ci(v: &[f64]) -> (f64, f64) {
-    let n = v.len() as f64;
-    let m = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1.0);
-    (m, t_quantile(n - 1.0) * (var / n).sqrt())
 }
 
 fn main() {

@@ -4,10 +4,11 @@
 //!
 //! Layout: [`scene`] is the problem (validated parameters), [`physics`] the model's pure
 //! functions, [`engine`] the methods that advance a scene, [`runner`] the loop that drives
-//! an engine along the output grid and feeds the [`observe`]rs and [`output`] writers.
+//! an engine along the output grid and feeds the [`observe`]rs and [`output`] writers;
+//! [`studies`] run many scenes (sweeps, work-precision comparisons) and [`plot`] draws
+//! their figures.
 
 pub mod cli;
-pub mod compare;
 pub mod engine;
 pub mod observe;
 pub mod ode;

@@ -47,7 +47,7 @@ fn fixed_step_bias_shrinks_in_proportion_to_dt() {
     for (i, b) in bias.iter().enumerate() {
         cov[i][i] = b.2 * b.2;
     }
-    let inv = stickslip::compare::fit::invert(&cov).expect("a covariance matrix is positive definite");
+    let inv = stickslip::studies::compare::fit::invert(&cov).expect("a covariance matrix is positive definite");
     let x: Vec<f64> = bias.iter().map(|b| b.0).collect();
     let y: Vec<f64> = bias.iter().map(|b| b.1).collect();
     let quad =

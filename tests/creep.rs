@@ -1,5 +1,5 @@
 //! Low-velocity creep (`scenarios/creep.toml`): the exact engine against the thermally
-//! activated (Bell) theory of `stickslip::compare::creep`.
+//! activated (Bell) theory of `stickslip::studies::compare::creep`.
 //!
 //! A weak junction formed unstretched and loaded at `r = kappa V` ruptures at mean force
 //! `E[f] = f_b e^a E1(a)`, `a = k0 f_b / r`; by renewal-reward the mean friction per junction
@@ -13,8 +13,8 @@ mod common;
 use std::path::Path;
 
 use common::mean_ci;
-use stickslip::compare::creep::theory;
-use stickslip::compare::seeds::{Role, pcg_seed};
+use stickslip::studies::compare::creep::theory;
+use stickslip::studies::seeds::{Role, pcg_seed};
 use stickslip::{Scene, run_scene};
 
 fn creep(v: f64) -> Scene {

@@ -1,11 +1,16 @@
 //! `stickslip sweep`, the regime criterion on simulated traces, and `trace.svg`.
 //!
 //! - the sweep's tables are byte-identical with 1 and 2 threads, and every run has its own seed;
-//! - bad `--values`, `--log-range`, `--range`, `--param`, `--replicas` give one line on
-//!   stderr, exit code 2, and no output directory;
+//! - a 2-D sweep (regime map) has both fields as leading columns, row-major grid points with
+//!   the seeds of their index, rows that aggregate their own runs, and a heat map; summaries
+//!   of runs made through the library API (travelling as JSON) give the command's tables, and
+//!   summaries out of order are refused;
+//! - bad `--values`, `--log-range`, `--range`, `--param`, `--replicas`, `--log-y` (also for
+//!   maps) give one line on stderr, exit code 2, and no output directory;
 //! - the regime criterion labels the fig2 scene smooth at V = 0.1 and stick-slip at V = 1
-//!   (fixed seeds), and the first version of the criterion (velocity hysteresis alone) would
-//!   have called the V = 0.1 trace stick-slip;
+//!   (fixed seeds; its period, amplitude and cycles as `summary.json` reports them), and the
+//!   velocity hysteresis alone (the first criterion, now a supporting sign) would have
+//!   called the V = 0.1 trace stick-slip;
 //! - `stickslip run` writes a well-formed `trace.svg` when `output.plot = true`, and none
 //!   otherwise; `plot = true` with `trace = false` is refused.
 
@@ -14,7 +19,7 @@ use std::process::Command;
 
 use stickslip::Scene;
 use stickslip::engine::{Engine, EngineVisitor, with_engine};
-use stickslip::observe::regime::{MIN_CYCLES, Regime, RegimeDetector};
+use stickslip::observe::regime::{MIN_COHERENCE, Regime, RegimeDetector, Verdict};
 use stickslip::runner::{OutputGrid, drive};
 
 const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
@@ -154,16 +159,163 @@ fn bad_sweep_arguments_are_refused() {
     expect_bad_input(&["--param", "junctions.temperature", "--values", "1,0"], &["junctions.temperature", "0"]);
 }
 
-/// The regime detector fed by a run of `scene`.
-fn detector(scene: &Scene) -> RegimeDetector {
+#[test]
+fn bad_map_arguments_are_refused() {
+    let two = |extra: &[&'static str]| -> Vec<&'static str> {
+        ["--param", "plate.v", "--values", "0.5,1", "--param", "plate.k"]
+            .iter()
+            .copied()
+            .chain(extra.iter().copied())
+            .collect()
+    };
+    // The second field without values, with two lists for one field, three fields.
+    expect_bad_input(&two(&[]), &["plate.k", "--values"]);
+    expect_bad_input(&two(&["--values", "5", "--range", "1:2:3"]), &["--range"]);
+    expect_bad_input(&two(&["--values", "5", "--param", "plate.eta", "--values", "1"]), &["--param", "at most 2"]);
+    expect_bad_input(&two(&["--values", "5,x"]), &["--values", "x"]);
+    // A value the scene refuses names both fields of its grid point.
+    expect_bad_input(&two(&["--values", "5,-2"]), &["plate.v = 0.5", "plate.k = -2", ">= 0"]);
+    expect_bad_input(
+        &["--param", "plate.v", "--values", "1", "--param", "plate.v", "--values", "2"],
+        &["plate.v", "twice"],
+    );
+    expect_bad_input(&["--param", "plate.v", "--values", "1", "--log-y"], &["--log-y"]);
+    expect_bad_input(&two(&["--values", "-1,1", "--log-y"]), &["--log-y", "-1"]);
+    expect_bad_input(&two(&["--values", "1", "--replicas", "0"]), &["--replicas"]);
+}
+
+/// A 3 x 2 map of the fig2 scene (plate.v x plate.k), 2 replicas, with `threads` threads
+/// into `dir/map`: the three tables.
+fn short_map(dir: &Path, threads: &str) -> (String, String, serde_json::Value) {
+    let out = dir.join("map");
+    let o = stickslip(
+        &[
+            "sweep",
+            fig2().to_str().unwrap(),
+            "--param",
+            "plate.v",
+            "--log-range",
+            "0.1:10:3",
+            "--param",
+            "plate.k",
+            "--values",
+            "15,150",
+            "--replicas",
+            "2",
+            "--set",
+            "run.t_end=300",
+            "--set",
+            "run.t_warmup=50",
+            "--threads",
+            threads,
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        dir,
+    );
+    assert!(o.status.success(), "map failed: {}", String::from_utf8_lossy(&o.stderr));
+    let read = |n: &str| std::fs::read_to_string(out.join(n)).unwrap();
+    let svg = read("sweep.svg");
+    assert_well_formed_svg(&svg);
+    assert!(svg.contains("regime map") && svg.contains("oscillation amplitude per junction"), "{svg}");
+    (read("sweep.csv"), read("runs.csv"), serde_json::from_str(&read("sweep.json")).unwrap())
+}
+
+#[test]
+fn a_map_has_both_fields_as_leading_columns_and_grid_point_seeds() {
+    let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let (csv1, runs1, json) = short_map(a.path(), "1");
+    let (csv2, runs2, _) = short_map(b.path(), "2");
+    assert_eq!((&csv1, &runs1), (&csv2, &runs2));
+    let lines: Vec<&str> = csv1.lines().collect();
+    assert_eq!(lines.len(), 1 + 6);
+    assert!(lines[0].starts_with("plate.v,plate.k,replicas,friction_mean,"), "{}", lines[0]);
+    assert!(
+        lines[0]
+            .ends_with(",oscillation_amplitude,oscillation_amplitude_ci95,oscillation_period,oscillation_period_ci95")
+    );
+    // Row-major: the first field varies slowest.
+    let lead: Vec<(&str, &str)> = lines[1..]
+        .iter()
+        .map(|l| {
+            let mut f = l.split(',');
+            (f.next().unwrap(), f.next().unwrap())
+        })
+        .collect();
+    assert_eq!(lead, [("0.1", "15"), ("0.1", "150"), ("1", "15"), ("1", "150"), ("10", "15"), ("10", "150")]);
+    assert_eq!(runs1.lines().count(), 1 + 12);
+    // Each row aggregates its own grid point's runs: the mean of runs.csv's friction_mean
+    // over the rows with the same two leading values.
+    for line in &lines[1..] {
+        let f: Vec<&str> = line.split(',').collect();
+        let mine: Vec<f64> = runs1
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .filter(|r| r[0] == f[0] && r[1] == f[1])
+            .map(|r| r[4].parse().unwrap())
+            .collect();
+        assert_eq!(mine.len(), 2);
+        let mean = mine.iter().sum::<f64>() / 2.0;
+        let row: f64 = f[3].parse().unwrap();
+        assert!((row - mean).abs() <= 1e-12 * mean.abs(), "{line}: {row} against {mean}");
+    }
+    assert_eq!(json["param"], "plate.v");
+    assert_eq!(json["param2"], "plate.k");
+    assert_eq!(json["values2"], serde_json::json!(["15", "150"]));
+    // Grid point g = i * 2 + j gets the seeds of value index g of a 1-D sweep.
+    let expected = stickslip::studies::seeds::derive_all(1, 6, 2, |_| stickslip::studies::seeds::SeedRange::Full);
+    let seeds: Vec<Vec<u64>> = serde_json::from_value(json["seeds"].clone()).unwrap();
+    assert_eq!(seeds, expected);
+    let from_runs: Vec<u64> = runs1.lines().skip(1).map(|l| l.split(',').nth(3).unwrap().parse().unwrap()).collect();
+    assert_eq!(from_runs, expected.concat());
+}
+
+#[test]
+fn summaries_run_elsewhere_give_the_same_tables_as_the_command() {
+    use stickslip::studies::sweep::{OutcomeError, Sweep, SweepAxis, SweepSpec, ValueSpec, parse_values};
+    // The command's tables.
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, runs, _) = short_map(dir.path(), "2");
+    // The same sweep through the library, each run's summary travelling as JSON (as from a
+    // cluster), handed back in the order of `runs()`.
+    let set = vec!["run.t_end=300".to_string(), "run.t_warmup=50".to_string()];
+    let base = Scene::from_file(&fig2(), &set).unwrap();
+    let axes = vec![
+        SweepAxis {
+            param: "plate.v".into(),
+            values: parse_values(ValueSpec::LogRange("0.1:10:3")).unwrap(),
+            log: true,
+        },
+        SweepAxis { param: "plate.k".into(), values: parse_values(ValueSpec::List("15,150")).unwrap(), log: false },
+    ];
+    let sweep = Sweep::prepare(base, SweepSpec { axes, replicas: 2, set }).unwrap();
+    let travelled: Vec<String> = sweep
+        .runs()
+        .map(|run| serde_json::to_string(&stickslip::run_scene(run.scene, None).unwrap()).unwrap())
+        .collect();
+    let summaries: Vec<stickslip::output::Summary> =
+        travelled.iter().map(|j| serde_json::from_str(j).unwrap()).collect();
+    let outcome = sweep.outcome(summaries.clone()).unwrap();
+    assert_eq!(outcome.sweep_csv(&sweep), csv);
+    assert_eq!(outcome.runs_csv(&sweep), runs);
+    // Out of order, or missing one: refused, not a wrong table.
+    let mut swapped = summaries.clone();
+    swapped.swap(0, 1);
+    assert!(matches!(sweep.outcome(swapped), Err(OutcomeError::Order { position: 0, point: 0, replica: 0, .. })));
+    assert!(matches!(sweep.outcome(summaries[1..].to_vec()), Err(OutcomeError::Count { expected: 12, got: 11 })));
+}
+
+/// The regime detector's verdict on a run of `scene`.
+fn verdict(scene: &Scene) -> Verdict {
     struct V<'a>(&'a Scene);
     impl EngineVisitor for V<'_> {
-        type Output = RegimeDetector;
-        fn visit<E: Engine>(self, mut e: E) -> RegimeDetector {
-            let mut d = RegimeDetector::new(self.0.run.t_warmup, self.0.plate.v);
+        type Output = Verdict;
+        fn visit<E: Engine>(self, mut e: E) -> Verdict {
+            let mut d = RegimeDetector::for_scene(self.0);
             let grid = OutputGrid::new(self.0, e.time_step());
             drive(&mut e, &grid, &mut d).expect("run");
-            d
+            d.verdict()
         }
     }
     with_engine(scene, V(scene)).expect("engine")
@@ -184,15 +336,15 @@ fn fig2_at(v: &str) -> Scene {
 #[test]
 fn fig2_is_smooth_at_low_velocity_although_its_velocity_fluctuates_by_more_than_v() {
     // Below V0 = 0.5 the plate's velocity jitters by about +-2 V (event noise), so the
-    // velocity hysteresis alone sees many "slips"; the friction drops little and the plate
-    // sticks rarely, so the run is smooth.
+    // velocity hysteresis (a supporting sign only) sees many "slips"; the friction has no
+    // coherent period, so the run is smooth.
     for seed in [1u64, 2, 3] {
         let mut s = fig2_at("0.1");
         s.run.seed = seed;
-        let d = detector(&s);
-        assert!(d.slips() >= 10 * MIN_CYCLES, "seed {seed}: {} slips", d.slips());
-        assert!(2 * d.cycles() < d.slips(), "seed {seed}: {} large of {} slips", d.cycles(), d.slips());
-        assert_eq!(d.regime(), Regime::Smooth, "seed {seed}");
+        let d = verdict(&s);
+        assert!(d.oscillation.slips >= 20, "seed {seed}: {} slips", d.oscillation.slips);
+        assert!(d.oscillation.oscillation_coherence < MIN_COHERENCE, "seed {seed}: {d:?}");
+        assert_eq!(d.regime, Regime::Smooth, "seed {seed}");
     }
 }
 
@@ -201,20 +353,24 @@ fn fig2_is_stick_slip_at_intermediate_velocity_and_smooth_at_high_velocity() {
     for seed in [1u64, 2, 3] {
         let mut s = fig2_at("1");
         s.run.seed = seed;
-        let d = detector(&s);
-        // About one cycle per 11 time units, every slip large, stuck a third of the time.
-        assert!(d.cycles() >= 40, "seed {seed}: {} cycles", d.cycles());
-        assert!(d.cycles() + 2 >= d.slips(), "seed {seed}: {} large of {} slips", d.cycles(), d.slips());
-        assert!(d.stuck_fraction() > 0.2, "seed {seed}: stuck {}", d.stuck_fraction());
-        assert_eq!(d.regime(), Regime::StickSlip, "seed {seed}");
+        let d = verdict(&s);
+        // About one cycle per 11 time units, the friction swinging by about +-0.2 per
+        // junction around 0.65, the plate stuck a third of the time (a sawtooth).
+        let o = &d.oscillation;
+        assert_eq!(d.regime, Regime::StickSlip, "seed {seed}: {d:?}");
+        assert!((10.0..12.5).contains(&o.oscillation_period.unwrap()), "seed {seed}: {o:?}");
+        assert!((0.12..0.3).contains(&(o.oscillation_amplitude / 300.0)), "seed {seed}: {o:?}");
+        assert!(o.stuck_fraction > 0.2, "seed {seed}: stuck {}", o.stuck_fraction);
+        assert!(d.cycles >= 60, "seed {seed}: {} cycles", d.cycles);
         let summary = stickslip::run_scene(&s, None).unwrap();
         assert_eq!(summary.regime, Regime::StickSlip);
-        assert_eq!(summary.stick_slip_cycles, d.cycles());
+        assert_eq!(summary.stick_slip_cycles, d.cycles);
+        assert_eq!(&summary.oscillation, o);
 
         let mut s = fig2_at("10");
         s.run.seed = seed;
-        let d = detector(&s);
-        assert_eq!((d.slips(), d.regime()), (0, Regime::Smooth), "seed {seed}");
+        let d = verdict(&s);
+        assert_eq!((d.oscillation.slips, d.regime), (0, Regime::Smooth), "seed {seed}");
     }
 }
 

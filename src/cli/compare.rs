@@ -1,12 +1,11 @@
-//! `stickslip compare`: the work-precision study of [`crate::compare`].
+//! `stickslip compare`: the work-precision study of [`crate::studies::compare`].
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use super::run::{load_scene, prepare_out_dir, remove_if_empty};
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
-use crate::compare::{Plan, default_dts, plot, report};
-use crate::output::atomic::write_whole;
+use crate::studies::compare::{Plan, default_dts, report};
 
 #[derive(clap::Args, Debug)]
 pub struct CompareArgs {
@@ -96,19 +95,8 @@ pub(crate) fn compare(args: &CompareArgs) -> ExitCode {
         Ok(s) => s,
         Err(e) => return failed(e.to_string()),
     };
-    let svg = match plot::svg(&study) {
-        Ok(s) => s,
-        Err(m) => return failed(format!("cannot draw compare.svg: {m}")),
-    };
-    let files = [
-        ("compare.csv", report::csv(&study)),
-        ("compare.svg", svg),
-        ("compare.md", report::markdown(&study, &command_line())),
-    ];
-    for (name, text) in &files {
-        if let Err(e) = write_whole(&out, name, text.as_bytes()) {
-            return failed(format!("cannot write {}: {e}", out.join(name).display()));
-        }
+    if let Err(e) = study.write(&out, &command_line()) {
+        return failed(e.to_string());
     }
     println!("compare {}: {} points, reference of {} exact replicas", scene.name, study.points.len(), ref_replicas);
     for line in report::reading(&study) {

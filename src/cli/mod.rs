@@ -71,7 +71,7 @@ pub enum Command {
     },
     /// Continue a killed run from the checkpoint in its output directory.
     Resume(resume::ResumeArgs),
-    /// Sweep one scene field over values, with replicas, in parallel; writes sweep.csv and sweep.svg.
+    /// Sweep one scene field, or two for a regime map, over values, with replicas, in parallel; writes sweep.csv and sweep.svg.
     Sweep(sweep::SweepArgs),
     /// Check a scene and print its resolved parameters.
     Validate {

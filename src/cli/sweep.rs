@@ -1,40 +1,39 @@
-//! `stickslip sweep`: one scene field over a list of values, with replicas, in parallel.
+//! `stickslip sweep`: one scene field, or two for a regime map, over lists of values, with
+//! replicas, in parallel.
+//!
+//! Each `--param SECTION.KEY` takes one value list, `--values A,B,..`, `--range LO:HI:COUNT`
+//! or `--log-range LO:HI:COUNT`: the first `--param` the first list given, the second the
+//! second. `--log-x` / `--log-y` draw the first / second field on a log axis (implied by
+//! `--log-range`).
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use clap::ArgGroup;
+use clap::{Arg, ArgAction, ArgMatches};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::run::{load_scene, prepare_out_dir, remove_if_empty};
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
-use crate::studies::sweep::{Sweep, ValueSpec, parse_values};
+use crate::scene::error::printable;
+use crate::studies::sweep::{MAX_AXES, Sweep, SweepAxis, SweepSpec, ValueSpec, parse_values};
 
 #[derive(clap::Args, Debug)]
-#[command(group(ArgGroup::new("swept_values").required(true).args(["values", "log_range", "range"])))]
 pub struct SweepArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// The scene field to sweep, as SECTION.KEY (e.g. plate.v, junctions.temperature).
-    #[arg(long, value_name = "SECTION.KEY")]
-    pub param: String,
-    /// The values, separated by commas (e.g. 0.1,0.5,2).
-    #[arg(long, value_name = "A,B,...", allow_hyphen_values = true)]
-    pub values: Option<String>,
-    /// COUNT values evenly spaced in log from LO to HI (0 < LO < HI); draws a log x axis.
-    #[arg(long = "log-range", value_name = "LO:HI:COUNT", allow_hyphen_values = true)]
-    pub log_range: Option<String>,
-    /// COUNT values evenly spaced from LO to HI (LO < HI).
-    #[arg(long, value_name = "LO:HI:COUNT", allow_hyphen_values = true)]
-    pub range: Option<String>,
-    /// Runs per value, each with its own seed.
+    #[command(flatten)]
+    pub axes: AxisArgs,
+    /// Runs per grid point, each with its own seed.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     pub replicas: u32,
-    /// Draw sweep.svg with a log x axis (implied by --log-range).
+    /// Draw the first field on a log axis of sweep.svg (implied by its --log-range).
     #[arg(long)]
     pub log_x: bool,
-    /// Output directory (default: out/<scene file stem>-sweep-<SECTION.KEY>/).
+    /// Draw the second field on a log axis of sweep.svg (implied by its --log-range).
+    #[arg(long)]
+    pub log_y: bool,
+    /// Output directory (default: out/<scene file stem>-sweep-<SECTION.KEY>[-<SECTION.KEY>]/).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Worker threads (default: all cores). The results do not depend on it.
@@ -42,29 +41,145 @@ pub struct SweepArgs {
     pub threads: Option<u32>,
 }
 
+/// Which flag a value list came with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ListFlag {
+    Values,
+    Range,
+    LogRange,
+}
+
+/// The swept fields and value lists as given, each list with its position on the command
+/// line (clap keeps the positions; pairing needs the order).
+#[derive(Clone, Debug, Default)]
+pub struct AxisArgs {
+    pub params: Vec<String>,
+    /// `(position, flag, text)`, in command-line order.
+    pub lists: Vec<(usize, ListFlag, String)>,
+}
+
+const PARAM_HELP: &str = "A scene field to sweep, as SECTION.KEY (e.g. plate.v); give it twice for a 2-D map. Each --param takes one value list (--values, --range or --log-range), in the order given";
+
+impl clap::Args for AxisArgs {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        let list = |id: &'static str, long: &'static str, name: &'static str, help: &'static str| {
+            Arg::new(id)
+                .long(long)
+                .value_name(name)
+                .help(help)
+                .action(ArgAction::Append)
+                .allow_hyphen_values(true)
+                .value_parser(clap::value_parser!(String))
+        };
+        cmd.arg(
+            Arg::new("param")
+                .long("param")
+                .value_name("SECTION.KEY")
+                .help(PARAM_HELP)
+                .required(true)
+                .action(ArgAction::Append)
+                .value_parser(clap::value_parser!(String)),
+        )
+        .arg(list("values", "values", "A,B,...", "Values separated by commas (e.g. 0.1,0.5,2)"))
+        .arg(list("range", "range", "LO:HI:COUNT", "COUNT values evenly spaced from LO to HI (LO < HI)"))
+        .arg(list(
+            "log_range",
+            "log-range",
+            "LO:HI:COUNT",
+            "COUNT values evenly spaced in log from LO to HI (0 < LO < HI); draws a log axis",
+        ))
+    }
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
+}
+
+impl clap::FromArgMatches for AxisArgs {
+    fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
+        let params = m.get_many::<String>("param").map(|v| v.cloned().collect()).unwrap_or_default();
+        let mut lists = Vec::new();
+        for (id, flag) in [("values", ListFlag::Values), ("range", ListFlag::Range), ("log_range", ListFlag::LogRange)]
+        {
+            if let (Some(texts), Some(positions)) = (m.get_many::<String>(id), m.indices_of(id)) {
+                lists.extend(positions.zip(texts).map(|(p, t)| (p, flag, t.clone())));
+            }
+        }
+        lists.sort_by_key(|l| l.0);
+        Ok(AxisArgs { params, lists })
+    }
+    fn update_from_arg_matches(&mut self, m: &ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(m)?;
+        Ok(())
+    }
+}
+
+impl ListFlag {
+    fn name(self) -> &'static str {
+        match self {
+            ListFlag::Values => "--values",
+            ListFlag::Range => "--range",
+            ListFlag::LogRange => "--log-range",
+        }
+    }
+}
+
+/// The sweep's axes from the command line: the k-th `--param` with the k-th value list.
+/// The error is one line.
+pub(crate) fn axes(args: &AxisArgs, log_x: bool, log_y: bool) -> Result<Vec<SweepAxis>, String> {
+    let (np, nl) = (args.params.len(), args.lists.len());
+    if np > MAX_AXES {
+        return Err(format!("--param: {np} fields given, at most {MAX_AXES} (a 2-D sweep)"));
+    }
+    let named = || args.params.iter().map(|p| printable(p)).collect::<Vec<_>>().join(" and ");
+    if nl == 0 {
+        return Err(format!("--values, --range or --log-range: no values given for {}", named()));
+    }
+    if np != nl {
+        let flags = args.lists.iter().map(|l| l.1.name()).collect::<Vec<_>>().join(", ");
+        return Err(format!(
+            "--param {}: {np} field{} but {nl} value lists ({flags}); each --param takes one of --values, --range or --log-range, in the order given",
+            named(),
+            if np == 1 { "" } else { "s" }
+        ));
+    }
+    if log_y && np < 2 {
+        return Err("--log-y: there is no second field (give a second --param with its values)".to_string());
+    }
+    args.params
+        .iter()
+        .zip(&args.lists)
+        .enumerate()
+        .map(|(k, (param, (_, flag, text)))| {
+            let spec = match flag {
+                ListFlag::Values => ValueSpec::List(text),
+                ListFlag::Range => ValueSpec::Range(text),
+                ListFlag::LogRange => ValueSpec::LogRange(text),
+            };
+            let values = parse_values(spec).map_err(|e| e.to_string())?;
+            let log = *flag == ListFlag::LogRange || if k == 0 { log_x } else { log_y };
+            Ok(SweepAxis { param: param.clone(), values, log })
+        })
+        .collect()
+}
+
 pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
-    let spec = match (&args.values, &args.log_range, &args.range) {
-        (Some(v), _, _) => ValueSpec::List(v),
-        (_, Some(l), _) => ValueSpec::LogRange(l),
-        (_, _, Some(r)) => ValueSpec::Range(r),
-        _ => unreachable!("clap requires one of --values, --log-range, --range"),
-    };
-    let values = match parse_values(spec) {
-        Ok(v) => v,
+    let axes = match axes(&args.axes, args.log_x, args.log_y) {
+        Ok(a) => a,
         Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
     let scene = match load_scene(&args.scene, &[]) {
         Ok(s) => s,
         Err(code) => return code,
     };
-    let log_x = args.log_x || args.log_range.is_some();
-    let sweep = match Sweep::prepare(scene, &args.param, values, args.replicas as usize, log_x, args.scene.set.clone())
-    {
+    let spec = SweepSpec { axes, replicas: args.replicas as usize, set: args.scene.set.clone() };
+    let sweep = match Sweep::prepare(scene, spec) {
         Ok(s) => s,
-        Err(m) => return fail(EXIT_BAD_INPUT, m),
+        Err(e) => return fail(EXIT_BAD_INPUT, e),
     };
-    let out =
-        args.out.clone().unwrap_or_else(|| Path::new("out").join(format!("{}-sweep-{}", sweep.base.name, sweep.param)));
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(format!("{}-sweep-{}", sweep.base.name, sweep.name())));
     let created = match prepare_out_dir(&out) {
         Ok(c) => c,
         Err(m) => return fail(EXIT_BAD_INPUT, m),
@@ -82,30 +197,37 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
     if let Some(p) = &progress {
         p.finish_and_clear();
     }
-    let outcome = match result.and_then(|o| o.write(&sweep, &out).map(|()| o)) {
+    let written = result.map_err(|e| e.to_string()).and_then(|o| match o.write(&sweep, &out) {
+        Ok(()) => Ok(o),
+        Err(e) => Err(e.to_string()),
+    });
+    let outcome = match written {
         Ok(o) => o,
-        Err(e) => {
+        Err(m) => {
             remove_if_empty(&created);
-            return fail(EXIT_RUN_FAILED, e);
+            return fail(EXIT_RUN_FAILED, m);
         }
     };
+    let timing = outcome.timing.expect("Sweep::run records its timing");
+    let fields = sweep.axes.iter().map(|a| a.param.as_str()).collect::<Vec<_>>().join(" x ");
+    let sizes = sweep.axes.iter().map(|a| a.values.len().to_string()).collect::<Vec<_>>().join(" x ");
     println!(
-        "sweep of {} over {} values x {} replicas of scene {} ({} runs on {} threads in {:.2} s)",
-        sweep.param,
-        sweep.values.len(),
+        "sweep of {fields} over {sizes} values x {} replicas of scene {} ({} runs on {} threads in {:.2} s)",
         sweep.replicas,
         sweep.base.name,
         sweep.len(),
-        outcome.threads,
-        outcome.wall_seconds
+        timing.threads,
+        timing.wall_seconds
     );
     for r in &outcome.rows {
         let (m, c) = r.friction_per_junction;
         let ci = if c.is_finite() { format!(" +- {c:.6}") } else { String::new() };
+        let at: Vec<String> =
+            sweep.axes.iter().zip(&r.values).map(|(a, v)| format!("{} = {:<12}", a.param, v.text)).collect();
+        let amplitude = r.oscillation_amplitude.0 / r.n as f64;
         println!(
-            "  {} = {:<12} F/N = {m:.6}{ci}  attached {:.4}  {} ({}/{} stick-slip)",
-            sweep.param,
-            r.value.text,
+            "  {} F/N = {m:.6}{ci}  attached {:.4}  amplitude/N {amplitude:.4}  {} ({}/{} stick-slip)",
+            at.join(" "),
             r.attached_fraction_mean.0,
             r.regime.as_str(),
             (r.stick_slip_fraction * r.replicas as f64).round(),
@@ -114,4 +236,46 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
     }
     println!("output in {} (sweep.csv, runs.csv, sweep.svg, sweep.json)", out.display());
     ExitCode::SUCCESS
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(params: &[&str], lists: &[(ListFlag, &str)]) -> AxisArgs {
+        AxisArgs {
+            params: params.iter().map(|s| s.to_string()).collect(),
+            lists: lists.iter().enumerate().map(|(i, (f, t))| (i, *f, t.to_string())).collect(),
+        }
+    }
+
+    #[test]
+    fn the_kth_param_takes_the_kth_list() {
+        let a = axes(
+            &args(&["plate.v", "plate.k"], &[(ListFlag::LogRange, "0.1:10:3"), (ListFlag::Values, "5,50")]),
+            false,
+            false,
+        )
+        .unwrap();
+        assert_eq!((a[0].param.as_str(), a[0].values.len(), a[0].log), ("plate.v", 3, true));
+        assert_eq!((a[1].param.as_str(), a[1].values.len(), a[1].log), ("plate.k", 2, false));
+        let a =
+            axes(&args(&["plate.v", "plate.k"], &[(ListFlag::Values, "1"), (ListFlag::Values, "5,50")]), false, true)
+                .unwrap();
+        assert!(!a[0].log && a[1].log);
+    }
+
+    #[test]
+    fn mismatched_lists_are_refused_in_one_line() {
+        for (p, l, mention) in [
+            (vec!["plate.v"], vec![], "--values"),
+            (vec!["plate.v"], vec![(ListFlag::Values, "1"), (ListFlag::Range, "0:1:3")], "--range"),
+            (vec!["plate.v", "plate.k"], vec![(ListFlag::Values, "1")], "plate.k"),
+            (vec!["a.b", "c.d", "e.f"], vec![], "at most 2"),
+        ] {
+            let e = axes(&args(&p, &l), false, false).unwrap_err();
+            assert!(e.contains(mention) && !e.contains('\n'), "{e}");
+        }
+        assert!(axes(&args(&["plate.v"], &[(ListFlag::Values, "1")]), false, true).unwrap_err().starts_with("--log-y"));
+    }
 }

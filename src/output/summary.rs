@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::engine::Counters;
-use crate::observe::regime::Regime;
+use crate::observe::regime::{Oscillation, Regime};
 use crate::scene::{EngineKind, Scene};
 
 /// Everything a run reports at its end.
@@ -35,9 +35,16 @@ pub struct Summary {
     /// Standard error of `rupture_force_mean`.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub rupture_force_sem: Option<f64>,
+    /// `smooth` or `stick-slip` (docs/model.md, "Regime criterion").
     pub regime: Regime,
-    /// Stick→slip cycles counted by the regime criterion.
+    /// Whole periods of the oscillation in the window when stick-slip, else 0.
     pub stick_slip_cycles: u64,
+    /// What the regime criterion measured: `oscillation_period`, `oscillation_amplitude`
+    /// (half the mean peak-to-trough range of the friction per period, force),
+    /// `oscillation_coherence`, `amplitude_cv` and `amplitude_cv_limit`, `junction_noise`,
+    /// and the supporting signs `stuck_fraction` and `slips`.
+    #[serde(flatten)]
+    pub oscillation: Oscillation,
     #[serde(flatten)]
     pub counters: Counters,
     /// Wall-clock time of the run in seconds.

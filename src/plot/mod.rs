@@ -1,11 +1,21 @@
-//! Plots as SVG text (plotters' SVG backend): panels of line series with error bars, log or
-//! linear axes, and shaded, labelled bands along the x axis. Used by `sweep.svg` and
-//! `trace.svg`; general enough for other studies.
+//! Every figure the program draws, as SVG text (plotters' SVG backend): [`sweep`]
+//! (`sweep.svg`: a curve for one swept field, a regime map for two), [`compare`]
+//! (`compare.svg`) and [`trace`] (`trace.svg`), sharing the helpers of this file (panels of
+//! line series with error bars, log or linear axes, shaded and labelled bands along the x
+//! axis, cell edges around grid points) and [`heatmap`] (a coloured grid with a colour bar
+//! and class boundaries).
 //!
 //! A [`Panel`] is one chart; [`render_svg`] stacks panels vertically into one SVG. Axis
 //! ranges are taken from the data (error bars included) unless an [`Axis`] fixes them.
 //! Output is deterministic: the same panels give the same bytes.
+//!
+//! Figures read the results of the runs and studies they draw (`crate::studies`,
+//! `crate::scene`) and return text, and nothing they read depends on them. A study's figure
+//! is written by the study's `files` module (the layer above both); a run's `trace.svg` is
+//! drawn from its `trace.csv` after the run, by [`trace::write_trace_svg`].
 
+pub mod compare;
+pub mod heatmap;
 pub mod sweep;
 pub mod trace;
 
@@ -27,7 +37,8 @@ pub const PALETTE: [RGBColor; 6] = [
 pub const BAND_SMOOTH: RGBColor = RGBColor(0, 114, 178);
 pub const BAND_STICK_SLIP: RGBColor = RGBColor(213, 94, 0);
 
-const FONT: &str = "sans-serif";
+/// The font family of every text in a figure.
+pub const FONT: &str = "sans-serif";
 
 /// Why a plot could not be drawn.
 #[derive(Debug, thiserror::Error)]
@@ -263,28 +274,37 @@ where
     Ok(())
 }
 
-/// Bands from consecutive classified points: each run of equal classes becomes one band,
-/// with boundaries halfway (on `axis`'s scale) between neighbouring points of different
-/// class, and the outer edges half a spacing beyond the first and last points. `class`
-/// gives a point's label and colour, or `None` for a point that belongs to no band.
-pub fn bands_from_classes(xs: &[f64], axis: &Axis, class: impl Fn(usize) -> Option<(String, RGBColor)>) -> Vec<Band> {
+/// The edges of the cells around points `xs` (increasing) on `axis`'s scale: halfway between
+/// neighbours, and half a spacing beyond the first and last points (a single point `x`
+/// takes the spacing of `[x, 2x]`). `xs.len() + 1` edges; empty for no points.
+pub fn cell_edges(xs: &[f64], axis: &Axis) -> Vec<f64> {
     let n = xs.len();
     if n == 0 {
         return Vec::new();
     }
-    // Edges between point i-1 and i; the outer ones extend half a spacing.
-    let edge = |i: usize| -> f64 {
-        if n == 1 {
-            return if i == 0 { axis.at(xs[0], xs[0] * 2.0, -0.5) } else { axis.at(xs[0], xs[0] * 2.0, 0.5) };
-        }
-        if i == 0 {
-            axis.at(xs[0], xs[1], -0.5)
-        } else if i == n {
-            axis.at(xs[n - 2], xs[n - 1], 1.5)
-        } else {
-            axis.mid(xs[i - 1], xs[i])
-        }
-    };
+    (0..=n)
+        .map(|i| {
+            if n == 1 {
+                if i == 0 { axis.at(xs[0], xs[0] * 2.0, -0.5) } else { axis.at(xs[0], xs[0] * 2.0, 0.5) }
+            } else if i == 0 {
+                axis.at(xs[0], xs[1], -0.5)
+            } else if i == n {
+                axis.at(xs[n - 2], xs[n - 1], 1.5)
+            } else {
+                axis.mid(xs[i - 1], xs[i])
+            }
+        })
+        .collect()
+}
+
+/// Bands from consecutive classified points: each run of equal classes becomes one band,
+/// with boundaries halfway (on `axis`'s scale) between neighbouring points of different
+/// class, and the outer edges half a spacing beyond the first and last points
+/// ([`cell_edges`]). `class` gives a point's label and colour, or `None` for a point that
+/// belongs to no band.
+pub fn bands_from_classes(xs: &[f64], axis: &Axis, class: impl Fn(usize) -> Option<(String, RGBColor)>) -> Vec<Band> {
+    let n = xs.len();
+    let edges = cell_edges(xs, axis);
     let mut out = Vec::new();
     let mut i = 0;
     while i < n {
@@ -294,7 +314,7 @@ pub fn bands_from_classes(xs: &[f64], axis: &Axis, class: impl Fn(usize) -> Opti
             j += 1;
         }
         if let Some((label, color)) = c {
-            out.push(Band { from: edge(i), to: edge(j), label, color });
+            out.push(Band { from: edges[i], to: edges[j], label, color });
         }
         i = j;
     }

@@ -17,10 +17,7 @@ pub type CoreObservers = (WindowStats, RegimeDetector);
 
 /// Builds the core observers for a scene.
 pub fn core_observers(scene: &Scene) -> CoreObservers {
-    (
-        WindowStats::new(scene.run.t_warmup, scene.run.t_end, scene.junctions.n as u64),
-        RegimeDetector::new(scene.run.t_warmup, scene.plate.v),
-    )
+    (WindowStats::new(scene.run.t_warmup, scene.run.t_end, scene.junctions.n as u64), RegimeDetector::for_scene(scene))
 }
 
 /// The observers of junction events a run may have: none, the rupture-force statistics

@@ -201,6 +201,7 @@ pub fn summarize<E: Engine>(
     wall_seconds: f64,
 ) -> Result<Summary, EngineError> {
     let (stats, regime) = core;
+    let verdict = regime.verdict();
     let summary = Summary {
         scene: scene.name.clone(),
         engine: E::KIND,
@@ -216,8 +217,9 @@ pub fn summarize<E: Engine>(
         attached_fraction_mean: stats.attached_fraction_mean(),
         rupture_force_mean: ruptures.filter(|r| r.count > 0).map(|r| r.mean()),
         rupture_force_sem: ruptures.filter(|r| r.count > 1).map(|r| r.standard_error()),
-        regime: regime.regime(),
-        stick_slip_cycles: regime.cycles(),
+        regime: verdict.regime,
+        stick_slip_cycles: verdict.cycles,
+        oscillation: verdict.oscillation,
         counters: engine.counters(),
         wall_seconds,
         parameters: scene.clone(),

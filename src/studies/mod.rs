@@ -1,7 +1,18 @@
 //! Studies: many runs of one scene, varied and replicated, with statistics across runs.
 //!
-//! - [`sweep`]: one scene field swept over a list of values, with replicas (`stickslip sweep`).
-//! - [`seeds`]: how each run's seed is derived from the scene's seed.
+//! - [`sweep`]: scene fields swept over values, with replicas (`stickslip sweep`).
+//! - [`compare`]: error against run time of the fixed-step and exact engines
+//!   (`stickslip compare`), and the creep theory it is checked against.
+//! - [`seeds`]: how each run's seed is derived from the scene's seed (one mixer for all).
+//! - [`stats`]: statistics across replicas (means, spreads, Student-t intervals).
+//! - [`format`]: numbers as text for reports.
+//!
+//! Layers, each depending only on those before it: a study's data (plan, runs, outcome,
+//! tables) -> its figure ([`crate::plot`], which reads the outcome and draws) -> its files
+//! (`sweep::files`, `compare::files`: tables and figure written to disk) -> the CLI.
 
+pub mod compare;
+pub mod format;
 pub mod seeds;
+pub mod stats;
 pub mod sweep;

@@ -1,24 +1,45 @@
 //! Seeds of the runs of a study, derived from the scene's seed so that a study is
 //! reproducible and independent of the order (and the thread) in which its runs execute.
 //!
-//! The run for value index `i` (0-based, in the order the values are listed) and replica
-//! `r` (0-based) gets
+//! One mixer, [`mix`]: SplitMix64's output function applied to `x + 0x9E3779B97F4A7C15`
+//! (Steele, Lea & Flood 2014; the generator behind `rand`'s `seed_from_u64`), a bijection of
+//! `u64` with good avalanche. A run's hash is the chain [`chain`]`(s, [v1, v2, ..]) =
+//! mix(..mix(mix(s) ^ v1) ^ v2 ..)` of the scene's `run.seed` `s` and the numbers that name
+//! the run.
+//!
+//! **Sweeps** (`stickslip sweep`). The run for grid point `i` (0-based, in the order the
+//! points are listed; for a 1-D sweep the value index) and replica `r` (0-based) gets
 //!
 //! ```text
-//! h(i, r) = mix(mix(mix(s) ^ i) ^ r)        s = the scene's run.seed
+//! h(i, r) = mix(mix(mix(s) ^ i) ^ r)
 //! ```
 //!
-//! where `mix` is SplitMix64's output function applied to `x + 0x9E3779B97F4A7C15`
-//! (Steele, Lea & Flood 2014; the generator behind `rand`'s `seed_from_u64`). The seed is
-//! `h >> 1` (a TOML integer, `0 ..= 2^63 - 1`), or `1 + h mod (2^31 - 2)` when the run uses
-//! the Park–Miller generator (`run.engine = "fixed"`, `fixed.rng = "park-miller"`), whose
-//! seeds lie in `[1, 2^31 - 2]`. Seeds are assigned in index-major order (all replicas of
-//! value 0, then of value 1, ...); a seed equal to one already assigned (possible, though
-//! unlikely, in the Park–Miller range) is replaced by the next `h <- mix(h)` until it is new,
-//! so every run of a study has its own seed.
+//! The seed is `h >> 1` (a TOML integer, `0 ..= 2^63 - 1`), or `1 + h mod (2^31 - 2)` when
+//! the run uses the Park–Miller generator (`run.engine = "fixed"`, `fixed.rng =
+//! "park-miller"`), whose seeds lie in `[1, 2^31 - 2]`. Seeds are assigned in point-major
+//! order (all replicas of point 0, then of point 1, ...); a seed equal to one already
+//! assigned (possible, though unlikely, in the Park–Miller range) is replaced by the next
+//! `h <- mix(h)` until it is new, so every run of a sweep has its own seed.
+//!
+//! **Work-precision studies** (`stickslip compare`). Every replica of every point gets its
+//! own seed, a function of `(run.seed, role, point, replica)` only:
+//!
+//! - PCG streams (the exact engine; the fixed engine with `fixed.rng = "pcg"`): the seed is
+//!   `chain(s, [role, point, replica]) >> 1`. `Pcg64::seed_from_u64` of distinct seeds gives
+//!   unrelated 128-bit states; the reference, every point and every replica have distinct
+//!   seeds.
+//! - Park–Miller (the fixed engine's default): every seed lies on the generator's single
+//!   cycle of length `2^31 - 2`, so seeds picked at random would give streams that overlap
+//!   (at `dt = 1/256` of Fig. 1 a replica draws 11.5 million numbers, and two random starts
+//!   fall that close with probability about 1 %). The replicas of one point therefore take
+//!   consecutive, disjoint blocks of the cycle: the point starts at a hashed state `s_0`,
+//!   replica `r` at `s_0 a^(r L) mod m` (`a = 16807`, `m = 2^31 - 1`, `L` the draws one
+//!   replica can use), computed by modular exponentiation. A point whose replicas do not
+//!   fit in one cycle is refused.
 
 use std::collections::HashSet;
 
+use crate::rng::ParkMiller;
 use crate::scene::validate::PARK_MILLER_SEED_MAX;
 
 /// SplitMix64's increment (the golden ratio in 64-bit fixed point).
@@ -31,6 +52,14 @@ pub fn mix(x: u64) -> u64 {
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
 }
+
+/// The hash chain `mix(..mix(mix(base) ^ values[0]) ^ values[1] ..)`.
+pub fn chain(base: u64, values: &[u64]) -> u64 {
+    values.iter().fold(mix(base), |h, &v| mix(h ^ v))
+}
+
+// ---------------------------------------------------------------------------------------
+// Sweeps
 
 /// The range a run's seed must lie in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,21 +79,21 @@ impl SeedRange {
     }
 }
 
-/// `h(i, r)` before mapping into a range.
+/// `h(i, r)` of a sweep's run before mapping into a range.
 pub fn hash(scene_seed: u64, index: u64, replica: u64) -> u64 {
-    mix(mix(mix(scene_seed) ^ index) ^ replica)
+    chain(scene_seed, &[index, replica])
 }
 
-/// Seeds of all runs: `seeds[i][r]` for `values` values and `replicas` replicas, distinct.
-/// `range(i)` gives the seed range of value `i`'s runs.
+/// Seeds of all runs of a sweep: `seeds[i][r]` for `points` grid points and `replicas`
+/// replicas, distinct. `range(i)` gives the seed range of point `i`'s runs.
 pub fn derive_all(
     scene_seed: u64,
-    values: usize,
+    points: usize,
     replicas: usize,
     range: impl Fn(usize) -> SeedRange,
 ) -> Vec<Vec<u64>> {
-    let mut seen = HashSet::with_capacity(values * replicas);
-    (0..values)
+    let mut seen = HashSet::with_capacity(points * replicas);
+    (0..points)
         .map(|i| {
             let rng = range(i);
             (0..replicas)
@@ -82,6 +111,65 @@ pub fn derive_all(
         .collect()
 }
 
+// ---------------------------------------------------------------------------------------
+// Work-precision studies
+
+/// Which part of a work-precision study a seed is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    /// The exact engine's reference replicas.
+    Reference = 1,
+    /// The exact engine's points (increasing replica counts).
+    Exact = 2,
+    /// The fixed engine's points (one per `dt`).
+    Fixed = 3,
+}
+
+/// The PCG seed of one replica of a study: in `[0, 2^63 - 1]`, as `run.seed` allows.
+pub fn pcg_seed(base: u64, role: Role, point: u64, replica: u64) -> u64 {
+    chain(base, &[role as u64, point, replica]) >> 1
+}
+
+/// The Park–Miller period `2^31 - 2`.
+pub const PARK_MILLER_PERIOD: u64 = ParkMiller::MODULUS as u64 - 1;
+
+/// `b^e mod m` for `m < 2^32`.
+fn pow_mod(mut b: u64, mut e: u64, m: u64) -> u64 {
+    let mut r = 1u64;
+    b %= m;
+    while e > 0 {
+        if e & 1 == 1 {
+            r = r * b % m;
+        }
+        b = b * b % m;
+        e >>= 1;
+    }
+    r
+}
+
+/// The Park–Miller seeds of `replicas` replicas of one fixed-step point of a study, each
+/// allowed `draws` numbers: disjoint consecutive blocks of the cycle starting at a hashed
+/// state. `None` if the blocks do not fit in one period.
+pub fn park_miller_seeds(base: u64, point: u64, replicas: usize, draws: u64) -> Option<Vec<u64>> {
+    let total = (replicas as u64).checked_mul(draws)?;
+    if total > PARK_MILLER_PERIOD {
+        return None;
+    }
+    let m = u64::from(ParkMiller::MODULUS);
+    let start = 1 + chain(base, &[Role::Fixed as u64, point, u64::MAX]) % PARK_MILLER_PERIOD;
+    let jump = pow_mod(u64::from(ParkMiller::MULTIPLIER), draws % PARK_MILLER_PERIOD, m);
+    let mut s = start;
+    Some(
+        (0..replicas)
+            .map(|_| {
+                let seed = s;
+                s = s * jump % m;
+                seed
+            })
+            .collect(),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -92,6 +180,19 @@ mod tests {
         // the previous state, so mix(0), mix(GAMMA), ... are its first outputs.
         assert_eq!(mix(0), 0xE220_A839_7B1D_CDAF);
         assert_eq!(mix(GAMMA), 0x6E78_9E6A_A1B9_65F4);
+    }
+
+    #[test]
+    fn derived_seeds_are_those_of_the_documented_results() {
+        // Computed with the two mixers this module replaced (`studies/seeds.rs::mix` and
+        // `compare/seeds.rs::splitmix64`, commit 5737812): the published sweeps and studies
+        // keep their seeds. docs/figures/fig2-sweep/sweep.json lists seeds[13][3].
+        let fig2 = derive_all(1, 14, 4, |_| SeedRange::Full);
+        assert_eq!(fig2[13][3], 4_231_203_880_505_546_300);
+        assert_eq!(SeedRange::ParkMiller.map(hash(5, 2, 1)), 1_761_769_255);
+        assert_eq!(pcg_seed(7, Role::Exact, 1, 3), 3_368_791_360_226_051_095);
+        assert_eq!(pcg_seed(1, Role::Reference, 0, 0), 7_256_120_447_724_176_321);
+        assert_eq!(chain(1, &[Role::Fixed as u64, 2, u64::MAX]), 8_444_155_210_490_955_777);
     }
 
     #[test]
@@ -117,5 +218,36 @@ mod tests {
         assert_eq!(a[..], b[..3]);
         assert_eq!(a[2][3], hash(7, 2, 3) >> 1);
         assert_ne!(derive_all(8, 1, 1, |_| SeedRange::Full), derive_all(7, 1, 1, |_| SeedRange::Full));
+    }
+
+    #[test]
+    fn park_miller_blocks_follow_each_other_on_the_cycle() {
+        let draws = 1000;
+        let seeds = park_miller_seeds(7, 3, 4, draws).unwrap();
+        for w in seeds.windows(2) {
+            let mut g = ParkMiller::new(w[0]).unwrap();
+            for _ in 0..draws {
+                g.next_state();
+            }
+            // The next replica starts where this one's block ends: no draw is shared.
+            assert_eq!(u64::from(g.state()), w[1]);
+        }
+        assert!(seeds.iter().all(|&s| (1..=PARK_MILLER_PERIOD).contains(&s)));
+    }
+
+    #[test]
+    fn too_many_draws_are_refused() {
+        assert!(park_miller_seeds(1, 0, 2, PARK_MILLER_PERIOD / 2).is_some());
+        assert!(park_miller_seeds(1, 0, 3, PARK_MILLER_PERIOD / 2).is_none());
+    }
+
+    #[test]
+    fn study_seeds_differ_by_role_point_and_replica() {
+        let a = pcg_seed(1, Role::Reference, 0, 0);
+        assert_ne!(a, pcg_seed(1, Role::Exact, 0, 0));
+        assert_ne!(a, pcg_seed(1, Role::Reference, 1, 0));
+        assert_ne!(a, pcg_seed(1, Role::Reference, 0, 1));
+        assert_ne!(a, pcg_seed(2, Role::Reference, 0, 0));
+        assert!(a < 1 << 63);
     }
 }

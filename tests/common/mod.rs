@@ -2,6 +2,8 @@
 //! from a distribution (KS, chi-square, Student t), never hand-tuned.
 #![allow(dead_code)]
 
+pub mod moments;
+
 use statrs::distribution::{ChiSquared, ContinuousCDF, StudentsT};
 use stickslip::Scene;
 use stickslip::engine::{Engine, EngineVisitor, with_engine};

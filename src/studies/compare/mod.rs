@@ -31,25 +31,30 @@
 //! **Guards.** A fixed point in which any replica diverges (`EngineError::Diverged`, or a
 //! non-finite state) is reported as `diverged` with the number of diverged replicas. A
 //! point whose `dt` lies beyond the plate step's linear stability with every junction
-//! attached ([`stability::plate_growth`] > 1) is reported as `unstable`, with its numbers.
+//! attached (the plate growth factor [`PlateLimit::radius_all`] of
+//! [`crate::stability::analyse`] > 1) is reported as `unstable`, with its numbers.
+//!
+//! Layout: this file plans, runs and aggregates (data only); [`fit`] the bias model,
+//! [`report`] `compare.csv` and `compare.md`, [`files`] writes them with `compare.svg`
+//! ([`crate::plot::compare`]); [`creep`] is the Bell theory the creep study compares with.
+//!
+//! [`PlateLimit::radius_all`]: crate::stability::PlateLimit::radius_all
 
 pub mod creep;
+pub mod files;
 pub mod fit;
-pub mod plot;
 pub mod report;
-pub mod seeds;
-pub mod stability;
 
 use std::time::Instant;
 
 use rayon::prelude::*;
-use statrs::distribution::{ContinuousCDF, StudentsT};
 
+use super::seeds::{self, Role};
+use super::stats::{ReplicaStats, t_quantile};
 use crate::engine::EngineError;
 use crate::output::Summary;
 use crate::runner::{RunError, run_scene};
 use crate::scene::{BondKind, EngineKind, RngKind, Scene};
-use seeds::Role;
 
 /// An observable compared between the engines.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -148,6 +153,9 @@ pub struct Plan {
     pub ref_replicas: usize,
     pub exact_counts: Vec<usize>,
     pub observables: Vec<Observable>,
+    /// Per step of `dts`: the plate update's growth factor per step with every junction
+    /// attached ([`crate::stability::PlateLimit::radius_all`] of the fixed-step scene).
+    pub plate_growth: Vec<f64>,
     jobs: Vec<Job>,
 }
 
@@ -190,6 +198,7 @@ impl Plan {
             jobs.push(Job { role: Role::Reference, point: 0, scene: with_seed(&exact, seed) });
         }
         let counts = exact_counts(replicas);
+        let mut plate_growth = Vec::with_capacity(dts.len());
         for (k, &count) in counts.iter().enumerate() {
             for r in 0..count {
                 let seed = seeds::pcg_seed(base, Role::Exact, k as u64, r as u64);
@@ -201,6 +210,7 @@ impl Plan {
             let set_dt = format!("fixed.dt={}", ryu::Buffer::new().format(dt));
             let fixed = quiet(scene, &["run.engine=fixed".into(), "run.seed=1".into(), set_dt])
                 .map_err(|e| PlanError(format!("--dts: {dt}: {e}")))?;
+            plate_growth.push(crate::stability::analyse(&fixed).selected().radius_all);
             let seeds: Vec<u64> = match fixed.fixed.rng {
                 RngKind::Pcg => (0..replicas).map(|r| seeds::pcg_seed(base, Role::Fixed, j as u64, r as u64)).collect(),
                 RngKind::ParkMiller => {
@@ -227,6 +237,7 @@ impl Plan {
             ref_replicas,
             exact_counts: counts,
             observables: Observable::for_scene(scene),
+            plate_growth,
             jobs,
         })
     }
@@ -242,7 +253,7 @@ impl Plan {
         // the study (other processes) spreads over all points instead of hitting one; the
         // outcomes are put back in job order.
         let mut order: Vec<usize> = (0..self.jobs.len()).collect();
-        order.sort_by_key(|&i| seeds::splitmix64(i as u64));
+        order.sort_by_key(|&i| seeds::mix(i as u64));
         let ran: Vec<(usize, Outcome)> =
             pool.install(|| order.par_iter().map(|&i| (i, run_job(&self.jobs[i], obs))).collect());
         let mut slots: Vec<Option<Outcome>> = (0..self.jobs.len()).map(|_| None).collect();
@@ -277,7 +288,8 @@ impl Plan {
         let refs = pick(Role::Reference, 0);
         let ref_wall: f64 = refs.iter().map(|o| o.wall()).sum();
         let ref_cpu: f64 = refs.iter().map(|o| o.cpu()).sum();
-        let ref_stats: Vec<Sample> = (0..nobs).map(|i| Sample::of(refs.iter().map(|o| o.value(i)))).collect();
+        let ref_stats: Vec<ReplicaStats> =
+            (0..nobs).map(|i| ReplicaStats::of(refs.iter().map(|o| o.value(i)))).collect();
         let reference = Reference {
             replicas: self.ref_replicas,
             wall_seconds: ref_wall,
@@ -291,7 +303,7 @@ impl Plan {
             let cpu = outs.iter().map(|o| o.cpu()).sum();
             let obs = (0..nobs)
                 .map(|i| {
-                    let s = Sample::of(outs.iter().map(|o| o.value(i)));
+                    let s = ReplicaStats::of(outs.iter().map(|o| o.value(i)));
                     let r = &ref_stats[i];
                     let se = r.sd / (count as f64).sqrt();
                     PointObs::new(s.mean, se, r, r.n.saturating_sub(1) as f64)
@@ -314,7 +326,7 @@ impl Plan {
             let wall = outs.iter().map(|o| o.wall()).sum();
             let cpu = outs.iter().map(|o| o.cpu()).sum();
             let diverged = outs.iter().filter(|o| matches!(o, Outcome::Diverged { .. })).count();
-            let growth = stability::plate_growth(&self.scene, dt);
+            let growth = self.plate_growth[j];
             let status = if diverged > 0 {
                 Status::Diverged
             } else if growth > 1.0 {
@@ -327,7 +339,7 @@ impl Plan {
                     if diverged > 0 {
                         return PointObs::none();
                     }
-                    let s = Sample::of(outs.iter().map(|o| o.value(i)));
+                    let s = ReplicaStats::of(outs.iter().map(|o| o.value(i)));
                     let r = &ref_stats[i];
                     let (a, b) = (s.se * s.se, r.se * r.se);
                     let df = (a + b) * (a + b) / (a * a / (s.n as f64 - 1.0) + b * b / (r.n as f64 - 1.0));
@@ -410,34 +422,6 @@ fn run_job(job: &Job, obs: &[Observable]) -> Outcome {
     }
 }
 
-/// Mean, standard deviation and standard error over replicas. If any replica lacks the
-/// value (a weak-bond run without a rupture in its window) every field is NaN.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sample {
-    pub n: usize,
-    pub mean: f64,
-    /// Standard deviation of one replica's value.
-    pub sd: f64,
-    /// Standard error of the mean.
-    pub se: f64,
-}
-
-impl Sample {
-    fn of(values: impl Iterator<Item = Option<f64>>) -> Sample {
-        let v: Option<Vec<f64>> = values.collect();
-        let Some(v) = v else { return Sample { n: 0, mean: f64::NAN, sd: f64::NAN, se: f64::NAN } };
-        let n = v.len();
-        // Summed in replica order: the same bytes whatever the thread count.
-        let mean = v.iter().sum::<f64>() / n as f64;
-        let sd = if n > 1 {
-            (v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n as f64 - 1.0)).sqrt()
-        } else {
-            f64::NAN
-        };
-        Sample { n, mean, sd, se: sd / (n as f64).sqrt() }
-    }
-}
-
 /// The reference: the exact engine over many replicas.
 #[derive(Clone, Debug)]
 pub struct Reference {
@@ -445,7 +429,7 @@ pub struct Reference {
     pub wall_seconds: f64,
     pub cpu_seconds: f64,
     /// One per observable.
-    pub stats: Vec<Sample>,
+    pub stats: Vec<ReplicaStats>,
 }
 
 /// How a point ended.
@@ -492,19 +476,11 @@ impl PointObs {
             floor: f64::NAN,
         }
     }
-    fn new(estimate: f64, se: f64, reference: &Sample, df: f64) -> PointObs {
+    fn new(estimate: f64, se: f64, reference: &ReplicaStats, df: f64) -> PointObs {
         let error = estimate - reference.mean;
         let floor = (se * se + reference.se * reference.se).sqrt();
         let half = t_quantile(df) * floor;
         PointObs { estimate, se, error, ci_low: error - half, ci_high: error + half, floor }
-    }
-}
-
-/// Two-sided 95 % Student-t quantile; the normal one when `df` is not a usable number.
-pub fn t_quantile(df: f64) -> f64 {
-    match StudentsT::new(0.0, 1.0, df) {
-        Ok(t) if df.is_finite() && df > 0.0 => t.inverse_cdf(0.975),
-        _ => 1.959_963_984_540_054,
     }
 }
 
@@ -569,8 +545,12 @@ mod tests {
     }
 
     #[test]
-    fn student_t_quantile() {
-        assert!((t_quantile(f64::INFINITY) - 1.96).abs() < 1e-3);
-        assert!((t_quantile(10.0) - 2.228).abs() < 1e-3);
+    fn fig1_plate_growth_is_that_of_the_stability_analysis() {
+        // Fig. 1, every junction attached: w2 = (150 + 30)/75 = 2.4, c = 1; at dt = 1 the
+        // semi-implicit Euler matrix is [[-1.4, 0], [-2.4, 0]], radius 1.4; at dt = 0.5,
+        // a complex pair of modulus sqrt(det) = sqrt(1 - 0.5).
+        let p = Plan::new(&crate::testkit::fig1(), vec![1.0, 0.5], 2, 2).unwrap();
+        assert!((p.plate_growth[0] - 1.4).abs() < 1e-12);
+        assert!((p.plate_growth[1] - 0.5f64.sqrt()).abs() < 1e-12);
     }
 }

@@ -6,9 +6,10 @@
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
-use super::report::sig;
-use super::{Status, Study};
+use super::{FONT, PlotError, err as e};
 use crate::scene::EngineKind;
+use crate::studies::compare::{Status, Study};
+use crate::studies::format::sig;
 
 const FIXED: RGBColor = RGBColor(31, 119, 180);
 const EXACT: RGBColor = RGBColor(214, 39, 40);
@@ -49,10 +50,8 @@ fn dots(study: &Study, i: usize, engine: EngineKind) -> Vec<Dot> {
         .collect()
 }
 
-type Err = String;
-
 /// The figure's legend, in pixels from the top left of `area`.
-fn legend<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift>, y: i32) -> Result<(), Err> {
+fn legend<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift>, y: i32) -> Result<(), PlotError> {
     let entries = [
         (FIXED, false, "fixed-step engine (label: dt)"),
         (FIXED, true, "fixed-step sampling floor"),
@@ -68,18 +67,14 @@ fn legend<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift>, y:
             area.draw(&PathElement::new(line, color.stroke_width(2))).map_err(e)?;
             area.draw(&Circle::new((x + 15, y), 4, color.filled())).map_err(e)?;
         }
-        area.draw_text(text, &("sans-serif", 15).into_font().color(&BLACK), (x + 38, y - 8)).map_err(e)?;
+        area.draw_text(text, &(FONT, 15).into_font().color(&BLACK), (x + 38, y - 8)).map_err(e)?;
         x += 290;
     }
     Ok(())
 }
 
-fn e<T: std::fmt::Debug>(x: T) -> Err {
-    format!("{x:?}")
-}
-
 /// The SVG text of the diagram.
-pub fn svg(study: &Study) -> Result<String, Err> {
+pub fn svg(study: &Study) -> Result<String, PlotError> {
     let nobs = study.observables.len();
     let rows = nobs.div_ceil(2) as u32;
     let notes = notes(study);
@@ -98,7 +93,7 @@ pub fn svg(study: &Study) -> Result<String, Err> {
                      exact, {} replicas)",
                     study.scene.name, study.replicas, study.replicas, study.reference.replicas
                 ),
-                &("sans-serif", 18).into_font().color(&BLACK),
+                &(FONT, 18).into_font().color(&BLACK),
                 (16, 16),
             )
             .map_err(e)?;
@@ -108,7 +103,7 @@ pub fn svg(study: &Study) -> Result<String, Err> {
         }
         legend(&foot, 16)?;
         for (k, line) in notes.iter().enumerate() {
-            foot.draw_text(line, &("sans-serif", 15).into_font().color(&BLACK), (16, 40 + 24 * k as i32)).map_err(e)?;
+            foot.draw_text(line, &(FONT, 15).into_font().color(&BLACK), (16, 40 + 24 * k as i32)).map_err(e)?;
         }
         root.present().map_err(e)?;
     }
@@ -141,14 +136,14 @@ fn panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     study: &Study,
     i: usize,
-) -> Result<(), Err> {
+) -> Result<(), PlotError> {
     let o = study.observables[i];
     let fixed = dots(study, i, EngineKind::Fixed);
     let exact = dots(study, i, EngineKind::Exact);
     let all: Vec<&Dot> = fixed.iter().chain(&exact).collect();
     let caption = format!("{} ({})", o.label(), o.key());
     if all.is_empty() {
-        area.draw_text(&format!("{caption}: nothing to draw"), &("sans-serif", 16).into_font().color(&BLACK), (20, 20))
+        area.draw_text(&format!("{caption}: nothing to draw"), &(FONT, 16).into_font().color(&BLACK), (20, 20))
             .map_err(e)?;
         return Ok(());
     }
@@ -160,7 +155,7 @@ fn panel<DB: DrawingBackend>(
     let (ylo, yhi) = if ymin.is_finite() && ymax > 0.0 { (ymin / 3.0, ymax * 2.0) } else { (1e-3, 1.0) };
     let (xlo, xhi) = (xmin / 1.6, xmax * 1.6);
     let mut chart = ChartBuilder::on(area)
-        .caption(caption, ("sans-serif", 17))
+        .caption(caption, (FONT, 17))
         .margin(12)
         .margin_right(60)
         .x_label_area_size(40)
@@ -200,7 +195,7 @@ fn panel<DB: DrawingBackend>(
         chart
             .draw_series(dots.iter().map(|d| {
                 EmptyElement::at((d.x, d.y.max(ylo)))
-                    + Text::new(d.label.clone(), (6, -16), ("sans-serif", 12).into_font().color(&color))
+                    + Text::new(d.label.clone(), (6, -16), (FONT, 12).into_font().color(&color))
             }))
             .map_err(e)?;
     }

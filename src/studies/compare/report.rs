@@ -21,6 +21,7 @@ use super::fit::{BiasFit, bias_fit};
 use super::{Observable, Point, Status, Study};
 use crate::output::csv::push_f64;
 use crate::scene::EngineKind;
+use crate::studies::format::sig;
 
 fn cell(line: &mut String, v: f64) {
     line.push(',');
@@ -87,22 +88,6 @@ fn engine_name(e: EngineKind) -> &'static str {
         EngineKind::Exact => "exact",
         EngineKind::Fixed => "fixed",
     }
-}
-
-/// `v` with `sig` significant digits, plain or scientific as suits its size.
-pub fn sig(v: f64, sig: usize) -> String {
-    if !v.is_finite() {
-        return if v.is_nan() { "-".into() } else { format!("{v}") };
-    }
-    if v == 0.0 {
-        return "0".into();
-    }
-    let mag = v.abs().log10().floor() as i32;
-    if !(-3..6).contains(&mag) {
-        return format!("{:.*e}", sig.saturating_sub(1), v);
-    }
-    let decimals = (sig as i32 - 1 - mag).max(0) as usize;
-    format!("{v:.decimals$}")
 }
 
 /// A step, as short as it reads back exactly.
@@ -355,7 +340,7 @@ pub fn markdown(study: &Study, command: &str) -> String {
     let _ = writeln!(
         md,
         "\n(Cost to reach an RMS error e: exact `c sd^2/e^2`, fixed at dt `c(dt) sd(dt)^2/(e^2 - b(dt)^2)`, at least \
-         one replica; c, sd, b measured here. See `src/compare/report.rs`.)\n"
+         one replica; c, sd, b measured here. See `src/studies/compare/report.rs`.)\n"
     );
     let bad: Vec<String> = study
         .points
@@ -424,18 +409,4 @@ pub fn markdown(study: &Study, command: &str) -> String {
         md.push('\n');
     }
     md
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn significant_digits() {
-        assert_eq!(sig(0.012345, 3), "0.0123");
-        assert_eq!(sig(123.456, 3), "123");
-        assert_eq!(sig(-1.5, 2), "-1.5");
-        assert_eq!(sig(1.23e-7, 2), "1.2e-7");
-        assert_eq!(sig(f64::NAN, 2), "-");
-    }
 }

@@ -1,0 +1,240 @@
+//! A prepared sweep: the swept fields and their values, the grid of points, and the scene of
+//! every run with its derived seed. Preparing validates everything and runs nothing.
+
+use serde::Serialize;
+
+use super::values::SweepValue;
+use crate::scene::error::printable;
+use crate::scene::{EngineKind, RngKind, Scene, SceneError};
+use crate::studies::seeds::{self, SeedRange};
+
+/// Most runs (grid points x replicas) a sweep may have.
+pub const MAX_RUNS: usize = 1_000_000;
+/// Most fields a sweep varies together (a 2-D map).
+pub const MAX_AXES: usize = 2;
+
+/// One swept field and its values.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SweepAxis {
+    /// The scene field, `section.key`.
+    pub param: String,
+    pub values: Vec<SweepValue>,
+    /// Draw this axis of `sweep.svg` on a log scale.
+    pub log: bool,
+}
+
+/// What to sweep: one or two axes (the first varies slowest), replicas per grid point, and
+/// the `--set` overrides already applied to the base scene (for the record).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepSpec {
+    pub axes: Vec<SweepAxis>,
+    pub replicas: usize,
+    pub set: Vec<String>,
+}
+
+/// One point of the grid: its index, one value per axis, and the scenes of its replicas.
+#[derive(Clone, Debug)]
+pub struct GridPoint {
+    /// `i` for a 1-D sweep; `i * len(values of axis 2) + j` for value `i` of the first axis and
+    /// `j` of the second (row-major).
+    pub index: usize,
+    /// The value of each axis at this point.
+    pub values: Vec<SweepValue>,
+    /// `scenes[r]`: the scene of replica `r`, its seed set.
+    pub scenes: Vec<Scene>,
+}
+
+/// One run of a sweep, in the order [`Sweep::runs`] lists them.
+#[derive(Clone, Copy, Debug)]
+pub struct RunSpec<'a> {
+    /// Grid point index.
+    pub point: usize,
+    pub replica: usize,
+    /// The scene to run, with its derived seed.
+    pub scene: &'a Scene,
+}
+
+/// A sweep ready to run.
+#[derive(Clone, Debug)]
+pub struct Sweep {
+    /// The scene with the `--set` overrides, before the swept values.
+    pub base: Scene,
+    pub axes: Vec<SweepAxis>,
+    pub replicas: usize,
+    /// The `--set` overrides, for the record.
+    pub set: Vec<String>,
+    /// The grid, row-major (the last axis varies fastest).
+    pub points: Vec<GridPoint>,
+}
+
+/// Why a sweep cannot be prepared: one line naming the argument, the value and what is
+/// allowed.
+#[derive(Debug, thiserror::Error)]
+pub enum SpecError {
+    #[error(
+        "--param: no field to sweep (give --param SECTION.KEY with its values, e.g. --param plate.v --values 0.1,1)"
+    )]
+    NoAxes,
+    #[error("--param: {count} fields given, at most {MAX_AXES} (a 2-D sweep)")]
+    TooManyAxes { count: usize },
+    #[error("--param {param}: expected a scene field as SECTION.KEY, e.g. plate.v")]
+    NotAField { param: String },
+    #[error("--param {param}: no section [{section}] in a scene (sections: {sections})")]
+    NoSection { param: String, section: String, sections: String },
+    #[error("--param {param}: [{section}] has no field '{key}' (fields: {fields})")]
+    NoField { param: String, section: String, key: String, fields: String },
+    #[error(
+        "--param run.seed: cannot be swept: each run's seed is derived from run.seed, the grid point and the replica (use --replicas, or --set run.seed=...)"
+    )]
+    SeedSwept,
+    #[error("--param {param}: given twice (a 2-D sweep varies two different fields)")]
+    SameField { param: String },
+    #[error("--values: no values given for {param}")]
+    NoValues { param: String },
+    #[error(
+        "--replicas {replicas}: must be at least 1, with grid points x replicas at most {MAX_RUNS} ({points} grid points)"
+    )]
+    Replicas { replicas: usize, points: usize },
+    #[error("{flag}: value {value} of {param} is not > 0 (a log axis needs positive values)")]
+    LogAxis { flag: &'static str, param: String, value: String },
+    #[error("{point}: {source}")]
+    Value {
+        /// `value V for P` (1-D) or `values P1 = V1, P2 = V2` (2-D).
+        point: String,
+        #[source]
+        source: SceneError,
+    },
+}
+
+/// Checks that `param` names a field of a scene.
+fn check_field(base: &Scene, param: &str) -> Result<(), SpecError> {
+    let (section, key) = param
+        .split_once('.')
+        .filter(|(s, k)| !s.is_empty() && !k.is_empty() && !k.contains('.') && !param.contains('='))
+        .ok_or_else(|| SpecError::NotAField { param: printable(param) })?;
+    let table = toml::Table::try_from(base.to_file()).expect("a scene always serializes");
+    let fields = |t: &toml::Table| t.keys().cloned().collect::<Vec<_>>().join(", ");
+    match table.get(section).and_then(|s| s.as_table()) {
+        None => {
+            Err(SpecError::NoSection { param: printable(param), section: printable(section), sections: fields(&table) })
+        }
+        Some(t) if !t.contains_key(key) => Err(SpecError::NoField {
+            param: printable(param),
+            section: section.to_string(),
+            key: printable(key),
+            fields: fields(t),
+        }),
+        _ if param == "run.seed" => Err(SpecError::SeedSwept),
+        _ => Ok(()),
+    }
+}
+
+impl Sweep {
+    /// Checks the fields and every grid point (its values applied to `base` and validated
+    /// like the scene file) and derives every run's seed ([`crate::studies::seeds`], grid
+    /// point index and replica). Nothing runs.
+    pub fn prepare(base: Scene, spec: SweepSpec) -> Result<Sweep, SpecError> {
+        let SweepSpec { axes, replicas, set } = spec;
+        match axes.len() {
+            0 => return Err(SpecError::NoAxes),
+            n if n > MAX_AXES => return Err(SpecError::TooManyAxes { count: n }),
+            _ => {}
+        }
+        for (k, a) in axes.iter().enumerate() {
+            check_field(&base, &a.param)?;
+            if axes[..k].iter().any(|b| b.param == a.param) {
+                return Err(SpecError::SameField { param: a.param.clone() });
+            }
+            if a.values.is_empty() {
+                return Err(SpecError::NoValues { param: a.param.clone() });
+            }
+            if let Some(v) = a.values.iter().find(|v| a.log && v.x <= 0.0) {
+                let flag = if k == 0 { "--log-x" } else { "--log-y" };
+                return Err(SpecError::LogAxis { flag, param: a.param.clone(), value: printable(&v.text) });
+            }
+        }
+        let points = axes.iter().map(|a| a.values.len()).product::<usize>();
+        if replicas == 0 || points.saturating_mul(replicas) > MAX_RUNS {
+            return Err(SpecError::Replicas { replicas, points });
+        }
+        // Row-major grid of value indices.
+        let grid: Vec<Vec<usize>> = match axes.len() {
+            1 => (0..axes[0].values.len()).map(|i| vec![i]).collect(),
+            _ => (0..axes[0].values.len()).flat_map(|i| (0..axes[1].values.len()).map(move |j| vec![i, j])).collect(),
+        };
+        let mut scenes = Vec::with_capacity(grid.len());
+        for idx in &grid {
+            let values: Vec<SweepValue> = idx.iter().zip(&axes).map(|(&i, a)| a.values[i].clone()).collect();
+            let overrides: Vec<String> =
+                values.iter().zip(&axes).map(|(v, a)| format!("{}={}", a.param, v.text)).collect();
+            let scene = base.with_overrides(&overrides).map_err(|source| {
+                let point = match axes.len() {
+                    1 => format!("value {} for {}", printable(&values[0].text), axes[0].param),
+                    _ => format!(
+                        "values {} = {}, {} = {}",
+                        axes[0].param,
+                        printable(&values[0].text),
+                        axes[1].param,
+                        printable(&values[1].text)
+                    ),
+                };
+                SpecError::Value { point, source }
+            })?;
+            scenes.push((values, scene));
+        }
+        let range = |g: usize| {
+            let s: &Scene = &scenes[g].1;
+            if s.run.engine == EngineKind::Fixed && s.fixed.rng == RngKind::ParkMiller {
+                SeedRange::ParkMiller
+            } else {
+                SeedRange::Full
+            }
+        };
+        let seeds = seeds::derive_all(base.run.seed, grid.len(), replicas, range);
+        let points = scenes
+            .into_iter()
+            .zip(seeds)
+            .enumerate()
+            .map(|(index, ((values, scene), row))| GridPoint {
+                index,
+                values,
+                scenes: row
+                    .into_iter()
+                    .map(|seed| {
+                        let mut r = scene.clone();
+                        r.run.seed = seed;
+                        r
+                    })
+                    .collect(),
+            })
+            .collect();
+        Ok(Sweep { base, axes, replicas, set, points })
+    }
+
+    /// Every run, grid point by grid point (replicas in order within a point): the order in
+    /// which [`Sweep::outcome`] takes the runs' summaries.
+    pub fn runs(&self) -> impl Iterator<Item = RunSpec<'_>> + '_ {
+        self.points.iter().flat_map(|p| {
+            p.scenes.iter().enumerate().map(move |(replica, scene)| RunSpec { point: p.index, replica, scene })
+        })
+    }
+
+    /// Number of runs.
+    pub fn len(&self) -> usize {
+        self.points.len() * self.replicas
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Whether the sweep varies two fields (a map).
+    pub fn is_map(&self) -> bool {
+        self.axes.len() == 2
+    }
+
+    /// The swept fields joined by `-` (for the default output directory).
+    pub fn name(&self) -> String {
+        self.axes.iter().map(|a| a.param.as_str()).collect::<Vec<_>>().join("-")
+    }
+}
