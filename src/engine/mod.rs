@@ -90,6 +90,9 @@ pub trait EngineVisitor {
 /// Builds the engine the scene asks for (`run.engine`), specialised to the scene's force
 /// law, bond kind and options, and hands it to `visitor`.
 pub fn with_engine<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output, EngineError> {
+    if scene.plate.kinematic {
+        return Err(EngineError::Unsupported { engine: "selected", reason: "plate.kinematic is not implemented yet" });
+    }
     match scene.run.engine {
         EngineKind::Fixed => fixed::dispatch(scene, visitor),
         EngineKind::Exact => exact::dispatch(scene, visitor),

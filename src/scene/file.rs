@@ -6,7 +6,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::params::{BondKind, EngineKind, FlipRule, ForceLawKind, Initial, IntegratorKind, Reattach, RngKind};
+use super::params::{
+    BondKind, EngineKind, FlipRule, ForceLawKind, Initial, IntegratorKind, Reattach, RngKind, TiltedMethod,
+};
 
 /// `[junctions]`.
 #[derive(Clone, Debug, Default, Deserialize, Serialize)]
@@ -36,6 +38,7 @@ pub struct PlateSection {
     pub eta: Option<f64>,
     pub k: Option<f64>,
     pub v: Option<f64>,
+    pub kinematic: Option<bool>,
 }
 
 /// `[run]`.
@@ -64,6 +67,7 @@ pub struct FixedSection {
 pub struct ExactSection {
     pub rtol: Option<f64>,
     pub atol: Option<f64>,
+    pub tilted: Option<TiltedMethod>,
 }
 
 /// `[output]`.

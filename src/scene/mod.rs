@@ -68,7 +68,13 @@ impl Scene {
                 temperature: Some(j.temperature),
                 initial: Some(j.initial),
             },
-            plate: file::PlateSection { mass: Some(p.mass), eta: Some(p.eta), k: Some(p.k), v: Some(p.v) },
+            plate: file::PlateSection {
+                mass: Some(p.mass),
+                eta: Some(p.eta),
+                k: Some(p.k),
+                v: Some(p.v),
+                kinematic: Some(p.kinematic),
+            },
             run: file::RunSection {
                 engine: Some(r.engine),
                 t_end: Some(r.t_end),
@@ -81,7 +87,7 @@ impl Scene {
                 flip: Some(f.flip),
                 integrator: Some(f.integrator),
             },
-            exact: file::ExactSection { rtol: Some(e.rtol), atol: Some(e.atol) },
+            exact: file::ExactSection { rtol: Some(e.rtol), atol: Some(e.atol), tilted: Some(e.tilted) },
             output: file::OutputSection {
                 sample_dt: Some(o.sample_dt),
                 trace: Some(o.trace),

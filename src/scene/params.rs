@@ -144,6 +144,10 @@ pub struct PlateParams {
     pub k: f64,
     /// Driving velocity `V` (>= 0).
     pub v: f64,
+    /// Kinematic drive: the plate follows `X = V t` exactly (no plate equation; `mass`, `eta`
+    /// and `k` are not used) and the friction is the junctions' force `F_b`.
+    #[serde(default)]
+    pub kinematic: bool,
 }
 
 /// Run control.
@@ -185,6 +189,21 @@ pub struct ExactParams {
     pub rtol: f64,
     /// Absolute tolerance of the adaptive plate integrator (tilted law only).
     pub atol: f64,
+    /// How the exact engine evaluates the tilted law's bond force.
+    #[serde(default)]
+    pub tilted: TiltedMethod,
+}
+
+/// How the exact engine evaluates the tilted law's bond force `F_b(X) = sum_i f^x(X - c_i)`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TiltedMethod {
+    /// A truncated Taylor series about a base point, updated in O(1) per event, with a
+    /// rigorous remainder bound (docs/engines.md); the default.
+    #[default]
+    Series,
+    /// Direct summation over the attached junctions, O(N) per evaluation (the reference).
+    Direct,
 }
 
 /// What a run writes.

@@ -92,8 +92,9 @@ impl SceneFile {
             eta: finite_ge("plate.eta", p.eta.unwrap_or(75.0), 0.0)?,
             k: finite_ge("plate.k", p.k.unwrap_or(150.0), 0.0)?,
             v: finite_ge("plate.v", p.v.unwrap_or(0.5), 0.0)?,
+            kinematic: p.kinematic.unwrap_or(false),
         };
-        if plate.mass == 0.0 && plate.eta == 0.0 {
+        if !plate.kinematic && plate.mass == 0.0 && plate.eta == 0.0 {
             return Err(SceneError::invalid(
                 "plate.eta",
                 0,
@@ -155,7 +156,11 @@ impl SceneFile {
         }
 
         let e = &self.exact;
-        let exact = ExactParams { rtol: e.rtol.unwrap_or(1e-10), atol: e.atol.unwrap_or(1e-12) };
+        let exact = ExactParams {
+            rtol: e.rtol.unwrap_or(1e-10),
+            atol: e.atol.unwrap_or(1e-12),
+            tilted: e.tilted.unwrap_or_default(),
+        };
         if !(exact.rtol.is_finite() && (1e-14..=1e-2).contains(&exact.rtol)) {
             return Err(SceneError::invalid("exact.rtol", exact.rtol, "must be a number from 1e-14 to 1e-2"));
         }
