@@ -150,6 +150,16 @@ fn dd_add(acc: &mut [f64; 2], x: f64) {
     *acc = [hi, lo];
 }
 
+/// `(hi, lo) += x` elementwise, double-double.
+#[inline]
+fn dd_add_all(hi: &mut [f64], lo: &mut [f64], x: &[f64]) {
+    for ((h, l), &v) in hi.iter_mut().zip(lo.iter_mut()).zip(x) {
+        let (s, e) = two_sum(*h, v);
+        *h = s;
+        *l += e;
+    }
+}
+
 /// One bin of anchors: grid index, count, raw moments about the centre.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 struct Bin {
@@ -417,11 +427,7 @@ impl SeriesSum {
             pw[m] = pw[m - 2] * e2;
         }
         let bin = &mut self.bins[slot];
-        for m in 0..=p {
-            let (hi, lo) = two_sum(bin.m[m], pw[m]);
-            bin.m[m] = hi;
-            bin.ml[m] += lo;
-        }
+        dd_add_all(&mut bin.m[..=p], &mut bin.ml[..=p], &pw[..=p]);
         let t = self.tri();
         let g = &self.g[slot * t..(slot + 1) * t];
         // dt_k = sum_m G[m][k] e^m, four rows per pass (a quarter of the stores and reloads
@@ -451,11 +457,7 @@ impl SeriesSum {
             off += len;
             m += 1;
         }
-        for k in 0..=p {
-            let (hi, lo) = two_sum(self.a[k], dt[k]);
-            self.a[k] = hi;
-            self.al[k] += lo;
-        }
+        dd_add_all(&mut self.a[..=p], &mut self.al[..=p], &dt[..=p]);
         self.roff += self.op_roundoff();
     }
 
@@ -551,11 +553,7 @@ impl SeriesSum {
                 }
                 off += len;
             }
-            for k in 0..=p {
-                let (hi, lo) = two_sum(a[k], tb[k]);
-                a[k] = hi;
-                al[k] += lo;
-            }
+            dd_add_all(&mut a[..=p], &mut al[..=p], &tb[..=p]);
             spread += bin.count as f64 * (self.x_of(j).abs() + 0.5 * w);
         }
         self.a = a;
