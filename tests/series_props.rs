@@ -383,3 +383,40 @@ fn shift_is_a_change_of_frame() {
     assert!((before.0 - after.0).abs() <= s.error_bound(), "{before:?} vs {after:?}");
     assert!((before.1 - after.1).abs() <= s.stiffness_error_bound());
 }
+
+/// `integral` against composite Simpson quadrature (double-double accumulation) of the
+/// direct double-double sum over the whole radius: within `|y1 - y0| error_bound()` plus
+/// Simpson's own error, `L h^4 max|S''''| / 180 <= 1e-14` here (`h = 1.25e-4`).
+#[test]
+fn integral_matches_quadrature() {
+    let law = Tilted { kappa: 0.3, l0: 1.0 };
+    let mut s = SeriesSum::new(law, 1e-10);
+    let anchors: Vec<(f64, u32)> = (0..200)
+        .map(|i| {
+            let c = 2.0 - 0.037 * i as f64;
+            (c, s.add(c))
+        })
+        .collect();
+    s.rebase(0.3);
+    let (y0, y1) = (s.base() - s.radius(), s.base() + s.radius());
+    let m = 2000;
+    let h = (y1 - y0) / m as f64;
+    let mut acc = dd(0.0);
+    for i in 0..=m {
+        let wgt = if i == 0 || i == m {
+            1.0
+        } else if i % 2 == 1 {
+            4.0
+        } else {
+            2.0
+        };
+        let y = y0 + i as f64 * h;
+        for &(c, _) in &anchors {
+            acc += dd(wgt) * oracle_one(&law, y, c).0;
+        }
+    }
+    let simpson = (acc * dd(h / 3.0)).hi();
+    let got = s.integral(y0, y1);
+    let tol = (y1 - y0) * s.error_bound() + 1e-14;
+    assert!((got - simpson).abs() <= tol, "{got} vs {simpson}: {:e} > {tol:e}", got - simpson);
+}

@@ -1,7 +1,8 @@
 //! The tilted law's total bond force `S(y) = sum_i f^x(y - c_i)` (plate at `y`, junction `i`
 //! anchored at `c_i`, extension `x_i = y - c_i`) as a truncated series about a base point
-//! `y0`, updated in O(p) per attached or detached junction and re-based in
-//! O(bins p^2), independent of the number `N` of junctions (issue 10).
+//! `y0`, updated in O(p^2) flops per attached or detached junction and re-based in
+//! O(bins p^2), independent of the number `N` of junctions (issue 10). Measured costs:
+//! docs/performance.md, "Tilted law: the bond-force series".
 //!
 //! **Split.** `f^x(x) = kappa x + phi(x)`, `phi(x) = -kappa l0 x h(x)`,
 //! `h(x) = (x^2 + l0^2)^(-1/2)`. The linear part is kept exactly as
@@ -65,9 +66,20 @@
 //! anchors `fl(c - dy)` and ours, `origin + e`, differ by rounding in the absolute
 //! coordinates). For `dS/dy` the coefficient allowance is multiplied by `p/rho` (a
 //! perturbation with `|dA|_rho <= D` changes the derivative by at most `p D / rho`). The
-//! per-operation part grows by `~ 1.5e-13 kappa l0` per operation at `p = 17`, so it
-//! reaches `(rtol/2) kappa l0 n` only after `~ 3e2 n` operations without a re-base at
-//! `rtol = 1e-10`; `rebase(base())` (O(bins p^2)) resets it.
+//! per-operation part grows by `171 eps / (3/4) = 5e-14 kappa l0` per operation at `p = 17`,
+//! so it reaches `(rtol/2) kappa l0 n` only after `~ 1e3 n` operations without a re-base at
+//! `rtol = 1e-10`; `rebase(base())` (O(bins p^2)) resets it. (Also not in the truncation
+//! bound: a computed offset `e` may exceed `w/2` by its rounding, `eps |c - origin|`; the
+//! engine's periodic `shift` keeps `|c - origin|` small.)
+//!
+//! **Use (engine).** Keep `|y - base()| <= radius()` (call `rebase(y)` when the plate leaves
+//! it); give `remove` the anchor exactly as given to `add` (or as moved by the caller's own
+//! `shift` arithmetic) with the handle `add` returned; `integral(y0, y1)` is within
+//! `|y1 - y0| error_bound()` plus its own evaluation rounding (a few `eps |result|`); compare
+//! `error_bound()` with `rtol kappa l0 max(len, 1)` now and then and call `rebase(base())`
+//! when the per-operation allowance has used up its half (the stick phase of a long run,
+//! where the plate stays within the radius for many events). The state serialises
+//! (checkpoints) without the per-bin matrices `G_b`, which are recomputed bit-identically.
 
 use serde::{Deserialize, Serialize};
 
