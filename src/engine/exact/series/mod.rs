@@ -15,12 +15,12 @@
 mod engine;
 pub mod kinetics;
 pub mod motion;
-mod standin;
 
+pub(crate) use crate::ode::{Rosenbrock, RosenbrockConfig, StiffSystem};
+pub(crate) use crate::physics::SeriesSum;
 pub use engine::ExactSeries;
 pub use kinetics::{Kinetics, StrongKinetics, WeakKinetics};
 pub use motion::{Dynamic, Kinematic, Motion};
-pub(crate) use standin::{Rosenbrock, RosenbrockConfig, SeriesSum, StiffSystem};
 
 use crate::engine::{EngineError, EngineVisitor};
 use crate::scene::{BondKind, Scene};
