@@ -183,6 +183,32 @@ impl WeakRupture {
         let w = self.tree.total();
         (self.e_hi * w[0], self.e_lo * w[1])
     }
+    /// A slot drawn with probability `b_i / B` (one of the two terms, then the sum tree of
+    /// that component), and its leaf weights `[exp(-a c), exp(a c)]`.
+    #[inline]
+    fn draw_slot(&self, rng: &mut Pcg64, n_att: usize) -> (usize, [f64; 2]) {
+        let (m, p) = self.terms();
+        let u = rng.uniform() * (m + p);
+        let slot = if u < m { self.tree.find(0, u / self.e_hi) } else { self.tree.find(1, (u - m) / self.e_lo) };
+        let slot = slot.min(n_att - 1);
+        (slot, self.tree.get(slot))
+    }
+    /// The envelope for any plate path with `y_lo <= y <= y_hi` (tilted law,
+    /// [`crate::engine::exact::series`]): sets the bounds and returns the total candidate
+    /// rate `B / k0 = exp(a y_hi) W- + exp(-a y_lo) W+` (in units of `k0`; may be `+inf`).
+    #[inline]
+    pub fn envelope(&mut self, y_lo: f64, y_hi: f64) -> f64 {
+        self.set_bounds(y_lo, y_hi);
+        let (m, p) = self.terms();
+        m + p
+    }
+    /// A candidate of the envelope last set by [`WeakRupture::envelope`]: the slot, drawn
+    /// with probability `b_i / B`, and its bound `b_i / k0 = exp(a (y_hi - c_i)) + exp(a (c_i - y_lo))`.
+    #[inline]
+    pub fn envelope_candidate(&self, rng: &mut Pcg64, n_att: usize) -> (usize, f64) {
+        let (slot, w) = self.draw_slot(rng, n_att);
+        (slot, self.e_hi * w[0] + self.e_lo * w[1])
+    }
 }
 
 impl RuptureModel for WeakRupture {
@@ -260,17 +286,13 @@ impl RuptureModel for WeakRupture {
             return Some(attached.len() - 1);
         }
         let y = traj.at(s).0;
-        let (m, p) = self.terms();
-        let u = rng.uniform() * (m + p);
-        let slot = if u < m { self.tree.find(0, u / self.e_hi) } else { self.tree.find(1, (u - m) / self.e_lo) };
-        let slot = slot.min(attached.len() - 1);
+        let (slot, w) = self.draw_slot(rng, attached.len());
         // The junction is read only if the candidate is accepted: start loading it now.
         super::pick::prefetch(&attached[slot]);
         // Accept with r_i / b_i = exp(a|y-c|) / (exp(a(y_hi-c)) + exp(a(c-y_lo))), from the
         // leaf weights [exp(-a c), exp(a c)] just read by the descent (no access to the
         // junction, one exponential): exp(a(y-c)) = exp(a y) w0, exp(a(c-y)) = w1 / exp(a y).
         // All factors stay finite: |a y| <= FRAME_EXPONENT_LIMIT and |a c| <= EXPONENT_CAP.
-        let w = self.tree.get(slot);
         let ey = (self.a * y).exp();
         let r = (ey * w[0]).max(w[1] / ey);
         let b = self.e_hi * w[0] + self.e_lo * w[1];
