@@ -224,12 +224,17 @@ impl Dynamic {
         }
         let cfg = RosenbrockConfig { rtol, atol, ..RosenbrockConfig::default() };
         let ode = Rosenbrock::with_config(layout.dim, cfg).map_err(|e| ode_error(e, 0.0, rtol))?;
+        // At rest at X = 0: u = 0, W = tau_w (0 - V).
+        let mut state = vec![0.0; layout.dim];
+        if let Some(iv) = layout.vel {
+            state[iv] = -tau_w * plate.v;
+        }
         Ok(Dynamic {
             plate,
             layout,
             tau_w,
             ode,
-            state: vec![0.0; layout.dim],
+            state,
             saved: vec![0.0; layout.dim],
             lag_ref: 0.0,
             tau: 0.0,
