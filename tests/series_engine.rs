@@ -119,12 +119,11 @@ fn event_log_and_samples_are_consistent() {
 fn stiff_plates_cost_what_their_events_cost() {
     const STEPS_PER_EVENT: f64 = 12.0;
     const STEPS_PER_LENGTH: f64 = 200.0;
-    let cases: [&[&str]; 5] = [
+    let cases: [&[&str]; 4] = [
         &["plate.mass=1e-9", "plate.eta=100", "plate.k=1e9"],
         &["plate.mass=0", "plate.eta=75"],
         &["plate.eta=0"],
         &["plate.mass=1e-6", "plate.eta=100", "plate.k=1e9"],
-        &["plate.mass=1e-9", "plate.eta=1e-3"],
     ];
     for (i, case) in cases.iter().enumerate() {
         for bond in ["strong", "weak"] {
