@@ -160,8 +160,15 @@ impl Kinetics for WeakKinetics {
             return Ok(None);
         }
         let rate = self.k0 * self.envelope.envelope(y_lo, y_hi);
-        if !rate.is_finite() {
+        if rate.is_nan() {
             return Err(EngineError::NonFinite { t: s0, quantity: "weak-bond thinning envelope", value: rate });
+        }
+        if rate == f64::INFINITY {
+            // Rates beyond any representable bound within the step: a junction ruptures at
+            // once (docs/model.md, "Equations", item 6), one per call, as the linear engine's
+            // immediate ruptures.
+            *candidates += 1;
+            return Ok(Some((s0, n_att - 1)));
         }
         let mut s = s0;
         loop {

@@ -183,6 +183,8 @@ impl StiffSystem for System<'_> {
 
 /// Retakes of one step (validity or spread) before giving up.
 const MAX_RETAKES: u32 = 200;
+/// Retakes for the spread (weak bonds) before a wider step is accepted.
+const LOOSE_AFTER: u32 = 20;
 
 /// The dynamic plate: Rosenbrock on `[u, W, L, L2, B]` (`[u, L, L2, B]` when `M = 0`),
 /// `u = X - V t` the lag, `W = tau_w (Xd - V)`.
@@ -302,7 +304,10 @@ impl Motion for Dynamic {
             let (lo, hi) = (lo - 4.0 * f64::EPSILON * lo.abs(), hi + 4.0 * f64::EPSILON * hi.abs());
             let (base, r) = (ctx.series.base(), ctx.series.radius());
             let valid = lo >= base - r && hi <= base + r;
-            let tight = hi - lo <= ctx.max_spread;
+            // After LOOSE_AFTER retakes a wider step is accepted: the envelope stays valid
+            // (only less tight), and a spread below what the plate can resolve (an
+            // overflowing rate exponent) becomes an immediate rupture in the thinning.
+            let tight = hi - lo <= ctx.max_spread || retakes >= LOOSE_AFTER;
             if valid && tight {
                 self.tau = t;
                 return Ok(Step { s0: tau, s1: t, y_lo: lo, y_hi: hi });
@@ -427,7 +432,12 @@ impl Motion for Kinematic {
         ctx.recentre(y);
         let room = ctx.series.base() + ctx.series.radius() - y;
         let dy = room.min(ctx.max_spread);
-        let s1 = target.min(tau + dy / self.v);
+        let mut s1 = target.min(tau + dy / self.v);
+        if s1 <= tau {
+            // A spread too small to resolve in time: a wider step (the thinning then sees an
+            // overflowing envelope, an immediate rupture).
+            s1 = target.min(tau + room / self.v);
+        }
         Ok(Step { s0: tau, s1, y_lo: y, y_hi: self.y(s1) })
     }
     #[inline]
