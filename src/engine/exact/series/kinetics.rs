@@ -23,6 +23,8 @@ use crate::rng::{Pcg64, UniformSource};
 
 /// Target spread `a (y_hi - y_lo)` of a step (weak bonds): acceptance stays above `e^-1 / 2`.
 pub const SPREAD: f64 = 1.0;
+/// Largest `a = beta dx kappa` whose spread `SPREAD / a` a step is made to keep.
+const A_RESOLVABLE: f64 = 1e12;
 
 /// How attached junctions rupture, for the series engine.
 pub trait Kinetics: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static {
@@ -143,7 +145,9 @@ impl Kinetics for WeakKinetics {
     }
     #[inline]
     fn max_spread(&self) -> f64 {
-        if self.a() > 0.0 { SPREAD / self.a() } else { f64::INFINITY }
+        // Beyond A_RESOLVABLE no plate step can keep the spread (rates change by e over less
+        // than 1e-12 lengths): no limit, and the envelope overflows into immediate ruptures.
+        if self.a() > 0.0 && self.a() <= A_RESOLVABLE { SPREAD / self.a() } else { f64::INFINITY }
     }
     fn thin<F: FnMut(f64) -> Result<f64, EngineError>>(
         &mut self,
