@@ -33,6 +33,13 @@ pub struct Counters {
     /// Exact engine: coordinate re-basings (long runs).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rebases: Option<u64>,
+    /// Exact engine, tilted law, series method: re-basings of the bond-force series.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub series_rebases: Option<u64>,
+    /// Exact engine, tilted law, series method: the largest bound of the series' error on
+    /// the bond force over the run, relative to `kappa l0 max(N_att, 1)`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub series_error: Option<f64>,
 }
 
 /// Why an engine could not go on.
@@ -90,7 +97,8 @@ pub trait EngineVisitor {
 /// Builds the engine the scene asks for (`run.engine`), specialised to the scene's force
 /// law, bond kind and options, and hands it to `visitor`.
 pub fn with_engine<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output, EngineError> {
-    if scene.plate.kinematic {
+    let tilted = scene.junctions.force_law == crate::scene::ForceLawKind::Tilted;
+    if scene.plate.kinematic && !(tilted && scene.run.engine == EngineKind::Exact) {
         return Err(EngineError::Unsupported { engine: "selected", reason: "plate.kinematic is not implemented yet" });
     }
     match scene.run.engine {

@@ -1,0 +1,571 @@
+//! Plate motions of the series engine, chosen once per run.
+//!
+//! - [`Dynamic`]: the plate equation `M y'' + eta y' + S(y) + K lag = 0` (or `eta y' = ...`
+//!   when `M = 0`) with `S` the junction force from the [`SeriesSum`], integrated by the
+//!   L-stable [`Rosenbrock`] method with the analytic Jacobian, together with the
+//!   quadratures of the segment statistics: `L = int (lag - lag0)`, `L2 = int (lag - lag0)^2`,
+//!   `B = int S`. Stable at any stiffness: the step follows the accuracy, not `M/eta` or
+//!   `sqrt(M/K)`.
+//! - [`Kinematic`]: `y = V tau` exactly, no ODE and no integrator; the statistics come from
+//!   [`SeriesSum::integral`] (`int S dy`) and an 8-point Gauss–Legendre rule for
+//!   `int (S - S0)^2`.
+//!
+//! Every step keeps `|y - base| <= radius` of the series (re-basing, and retaking the step
+//! if the bounds of the accepted step leave the disc) and, for weak bonds, `y_hi - y_lo <=
+//! max_spread`, so the thinning envelope of the step is tight.
+
+use serde::{Deserialize, Serialize, de::DeserializeOwned};
+
+use super::{Rosenbrock, RosenbrockConfig, SeriesSum, StiffSystem};
+use crate::engine::exact::frame::Frame;
+use crate::engine::exact::tilted::ode_error;
+use crate::engine::{Counters, EngineError};
+use crate::observe::Segment;
+use crate::physics::Plate;
+
+/// One plate step `[s0, s1]` and proven bounds of `y` over it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Step {
+    pub s0: f64,
+    pub s1: f64,
+    pub y_lo: f64,
+    pub y_hi: f64,
+}
+
+/// What a step may change besides the motion: the series (re-basings) and the counters.
+pub struct StepCtx<'a> {
+    pub series: &'a mut SeriesSum,
+    pub frame: &'a Frame,
+    pub counters: &'a mut Counters,
+    /// Largest `y_hi - y_lo` of a step.
+    pub max_spread: f64,
+}
+
+impl StepCtx<'_> {
+    /// Re-bases the series at `y` and counts it.
+    #[inline]
+    fn rebase_series(&mut self, y: f64) {
+        self.series.rebase(y);
+        *self.counters.series_rebases.get_or_insert(0) += 1;
+    }
+    /// Re-bases the series at `y` if `y` is more than half the radius away from its base
+    /// (a step from there could leave the disc). Returns whether it did.
+    #[inline]
+    fn recentre(&mut self, y: f64) -> bool {
+        if (y - self.series.base()).abs() > 0.5 * self.series.radius() {
+            self.rebase_series(y);
+            true
+        } else {
+            false
+        }
+    }
+}
+
+/// How the plate moves between events.
+pub trait Motion: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static {
+    /// `true` for the kinematic drive (friction reported as the bond force).
+    const KINEMATIC: bool;
+    /// Plate position at the current local time `tau`.
+    fn y(&self, tau: f64) -> f64;
+    /// The lag `X - V t` now (0 for the kinematic drive).
+    fn lag(&self, tau: f64, frame: &Frame) -> f64;
+    /// Plate velocity now.
+    fn velocity(&self, series: &SeriesSum, frame: &Frame, tau: f64) -> f64;
+    /// Starts a piece (segment) at `tau`.
+    fn open_piece(&mut self, tau: f64, series: &SeriesSum, frame: &Frame);
+    /// Takes one step from `tau` towards `target` (never past it); `tau` is not moved: the
+    /// caller ends the step with [`Motion::finish`].
+    fn step(&mut self, ctx: &mut StepCtx<'_>, tau: f64, target: f64) -> Result<Step, EngineError>;
+    /// Position at `s` inside the last step.
+    fn y_at(&mut self, s: f64) -> Result<f64, EngineError>;
+    /// Ends the last step at `s` (its end, or an event inside it) and accumulates its
+    /// statistics up to `s`.
+    fn finish(&mut self, step: &Step, s: f64, series: &SeriesSum) -> Result<(), EngineError>;
+    /// The statistics of the piece from its start to `tau`.
+    fn segment(&self, tau: f64, frame: &Frame, plate: &Plate, series: &SeriesSum) -> Option<Segment>;
+    /// The frame moved by `(dtau, dy)`; the current local time becomes 0.
+    fn rebase(&mut self, dtau: f64, dy: f64);
+    /// Work counters (integrator steps).
+    fn sync_counters(&self, counters: &mut Counters);
+}
+
+/// Where each quantity sits in the integrated state.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+struct Layout {
+    /// Index of `w = Xd - V` (`None` for the overdamped plate).
+    vel: Option<usize>,
+    /// `L`; `L2 = l + 1`, `B = l + 2`.
+    l: usize,
+    dim: usize,
+}
+
+impl Layout {
+    fn new(overdamped: bool) -> Layout {
+        let (vel, l) = if overdamped { (None, 1) } else { (Some(1), 2) };
+        Layout { vel, l, dim: l + 3 }
+    }
+}
+
+/// The plate equation in the lag `u = X - V t` and `w = Xd - V`, with the series force at
+/// `y = u + V t - lag_ref`, and the quadratures `L = int (u - u0)`, `L2 = int (u - u0)^2`,
+/// `B = int S`. In these variables the drive's force `K u` has no cancellation (in `y`,
+/// `K (y - V t)` loses `K eps |y|`, which at `K = 1e9` exceeds any velocity tolerance), and
+/// the tolerance on `u` is one on the friction `-K u`.
+struct System<'a> {
+    series: &'a SeriesSum,
+    plate: Plate,
+    lag_ref: f64,
+    u0: f64,
+    layout: Layout,
+    /// Velocity scale `tau_w`: the state holds `W = tau_w w`.
+    tau_w: f64,
+}
+
+impl System<'_> {
+    #[inline]
+    fn y(&self, u: f64, t: f64) -> f64 {
+        u + self.plate.v * t - self.lag_ref
+    }
+}
+
+impl StiffSystem for System<'_> {
+    /// `u' = w`, `M w' = -(eta (w + V) + S + K u)` (in `W = tau_w w`); overdamped:
+    /// `u' = -(S + K u)/eta - V`.
+    fn rhs(&mut self, t: f64, s: &[f64], d: &mut [f64]) {
+        let u = s[0];
+        let fb = self.series.force(self.y(u, t));
+        let p = &self.plate;
+        match self.layout.vel {
+            Some(iv) => {
+                let w = s[iv] / self.tau_w;
+                d[0] = w;
+                d[iv] = self.tau_w * p.acceleration(u, w + p.v, fb);
+            }
+            None => d[0] = p.overdamped_velocity(u, fb) - p.v,
+        }
+        let du = u - self.u0;
+        let l = self.layout.l;
+        d[l] = du;
+        d[l + 1] = du * du;
+        d[l + 2] = fb;
+    }
+
+    /// `d/du` of the plate rows is `-(S' + K) / M` (or `/ eta`), `d/dw = -eta/M`; the time
+    /// enters only through `S(u + V t - lag_ref)`: `d/dt = -S' V / M` (or `/ eta`).
+    fn jacobian(&mut self, t: f64, s: &[f64], j: &mut [f64], dt: &mut [f64]) {
+        let (u, n) = (s[0], self.layout.dim);
+        let (_, ds) = self.series.force_and_stiffness(self.y(u, t));
+        let p = &self.plate;
+        j.iter_mut().for_each(|v| *v = 0.0);
+        match self.layout.vel {
+            Some(iv) => {
+                let tw = self.tau_w;
+                j[iv] = 1.0 / tw;
+                j[iv * n] = -tw * (ds + p.k) / p.mass;
+                j[iv * n + iv] = -p.eta / p.mass;
+                dt[0] = 0.0;
+                dt[iv] = -tw * ds * p.v / p.mass;
+            }
+            None => {
+                j[0] = -(ds + p.k) / p.eta;
+                dt[0] = -ds * p.v / p.eta;
+            }
+        }
+        let l = self.layout.l;
+        j[l * n] = 1.0;
+        j[(l + 1) * n] = 2.0 * (u - self.u0);
+        j[(l + 2) * n] = ds;
+        dt[l] = 0.0;
+        dt[l + 1] = 0.0;
+        dt[l + 2] = ds * p.v;
+    }
+}
+
+/// Retakes of one step (validity or spread) before giving up.
+const MAX_RETAKES: u32 = 200;
+/// Retakes for the spread (weak bonds) before a wider step is accepted.
+const LOOSE_AFTER: u32 = 20;
+
+/// The dynamic plate: Rosenbrock on `[u, W, L, L2, B]` (`[u, L, L2, B]` when `M = 0`),
+/// `u = X - V t` the lag, `W = tau_w (Xd - V)`.
+///
+/// The velocity is held in length units, scaled by its own time scale
+/// `tau_w = min(M / eta, sqrt(M / (K + kappa N)))`: an error `dw` in the velocity moves the
+/// plate by at most about `tau_w dw` before the plate's damping (or, undamped, its
+/// oscillation) takes it back, so the one tolerance `atol + rtol |.|` applied to `u` and `W`
+/// is a tolerance on the position. Without the scaling a stiff plate (M/eta = 1e-11)
+/// would resolve every event's velocity transient, invisible in the position, to `atol`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Dynamic {
+    plate: Plate,
+    layout: Layout,
+    tau_w: f64,
+    ode: Rosenbrock,
+    state: Vec<f64>,
+    /// State before the last step (restored when a step is retaken).
+    saved: Vec<f64>,
+    /// `lag_ref` of the frame: `y = u + V tau - lag_ref`.
+    lag_ref: f64,
+    /// Local time of the state (the last step's end, or the event inside it).
+    tau: f64,
+    tau0: f64,
+    u0: f64,
+}
+
+impl Dynamic {
+    /// `kappa_n = kappa N`, the junctions' largest stiffness (`d f^x / dx <= kappa`).
+    pub fn new(plate: Plate, kappa_n: f64, rtol: f64, atol: f64) -> Result<Dynamic, EngineError> {
+        let layout = Layout::new(plate.mass == 0.0);
+        let k = plate.k + kappa_n;
+        let mut tau_w = if plate.eta > 0.0 { plate.mass / plate.eta } else { f64::INFINITY };
+        if k > 0.0 {
+            tau_w = tau_w.min((plate.mass / k).sqrt());
+        }
+        if !(tau_w.is_finite() && tau_w > 0.0) {
+            tau_w = 1.0;
+        }
+        let cfg = RosenbrockConfig { rtol, atol, ..RosenbrockConfig::default() };
+        let ode = Rosenbrock::with_config(layout.dim, cfg).map_err(|e| ode_error(e, 0.0, rtol))?;
+        // At rest at X = 0: u = 0, W = tau_w (0 - V).
+        let mut state = vec![0.0; layout.dim];
+        if let Some(iv) = layout.vel {
+            state[iv] = -tau_w * plate.v;
+        }
+        Ok(Dynamic {
+            plate,
+            layout,
+            tau_w,
+            ode,
+            state,
+            saved: vec![0.0; layout.dim],
+            lag_ref: 0.0,
+            tau: 0.0,
+            tau0: 0.0,
+            u0: 0.0,
+        })
+    }
+    #[inline]
+    fn y_of(&self, u: f64, tau: f64) -> f64 {
+        u + self.plate.v * tau - self.lag_ref
+    }
+}
+
+impl Motion for Dynamic {
+    const KINEMATIC: bool = false;
+    #[inline]
+    fn y(&self, tau: f64) -> f64 {
+        self.y_of(self.state[0], tau)
+    }
+    #[inline]
+    fn lag(&self, _tau: f64, _frame: &Frame) -> f64 {
+        self.state[0]
+    }
+    fn velocity(&self, series: &SeriesSum, _frame: &Frame, tau: f64) -> f64 {
+        let p = &self.plate;
+        match self.layout.vel {
+            Some(iv) => self.state[iv] / self.tau_w + p.v,
+            None => {
+                let u = self.state[0];
+                p.overdamped_velocity(u, series.force(self.y_of(u, tau)))
+            }
+        }
+    }
+    fn open_piece(&mut self, tau: f64, _series: &SeriesSum, _frame: &Frame) {
+        let l = self.layout.l;
+        self.state[l..l + 3].iter_mut().for_each(|v| *v = 0.0);
+        self.tau0 = tau;
+        self.tau = tau;
+        self.u0 = self.state[0];
+        self.ode.reset();
+    }
+    fn step(&mut self, ctx: &mut StepCtx<'_>, tau: f64, target: f64) -> Result<Step, EngineError> {
+        if ctx.recentre(self.y(tau)) {
+            self.ode.reset();
+        }
+        let rtol = self.ode.config().rtol;
+        self.saved.copy_from_slice(&self.state);
+        let mut retakes = 0;
+        loop {
+            let mut t = tau;
+            let mut sys = System {
+                series: ctx.series,
+                plate: self.plate,
+                lag_ref: self.lag_ref,
+                u0: self.u0,
+                layout: self.layout,
+                tau_w: self.tau_w,
+            };
+            self.ode
+                .step(&mut sys, &mut t, &mut self.state, target)
+                .map_err(|e| ode_error(e, ctx.frame.time(tau), rtol))?;
+            let (ulo, uhi) = self.ode.component_bounds(0).map_err(|e| ode_error(e, ctx.frame.time(tau), rtol))?;
+            // y = u + V s - lag_ref with V >= 0: bounded by the u bounds at the two ends.
+            let (lo, hi) = (self.y_of(ulo, tau), self.y_of(uhi, t));
+            let (lo, hi) = (lo - 4.0 * f64::EPSILON * lo.abs(), hi + 4.0 * f64::EPSILON * hi.abs());
+            let (base, r) = (ctx.series.base(), ctx.series.radius());
+            let valid = lo >= base - r && hi <= base + r;
+            // After LOOSE_AFTER retakes a wider step is accepted: the envelope stays valid
+            // (only less tight), and a spread below what the plate can resolve (an
+            // overflowing rate exponent) becomes an immediate rupture in the thinning.
+            let tight = hi - lo <= ctx.max_spread || retakes >= LOOSE_AFTER;
+            if valid && tight {
+                self.tau = t;
+                return Ok(Step { s0: tau, s1: t, y_lo: lo, y_hi: hi });
+            }
+            retakes += 1;
+            if retakes > MAX_RETAKES {
+                return Err(EngineError::StepSizeUnderflow { t: ctx.frame.time(tau), h: t - tau, rtol });
+            }
+            // Restore the state before the step and retake it, shorter.
+            self.state.copy_from_slice(&self.saved);
+            let y0 = self.y_of(self.saved[0], tau);
+            let mut factor: f64 = 0.5;
+            if !valid && y0 != base {
+                ctx.rebase_series(y0);
+            }
+            if !tight {
+                factor = factor.min(0.5 * ctx.max_spread / (hi - lo));
+            }
+            self.ode.reset();
+            self.ode.set_h_proposal((t - tau) * factor);
+        }
+    }
+    #[inline]
+    fn y_at(&mut self, s: f64) -> Result<f64, EngineError> {
+        let u = self.ode.dense_component(0, s).map_err(|e| ode_error(e, s, 0.0))?;
+        Ok(self.y_of(u, s))
+    }
+    fn finish(&mut self, step: &Step, s: f64, _series: &SeriesSum) -> Result<(), EngineError> {
+        if s < step.s1 {
+            self.ode.dense(s, &mut self.state).map_err(|e| ode_error(e, s, 0.0))?;
+        }
+        self.tau = s;
+        Ok(())
+    }
+    fn segment(&self, tau: f64, frame: &Frame, plate: &Plate, _series: &SeriesSum) -> Option<Segment> {
+        let h = tau - self.tau0;
+        if h <= 0.0 {
+            return None;
+        }
+        let l = self.layout.l;
+        let s = &self.state;
+        let (li, l2) = (s[l], s[l + 1]);
+        let k = plate.k;
+        Some(Segment {
+            t0: frame.time(self.tau0),
+            t1: frame.time(tau),
+            friction: -k * (self.u0 + li / h),
+            friction_m2: k * k * (l2 - li * li / h).max(0.0),
+            bond_force: s[l + 2] / h,
+            // eta (X1 - X0) / h = eta (V + (u1 - u0) / h).
+            viscous: plate.eta * (plate.v + (s[0] - self.u0) / h),
+            attached: 0,
+        })
+    }
+    fn rebase(&mut self, dtau: f64, dy: f64) {
+        self.lag_ref += dy - self.plate.v * dtau;
+        self.tau0 -= dtau;
+        self.tau -= dtau;
+        self.ode.reset();
+    }
+    fn sync_counters(&self, c: &mut Counters) {
+        let st = self.ode.stats();
+        c.ode_steps = Some(st.accepted);
+        c.ode_rejected = Some(st.rejected);
+    }
+}
+
+/// Gauss–Legendre nodes and weights on `[-1, 1]`, 8 points (exact for degree 15).
+const GL8: [(f64, f64); 8] = [
+    (-0.960_289_856_497_536_3, 0.101_228_536_290_376_26),
+    (-0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
+    (-0.525_532_409_916_329, 0.313_706_645_877_887_3),
+    (-0.183_434_642_495_649_8, 0.362_683_783_378_362),
+    (0.183_434_642_495_649_8, 0.362_683_783_378_362),
+    (0.525_532_409_916_329, 0.313_706_645_877_887_3),
+    (0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
+    (0.960_289_856_497_536_3, 0.101_228_536_290_376_26),
+];
+
+/// The kinematic drive: `y = V tau` in the local frame, no ODE.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Kinematic {
+    v: f64,
+    tau0: f64,
+    /// `S` at the start of the piece, and `int (S - S0) ds`, `int (S - S0)^2 ds` since.
+    f0: f64,
+    i1: f64,
+    i2: f64,
+}
+
+impl Kinematic {
+    pub fn new(v: f64) -> Kinematic {
+        Kinematic { v, tau0: 0.0, f0: 0.0, i1: 0.0, i2: 0.0 }
+    }
+}
+
+impl Motion for Kinematic {
+    const KINEMATIC: bool = true;
+    #[inline]
+    fn y(&self, tau: f64) -> f64 {
+        self.v * tau
+    }
+    #[inline]
+    fn lag(&self, _tau: f64, _frame: &Frame) -> f64 {
+        0.0
+    }
+    #[inline]
+    fn velocity(&self, _series: &SeriesSum, _frame: &Frame, _tau: f64) -> f64 {
+        self.v
+    }
+    fn open_piece(&mut self, tau: f64, series: &SeriesSum, _frame: &Frame) {
+        self.tau0 = tau;
+        self.f0 = series.force(self.y(tau));
+        self.i1 = 0.0;
+        self.i2 = 0.0;
+    }
+    fn step(&mut self, ctx: &mut StepCtx<'_>, tau: f64, target: f64) -> Result<Step, EngineError> {
+        let y = self.y(tau);
+        if self.v == 0.0 {
+            return Ok(Step { s0: tau, s1: target, y_lo: y, y_hi: y });
+        }
+        ctx.recentre(y);
+        let room = ctx.series.base() + ctx.series.radius() - y;
+        let dy = room.min(ctx.max_spread);
+        let mut s1 = target.min(tau + dy / self.v);
+        if s1 <= tau {
+            // A spread too small to resolve in time: a wider step (the thinning then sees an
+            // overflowing envelope, an immediate rupture).
+            s1 = target.min(tau + room / self.v);
+        }
+        Ok(Step { s0: tau, s1, y_lo: y, y_hi: self.y(s1) })
+    }
+    #[inline]
+    fn y_at(&mut self, s: f64) -> Result<f64, EngineError> {
+        Ok(self.y(s))
+    }
+    fn finish(&mut self, step: &Step, s: f64, series: &SeriesSum) -> Result<(), EngineError> {
+        let h = s - step.s0;
+        if h <= 0.0 || self.v == 0.0 {
+            // A plate at rest keeps S = S0 (the segment's mean), with no spread.
+            return Ok(());
+        }
+        let (ya, yb) = (self.y(step.s0), self.y(s));
+        // int (S - S0) ds = (int S dy) / V - S0 h, exact for the series.
+        self.i1 += series.integral(ya, yb) / self.v - self.f0 * h;
+        let (mid, half) = (0.5 * (ya + yb), 0.5 * (yb - ya));
+        let q: f64 = GL8
+            .iter()
+            .map(|&(x, w)| {
+                let d = series.force(mid + half * x) - self.f0;
+                w * d * d
+            })
+            .sum();
+        self.i2 += 0.5 * h * q;
+        Ok(())
+    }
+    fn segment(&self, tau: f64, frame: &Frame, _plate: &Plate, _series: &SeriesSum) -> Option<Segment> {
+        let h = tau - self.tau0;
+        if h <= 0.0 {
+            return None;
+        }
+        let mean = self.f0 + self.i1 / h;
+        Some(Segment {
+            t0: frame.time(self.tau0),
+            t1: frame.time(tau),
+            friction: mean,
+            friction_m2: (self.i2 - self.i1 * self.i1 / h).max(0.0),
+            bond_force: mean,
+            viscous: 0.0,
+            attached: 0,
+        })
+    }
+    fn rebase(&mut self, dtau: f64, _dy: f64) {
+        self.tau0 -= dtau;
+    }
+    fn sync_counters(&self, _c: &mut Counters) {}
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::{ForceLaw, Tilted};
+
+    fn ctx<'a>(series: &'a mut SeriesSum, frame: &'a Frame, counters: &'a mut Counters) -> StepCtx<'a> {
+        StepCtx { series, frame, counters, max_spread: f64::INFINITY }
+    }
+
+    /// No junctions, overdamped: `u(t) = -(V eta / K) (1 - exp(-K t / eta))` (the plate
+    /// starts at rest at the drive), and the piece's quadratures match its integrals.
+    #[test]
+    fn dynamic_plate_follows_the_closed_form() {
+        let plate = Plate { mass: 0.0, eta: 2.0, k: 3.0, v: 0.5 };
+        let law = Tilted { kappa: 0.1, l0: 1.0 };
+        let mut series = SeriesSum::new(law, 1e-10);
+        let frame = Frame::new(plate.v);
+        let mut counters = Counters::default();
+        let mut m = Dynamic::new(plate, 0.0, 1e-10, 1e-12).unwrap();
+        m.open_piece(0.0, &series, &frame);
+        let (mut tau, target) = (0.0, 2.0);
+        while tau < target {
+            let step = m.step(&mut ctx(&mut series, &frame, &mut counters), tau, target).unwrap();
+            m.finish(&step, step.s1, &series).unwrap();
+            tau = step.s1;
+        }
+        let r = plate.k / plate.eta;
+        let u = -(plate.v / r) * (1.0 - (-r * target).exp());
+        assert!((m.lag(tau, &frame) - u).abs() < 1e-9, "{} vs {u}", m.lag(tau, &frame));
+        // Mean friction -K mean(u): int u = -(V/r) (T - (1 - e^{-rT})/r).
+        let int_u = -(plate.v / r) * (target - (1.0 - (-r * target).exp()) / r);
+        let seg = m.segment(tau, &frame, &plate, &series).unwrap();
+        assert!((seg.friction - (-plate.k * int_u / target)).abs() < 1e-8, "{}", seg.friction);
+        assert_eq!(seg.bond_force, 0.0);
+    }
+
+    /// Kinematic drive past one junction: the segment's mean is `int S dt / h` (compared
+    /// with a fine Simpson rule on the law itself), its spread `int (S - mean)^2 dt`.
+    #[test]
+    fn kinematic_segment_integrates_the_bond_force() {
+        let law = Tilted { kappa: 0.3, l0: 1.0 };
+        let mut series = SeriesSum::new(law, 1e-12);
+        let c = -0.4;
+        series.add(c);
+        let frame = Frame::new(0.7);
+        let mut counters = Counters::default();
+        let mut m = Kinematic::new(0.7);
+        m.open_piece(0.0, &series, &frame);
+        let (mut tau, target) = (0.0, 3.0);
+        while tau < target {
+            let step = m.step(&mut ctx(&mut series, &frame, &mut counters), tau, target).unwrap();
+            assert!(step.y_hi - series.base() <= series.radius() * (1.0 + 1e-12));
+            m.finish(&step, step.s1, &series).unwrap();
+            tau = step.s1;
+        }
+        assert!(counters.series_rebases.unwrap() >= 10);
+        let n = 20_000;
+        let f = |t: f64| law.force_x(0.7 * t - c);
+        let simpson = |g: &dyn Fn(f64) -> f64| {
+            let h = target / n as f64;
+            (0..=n)
+                .map(|i| {
+                    g(i as f64 * h)
+                        * if i == 0 || i == n {
+                            1.0
+                        } else if i % 2 == 1 {
+                            4.0
+                        } else {
+                            2.0
+                        }
+                })
+                .sum::<f64>()
+                * h
+                / 3.0
+        };
+        let mean = simpson(&f) / target;
+        let m2 = simpson(&|t| (f(t) - mean).powi(2));
+        let seg = m.segment(tau, &frame, &Plate { mass: 1.0, eta: 1.0, k: 1.0, v: 0.7 }, &series).unwrap();
+        assert!((seg.friction - mean).abs() < 1e-9 * mean.abs(), "{} vs {mean}", seg.friction);
+        assert!((seg.friction_m2 - m2).abs() < 1e-7 * m2, "{} vs {m2}", seg.friction_m2);
+        assert_eq!(seg.viscous, 0.0);
+    }
+}
