@@ -1,30 +1,93 @@
-//! The tilted law's total bond force `S(y) = sum_i f^x(y - c_i)` as an O(1)-per-event series.
+//! The tilted law's total bond force `S(y) = sum_i f^x(y - c_i)` (plate at `y`, junction `i`
+//! anchored at `c_i`, extension `x_i = y - c_i`) as a truncated series about a base point
+//! `y0`, updated in O(p) per attached or detached junction and re-based in
+//! O(bins p^2), independent of the number `N` of junctions (issue 10).
 //!
-//! FIRST CUT: the public API with a direct O(N) body (anchors stored); the series follows.
+//! **Split.** `f^x(x) = kappa x + phi(x)`, `phi(x) = -kappa l0 x h(x)`,
+//! `h(x) = (x^2 + l0^2)^(-1/2)`. The linear part is kept exactly as
+//! `kappa (X0 + n d)`, `d = y - y0`, `X0 = sum (y0 - c_i)` (a double-double running sum).
+//! Only `phi` (bounded, analytic, singular at `x = +-i l0`) goes into the series.
+//!
+//! **Taylor coefficients** (`tilted_taylor`). With `R = sqrt(x0^2 + l0^2)`, `t = -x0/R`,
+//! `h(x0 + d) = R^-1 (1 - 2 t (d/R) + (d/R)^2)^(-1/2) = sum_k R^-(k+1) P_k(t) d^k`
+//! (generating function of the Legendre polynomials), so `h_k = R^-(k+1) P_k(t)` by the
+//! stable three-term recurrence `k P_k = (2k-1) t P_(k-1) - (k-1) P_(k-2)`, O(1) per
+//! coefficient. (This is the brief's power recurrence for `u^(-1/2)`,
+//! `k u0 w_k = (alpha-k+1) u1 w_(k-1) + (2 alpha-k+2) u2 w_(k-2)`, after the scaling
+//! `w_k = R^-(k+1) P_k`.) Then `(x h)_k = x0 h_k + h_(k-1) = R^-k (P_(k-1)(t) - t P_k(t))`.
+//!
+//! **Coefficient bound.** For every real `x0` and `k >= 0`:
+//! `|phi_k(x0)| <= kappa l0 (l0/R)^(k+1) l0^-k <= kappa l0^(1-k)`.
+//! Proof: `k = 0`: `|phi_0| = kappa l0 |x0|/R`. `k >= 1`: the Legendre identity
+//! `(1-t^2) P_k' = k (P_(k-1) - t P_k)` gives `(x h)_k = R^-k (1-t^2) P_k'(t) / k`, and
+//! Bernstein's inequality `sqrt(1-t^2) |p'(t)| <= k max_[-1,1] |p|` with `|P_k| <= 1` gives
+//! `|(x h)_k| <= R^-k sqrt(1-t^2) = l0 R^-(k+1)`. (The brief's cruder bound
+//! `kappa l0 (2k+1) R^-k`, from `|h_k| <= (k+1) R^-(k+1)`, also holds; the tests check both.)
+//! The bound is uniform in `x0`: every junction's expansion converges with ratio `r/l0`
+//! wherever it is centred.
+//!
+//! **Bins.** Anchors are grouped on a fixed grid of width `w` in the anchor coordinate
+//! (bin `j` centred at `c_b = origin + (j + 1/2) w`); bin `b` keeps the count and the raw
+//! moments `M_(b,m) = sum_(i in b) e_i^m`, `e_i = c_i - c_b`, `|e_i| <= w/2`, `m = 0..=p`.
+//! With `x_b = y0 - c_b` and `y = y0 + d`, `|d| <= rho`:
+//! `phi(y - c_i) = sum_j phi_j(x_b) (d - e_i)^j`, and truncating at total degree `j <= p`,
+//! `A_k = sum_b sum_(m <= p-k) G_b[m][k] M_(b,m)`, `G_b[m][k] = (-1)^m C(m+k, k) phi_(m+k)(x_b)`,
+//! `Phi(y) ~ sum_(k<=p) A_k d^k`. A re-base recomputes `G_b` and `A` in O(bins p^2); an add or
+//! remove changes `M_b` by `+-e^m` and `A_k` by `+-sum_m G_b[m][k] e^m` (O(p^2) flops, no
+//! allocation), i.e. exactly the junction's own term of the re-base formula, so the series
+//! always equals the sum of the present junctions' truncated expansions (no drift from
+//! mixing expansions) and a detach cancels its attach up to round-off. A bin whose count
+//! reaches 0 is reset to exactly zero and its slab slot freed; the handle of a junction is
+//! its bin's slot. `shift` moves `origin` and `y0` only (bins, `x_b`, `G_b`, `A`, `X0` are
+//! relative quantities): O(1).
+//!
+//! **Truncation bound.** Per junction `|d - e_i| <= rho + w/2 = q l0`, so with the coefficient
+//! bound the dropped terms `j > p` are at most `kappa l0 sum_(j>p) q^j = kappa l0 q^(p+1)/(1-q)`
+//! for `S` and `kappa sum_(j>p) j q^(j-1) = kappa ((p+1) q^p/(1-q) + q^(p+1)/(1-q)^2)` for
+//! `dS/dy`; `error_bound` is `n` times these plus the round-off allowance. No near field is
+//! needed because `q < 1` for every bin, near or far.
+//!
+//! **Choice of `w`, `rho`, `p`.** `w/2 = rho = l0/8`, so `q = 1/4`; `p` is the smallest order
+//! with `q^(p+1)/(1-q) <= rtol/2` (capped at `PMAX - 1 = 31`, i.e. `rtol >= ~2e-19`): the
+//! truncation part of `error_bound()` is then `<= (rtol/2) kappa l0 len`, leaving the other
+//! half for round-off. `rtol = 1e-10` gives `p = 17`.
+//!
+//! **Round-off allowance** (first order in `eps`, not a proof). Norm: `|A|_rho =
+//! sum_k |A_k| rho^k`; every present junction contributes at most `kappa l0 /(1-q)` to it.
+//! Each add/remove adds `eps (n + 1 + 8 (p+2)) kappa l0/(1-q)` to an accumulated allowance
+//! (rounding of the increment and of its addition to `A`); a re-base resets it to
+//! `eps (n (bins (p+1) + 8 (p+2)) + sum_b mu_b) kappa l0/(1-q)`, `mu_b` the bin's own
+//! accumulated moment round-off `eps (n_b + 2)` per operation on it. At evaluation we add
+//! `eps (2p + 4) n kappa l0/(1-q)` (Horner) and `4 eps kappa (|X0| + n rho + sum_b n_b (|x_b| +
+//! w/2) + n (|y0 - origin| + |y0| + |origin|))` (the linear part, and the anchors' rounding
+//! against the grid: the caller's shifted anchors `fl(c - dy)` and ours, `origin + e`, differ
+//! by rounding in the absolute coordinates).
+//! For `dS/dy` the coefficient allowance is multiplied by `p/rho` (a perturbation with
+//! `|dA|_rho <= D` changes the derivative by at most `p D / rho`). The allowance grows with
+//! the number of operations since the last re-base; `rebase(base())` resets it.
 
 use serde::{Deserialize, Serialize};
 
-use super::force::{ForceLaw, Tilted};
+use super::force::Tilted;
 
-/// Taylor coefficients of the tilted law's horizontal force about `x`:
-/// `out[k] = (d^k f^x/dx^k)(x) / k!` for `k = 0..out.len()`.
-///
-/// `f^x = kappa x + phi`, `phi = -kappa l0 x h`, `h = (x^2 + l0^2)^(-1/2)`;
-/// `h_k = R^-(k+1) P_k(-x/R)` (Legendre, `R = sqrt(x^2 + l0^2)`), by the recurrence
-/// `k P_k = (2k - 1) t P_(k-1) - (k - 1) P_(k-2)`; `(x h)_k = x h_k + h_(k-1)`.
-pub fn tilted_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
-    let n = out.len();
-    if n == 0 {
-        return;
-    }
+/// Length of the fixed coefficient arrays: orders `p <= PMAX - 1`.
+pub const PMAX: usize = 32;
+/// `q = (rho + w/2) / l0`, the convergence ratio of every bin's double expansion.
+const Q: f64 = 0.25;
+const EPS: f64 = f64::EPSILON;
+
+/// Taylor coefficients of the nonlinear part `phi(x) = f^x(x) - kappa x = -kappa l0 x h(x)`
+/// about `x`, `out[k] = phi_k(x)` (computed directly, without the cancellation of
+/// subtracting `kappa x` from `tilted_taylor`).
+pub fn phi_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
     let r = x.hypot(law.l0);
     let t = -x / r;
     let inv_r = 1.0 / r;
     let a = -law.kappa * law.l0;
-    // (x h)_k = R^-k [ (x/R) P_k + P_(k-1) ] = R^-k [ P_(k-1) - t P_k ].
-    let (mut p_prev, mut p) = (1.0, t); // P_0, P_1
+    let (mut p_prev, mut p) = (1.0, t); // P_(k-1), P_k
     let mut scale = 1.0; // R^-k
     for (k, o) in out.iter_mut().enumerate() {
+        // (x h)_k = R^-k (P_(k-1) - t P_k); (x h)_0 = x/R = -t.
         let xh = if k == 0 {
             -t
         } else {
@@ -39,107 +102,521 @@ pub fn tilted_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
         };
         *o = a * xh;
     }
-    out[0] += law.kappa * x;
-    if n > 1 {
-        out[1] += law.kappa;
+}
+
+/// Taylor coefficients of the tilted law's horizontal force about `x`:
+/// `out[k] = (d^k f^x/dx^k)(x) / k!` for `k = 0..out.len()`.
+///
+/// `f^x = kappa x + phi`, `phi_k = -kappa l0 (x h)_k`, `(x h)_k = R^-k (P_(k-1)(t) - t P_k(t))`,
+/// `R = sqrt(x^2 + l0^2)`, `t = -x/R` (module doc). O(1) per coefficient.
+pub fn tilted_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
+    phi_taylor(law, x, out);
+    if let Some(o) = out.first_mut() {
+        *o += law.kappa * x;
+    }
+    if let Some(o) = out.get_mut(1) {
+        *o += law.kappa;
     }
 }
 
-/// The bond force of a set of junctions under the tilted law, kept about a base point.
+/// `a + b` as a double-double `(hi, lo)` (Knuth's TwoSum, exact).
+#[inline]
+fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
+}
+
+/// Double-double accumulator.
+#[inline]
+fn dd_add(acc: &mut [f64; 2], x: f64) {
+    let (s, e) = two_sum(acc[0], x);
+    let (hi, lo) = two_sum(s, acc[1] + e);
+    *acc = [hi, lo];
+}
+
+/// One bin of anchors: grid index, count, raw moments about the centre.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct Bin {
+    /// Grid index `j`: centre `origin + (j + 1/2) w`.
+    j: i64,
+    /// Number of anchors; 0 marks a free slab slot.
+    count: u64,
+    /// `M_m = sum e_i^m`, `m = 0..=p`.
+    m: [f64; PMAX],
+    /// Accumulated moment round-off, in units of `(w/2)^m`.
+    mu: f64,
+}
+
+/// Serialized form of `SeriesSum`: everything but the per-bin matrices `G_b`, which are a
+/// deterministic function of `(law, p, w, base_off, j)` and are recomputed on reading.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Wire {
+    law: Tilted,
+    p: usize,
+    base: f64,
+    origin: f64,
+    base_off: f64,
+    n: u64,
+    x0: [f64; 2],
+    a: [f64; PMAX],
+    bins: Vec<Bin>,
+    free: Vec<u32>,
+    index: Vec<(i64, u32)>,
+    roff: f64,
+    spread: f64,
+}
+
+/// The bond force `S(y) = sum_i f^x(y - c_i)` of a set of junctions under the tilted law,
+/// kept as `kappa (X0 + n d) + sum_(k<=p) A_k d^k`, `d = y - base`, plus anchor bins for
+/// O(bins) re-basing (module doc).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(from = "Wire", into = "Wire")]
 pub struct SeriesSum {
     law: Tilted,
-    rtol: f64,
+    /// Order: coefficients `A_0..=A_p`, bin moments `M_0..=M_p`.
+    p: usize,
+    /// Base point `y0` in the current frame.
     base: f64,
-    anchors: Vec<f64>,
-    live: Vec<bool>,
+    /// Grid origin in the current frame.
+    origin: f64,
+    /// `y0 - origin`, frame-independent (not touched by `shift`).
+    base_off: f64,
+    n: u64,
+    /// `X0 = sum (y0 - c_i)`, double-double.
+    x0: [f64; 2],
+    /// Series coefficients of `Phi(y0 + d)`.
+    a: [f64; PMAX],
+    /// Slab of bins; `count == 0` slots are on `free`.
+    bins: Vec<Bin>,
     free: Vec<u32>,
-    n: usize,
+    /// `(j, slot)` of the live bins, sorted by `j`.
+    index: Vec<(i64, u32)>,
+    /// Per slot, `G_b[m][k]` for `m + k <= p`, rows `m` of length `p + 1 - m`, concatenated.
+    g: Vec<f64>,
+    /// Accumulated coefficient round-off allowance, in units of `eps kappa l0 / (1 - q)`.
+    roff: f64,
+    /// `sum_b n_b (|x_b| + w/2)`, an upper bound on `sum |y0 - c_i|` (round-off allowance).
+    spread: f64,
+}
+
+impl From<Wire> for SeriesSum {
+    fn from(w: Wire) -> SeriesSum {
+        let mut s = SeriesSum {
+            law: w.law,
+            p: w.p.min(PMAX - 1),
+            base: w.base,
+            origin: w.origin,
+            base_off: w.base_off,
+            n: w.n,
+            x0: w.x0,
+            a: w.a,
+            bins: w.bins,
+            free: w.free,
+            index: w.index,
+            g: Vec::new(),
+            roff: w.roff,
+            spread: w.spread,
+        };
+        s.g = vec![0.0; s.bins.len() * s.tri()];
+        for slot in 0..s.bins.len() {
+            if s.bins[slot].count > 0 {
+                s.fill_g(slot);
+            }
+        }
+        s
+    }
+}
+
+impl From<SeriesSum> for Wire {
+    fn from(s: SeriesSum) -> Wire {
+        Wire {
+            law: s.law,
+            p: s.p,
+            base: s.base,
+            origin: s.origin,
+            base_off: s.base_off,
+            n: s.n,
+            x0: s.x0,
+            a: s.a,
+            bins: s.bins,
+            free: s.free,
+            index: s.index,
+            roff: s.roff,
+            spread: s.spread,
+        }
+    }
+}
+
+/// Smallest order `p` with `q^(p+1) / (1 - q) <= rtol / 2`, capped at `PMAX - 1`.
+fn order_for(rtol: f64) -> usize {
+    let mut tail = Q / (1.0 - Q); // q^(p+1)/(1-q) at p = 0
+    for p in 0..PMAX - 1 {
+        if tail <= 0.5 * rtol {
+            return p.max(1);
+        }
+        tail *= Q;
+    }
+    PMAX - 1
 }
 
 impl SeriesSum {
-    /// Empty set of anchors, base point 0.
+    /// Empty set of anchors, base point 0, bins of width `w = l0/4`, radius `rho = l0/8`
+    /// (`q = 1/4`) and the smallest order `p` with `q^(p+1)/(1-q) <= rtol/2`: the truncation
+    /// part of `error_bound()` is then at most `(rtol/2) kappa l0 len()` (for `rtol >= ~2e-19`;
+    /// smaller, non-positive or NaN `rtol` give the cap `p = 31`). The round-off part is
+    /// separate (module doc); it stays below the other half for `N` and operations since the
+    /// last re-base well below `rtol / eps`. `law.l0 > 0` is assumed (validated by the scene).
     pub fn new(law: Tilted, rtol: f64) -> SeriesSum {
-        SeriesSum { law, rtol, base: 0.0, anchors: Vec::new(), live: Vec::new(), free: Vec::new(), n: 0 }
+        SeriesSum {
+            law,
+            p: order_for(rtol),
+            base: 0.0,
+            origin: 0.0,
+            base_off: 0.0,
+            n: 0,
+            x0: [0.0; 2],
+            a: [0.0; PMAX],
+            bins: Vec::new(),
+            free: Vec::new(),
+            index: Vec::new(),
+            g: Vec::new(),
+            roff: 0.0,
+            spread: 0.0,
+        }
     }
+
+    /// The truncation order `p`.
+    pub fn order(&self) -> usize {
+        self.p
+    }
+
+    /// Number of live bins.
+    pub fn bin_count(&self) -> usize {
+        self.index.len()
+    }
+
     pub fn len(&self) -> usize {
-        self.n
+        self.n as usize
     }
+
     pub fn is_empty(&self) -> bool {
         self.n == 0
     }
+
     /// Base point `y0` of the series.
     pub fn base(&self) -> f64 {
         self.base
     }
-    /// The series is valid for `|y - base| <= radius()`.
+
+    /// The series is valid (error within `error_bound()`) for `|y - base| <= radius()`;
+    /// `radius = l0/8`. Outside it, nothing is guaranteed.
     pub fn radius(&self) -> f64 {
-        self.law.l0 / 8.0
+        0.125 * self.law.l0
     }
-    /// A junction with anchor `c` attached. Returns a handle to pass to `remove`.
-    pub fn add(&mut self, c: f64) -> u32 {
-        self.n += 1;
-        if let Some(h) = self.free.pop() {
-            self.anchors[h as usize] = c;
-            self.live[h as usize] = true;
-            h
-        } else {
-            self.anchors.push(c);
-            self.live.push(true);
-            (self.anchors.len() - 1) as u32
+
+    /// Bin width `w = l0/4`.
+    #[inline]
+    fn width(&self) -> f64 {
+        0.25 * self.law.l0
+    }
+
+    /// Entries of one bin's triangular matrix `G_b`.
+    #[inline]
+    fn tri(&self) -> usize {
+        (self.p + 1) * (self.p + 2) / 2
+    }
+
+    /// `x_b = y0 - c_b` of grid index `j`.
+    #[inline]
+    fn x_of(&self, j: i64) -> f64 {
+        self.base_off - (j as f64 + 0.5) * self.width()
+    }
+
+    /// `G_b[m][k] = (-1)^m C(m+k, k) phi_(m+k)(x_b)` for the bin in `slot`. O(p^2).
+    fn fill_g(&mut self, slot: usize) {
+        let p = self.p;
+        let mut phi = [0.0; PMAX];
+        phi_taylor(&self.law, self.x_of(self.bins[slot].j), &mut phi[..=p]);
+        // Pascal's triangle by rows `m`: binom[k] = C(m+k, k).
+        let mut binom = [1.0; PMAX];
+        let t = self.tri();
+        let g = &mut self.g[slot * t..(slot + 1) * t];
+        let mut off = 0;
+        for m in 0..=p {
+            if m > 0 {
+                // C(m+k, k) = C(m-1+k, k) + C(m+k-1, k-1).
+                for k in 1..=p - m {
+                    binom[k] += binom[k - 1];
+                }
+            }
+            let sign = if m % 2 == 0 { 1.0 } else { -1.0 };
+            for k in 0..=p - m {
+                g[off + k] = sign * binom[k] * phi[m + k];
+            }
+            off += p + 1 - m;
         }
     }
-    /// The junction with anchor `c` and handle `h` detached.
-    pub fn remove(&mut self, _c: f64, h: u32) {
-        assert!(self.live[h as usize], "SeriesSum::remove: handle {h} is not attached");
-        self.live[h as usize] = false;
-        self.free.push(h);
+
+    /// Slot of the bin with grid index `j`, created (with its `G_b`) if absent.
+    fn slot_of(&mut self, j: i64) -> usize {
+        match self.index.binary_search_by_key(&j, |&(jj, _)| jj) {
+            Ok(i) => self.index[i].1 as usize,
+            Err(i) => {
+                let bin = Bin { j, count: 0, m: [0.0; PMAX], mu: 0.0 };
+                let slot = match self.free.pop() {
+                    Some(s) => {
+                        self.bins[s as usize] = bin;
+                        s as usize
+                    }
+                    None => {
+                        self.bins.push(bin);
+                        self.g.resize(self.bins.len() * self.tri(), 0.0);
+                        self.bins.len() - 1
+                    }
+                };
+                self.index.insert(i, (j, slot as u32));
+                self.fill_g(slot);
+                slot
+            }
+        }
+    }
+
+    /// Adds `sign * (junction with offset e in slot)` to the moments and the series. O(p^2).
+    #[inline]
+    fn apply(&mut self, slot: usize, e: f64, sign: f64) {
+        let p = self.p;
+        let mut pw = [0.0; PMAX];
+        let mut v = sign;
+        for x in pw.iter_mut().take(p + 1) {
+            *x = v;
+            v *= e;
+        }
+        let bin = &mut self.bins[slot];
+        for (m, x) in bin.m.iter_mut().zip(&pw).take(p + 1) {
+            *m += x;
+        }
+        bin.mu += (bin.count + 2) as f64;
+        let t = self.tri();
+        let g = &self.g[slot * t..(slot + 1) * t];
+        let mut dt = [0.0; PMAX];
+        let mut off = 0;
+        for (m, &em) in pw.iter().enumerate().take(p + 1) {
+            let len = p + 1 - m;
+            for (d, gv) in dt[..len].iter_mut().zip(&g[off..off + len]) {
+                *d += gv * em;
+            }
+            off += len;
+        }
+        for (a, d) in self.a.iter_mut().zip(&dt).take(p + 1) {
+            *a += d;
+        }
+        self.roff += self.n as f64 + 1.0 + 8.0 * (p as f64 + 2.0);
+    }
+
+    /// A junction with anchor `c` attached. O(p^2) flops (plus a binary search over the
+    /// bins, and O(p^2 + bins) when it opens a new bin). Returns a handle to pass to `remove`.
+    pub fn add(&mut self, c: f64) -> u32 {
+        let w = self.width();
+        let t = c - self.origin;
+        let j = (t / w).floor() as i64;
+        let slot = self.slot_of(j);
+        let e = t - (j as f64 + 0.5) * w;
+        self.n += 1;
+        self.bins[slot].count += 1;
+        self.apply(slot, e, 1.0);
+        dd_add(&mut self.x0, self.base - c);
+        self.spread += self.x_of(j).abs() + 0.5 * w;
+        slot as u32
+    }
+
+    /// The junction with anchor `c` (as given to `add`, or as moved by `shift`) and handle `h`
+    /// detached. O(p^2) flops (O(bins) when its bin empties and is freed).
+    pub fn remove(&mut self, c: f64, h: u32) {
+        let slot = h as usize;
+        let w = self.width();
+        let j = self.bins[slot].j;
+        debug_assert!(self.bins[slot].count > 0, "SeriesSum::remove: handle {h} has no junction");
+        let e = (c - self.origin) - (j as f64 + 0.5) * w;
         self.n -= 1;
+        self.bins[slot].count -= 1;
+        dd_add(&mut self.x0, c - self.base);
+        self.spread = (self.spread - (self.x_of(j).abs() + 0.5 * w)).max(0.0);
+        if self.bins[slot].count == 0 {
+            // Its exact moments are zero: forget the rounded ones and free the slot.
+            self.apply(slot, e, -1.0);
+            let bin = &mut self.bins[slot];
+            bin.m = [0.0; PMAX];
+            bin.mu = 0.0;
+            if let Ok(i) = self.index.binary_search_by_key(&j, |&(jj, _)| jj) {
+                self.index.remove(i);
+            }
+            self.free.push(h);
+        } else {
+            self.apply(slot, e, -1.0);
+        }
+        if self.n == 0 {
+            self.x0 = [0.0; 2];
+            self.a = [0.0; PMAX];
+            self.spread = 0.0;
+            self.roff = 0.0;
+        }
     }
-    /// New base point `y0`.
+
+    /// New base point `y0`: the series is recomputed from the bins' moments,
+    /// `A_k = sum_b sum_m G_b[m][k] M_(b,m)`. O(bins p^2), independent of `len()`.
     pub fn rebase(&mut self, y0: f64) {
+        let n = self.n as f64;
+        // X0 += n (y0 - base), the product exactly (Dekker split via fma-free two-product).
+        let delta = y0 - self.base;
+        let prod = n * delta;
+        let err = two_product_err(n, delta, prod);
+        dd_add(&mut self.x0, prod);
+        dd_add(&mut self.x0, err);
         self.base = y0;
+        self.base_off = y0 - self.origin;
+        let p = self.p;
+        let t = self.tri();
+        let w = self.width();
+        let mut a = [0.0; PMAX];
+        let mut mu = 0.0;
+        let mut spread = 0.0;
+        for i in 0..self.index.len() {
+            let (j, slot) = self.index[i];
+            let slot = slot as usize;
+            self.fill_g(slot);
+            let g = &self.g[slot * t..(slot + 1) * t];
+            let bin = &self.bins[slot];
+            let mut off = 0;
+            for m in 0..=p {
+                let len = p + 1 - m;
+                let mm = bin.m[m];
+                for (ak, gv) in a[..len].iter_mut().zip(&g[off..off + len]) {
+                    *ak += gv * mm;
+                }
+                off += len;
+            }
+            mu += bin.mu;
+            spread += bin.count as f64 * (self.x_of(j).abs() + 0.5 * w);
+        }
+        self.a = a;
+        self.spread = spread;
+        let bins = self.index.len() as f64;
+        self.roff = n * (bins * (p as f64 + 1.0) + 8.0 * (p as f64 + 2.0)) + mu;
     }
+
     /// The coordinate frame moved: every anchor `c -> c - dy` and the base `-> base - dy`.
+    /// Handles stay valid. O(1): bins, `x_b`, `G_b` and the series are frame-independent.
     pub fn shift(&mut self, dy: f64) {
         self.base -= dy;
-        for c in &mut self.anchors {
-            *c -= dy;
-        }
+        self.origin -= dy;
     }
-    fn live_anchors(&self) -> impl Iterator<Item = f64> + '_ {
-        self.anchors.iter().zip(&self.live).filter(|(_, l)| **l).map(|(c, _)| *c)
+
+    /// `kappa (X0 + n d)`, the linear part at `d = y - base`.
+    #[inline]
+    fn linear(&self, d: f64) -> f64 {
+        self.law.kappa * ((self.x0[0] + self.n as f64 * d) + self.x0[1])
     }
-    /// `S(y)`.
+
+    /// `S(y) = kappa (X0 + n d) + sum_k A_k d^k` (Horner).
     pub fn force(&self, y: f64) -> f64 {
-        self.live_anchors().map(|c| self.law.force_x(y - c)).sum()
+        let d = y - self.base;
+        let mut s = 0.0;
+        for &ak in self.a[..=self.p].iter().rev() {
+            s = s * d + ak;
+        }
+        self.linear(d) + s
     }
-    /// `(S(y), dS/dy(y))`.
+
+    /// `(S(y), dS/dy(y))`, `dS/dy = kappa n + sum_k k A_k d^(k-1)` (Horner, both at once).
     pub fn force_and_stiffness(&self, y: f64) -> (f64, f64) {
-        self.live_anchors()
-            .map(|c| (self.law.force_x(y - c), self.law.stiffness_x(y - c)))
-            .fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
+        let d = y - self.base;
+        let mut s = 0.0;
+        let mut ds = 0.0;
+        for &ak in self.a[..=self.p].iter().rev() {
+            ds = ds * d + s;
+            s = s * d + ak;
+        }
+        (self.linear(d) + s, self.law.kappa * self.n as f64 + ds)
     }
-    /// `int_{y0}^{y1} S(y) dy`: the antiderivative of `f^x` is `kappa (x^2/2 - l0 (l - l0))`.
+
+    /// `int_{y0}^{y1} S(y) dy` (both ends within the radius)
+    /// `= (y1 - y0) [kappa (X0 + n (d0 + d1)/2) + sum_k A_k s_k / (k+1)]`,
+    /// `s_k = sum_(i<=k) d1^i d0^(k-i)` (`s_k = d0 s_(k-1) + d1^k`), free of cancellation.
+    /// Its error is at most `|y1 - y0| error_bound()`.
     pub fn integral(&self, y0: f64, y1: f64) -> f64 {
-        let (k, l0) = (self.law.kappa, self.law.l0);
-        let g = |x: f64| k * (0.5 * x * x - l0 * (x * x / (x.hypot(l0) + l0)));
-        self.live_anchors().map(|c| g(y1 - c) - g(y0 - c)).sum()
+        let d0 = y0 - self.base;
+        let d1 = y1 - self.base;
+        let mut sk = 1.0;
+        let mut d1k = 1.0;
+        let mut acc = self.a[0];
+        for k in 1..=self.p {
+            d1k *= d1;
+            sk = d0 * sk + d1k;
+            acc += self.a[k] * sk / (k as f64 + 1.0);
+        }
+        (y1 - y0) * (self.linear(0.5 * (d0 + d1)) + acc)
     }
-    /// Bound on `|S(y) - S_true(y)|` (round-off of the direct sum).
+
+    /// Bound on the truncation error of one junction's expansion, in units of `kappa l0`
+    /// (`S`) and `kappa` (`dS/dy`).
+    fn tails(&self) -> (f64, f64) {
+        let qp = Q.powi(self.p as i32);
+        let p1 = self.p as f64 + 1.0;
+        (qp * Q / (1.0 - Q), p1 * qp / (1.0 - Q) + qp * Q / ((1.0 - Q) * (1.0 - Q)))
+    }
+
+    /// Round-off allowance on the coefficients, in the norm `sum_k |dA_k| rho^k`.
+    fn coeff_roundoff(&self) -> f64 {
+        let n = self.n as f64;
+        EPS * self.law.kappa * self.law.l0 / (1.0 - Q) * (self.roff + (2.0 * self.p as f64 + 4.0) * n)
+    }
+
+    /// Round-off allowance of the linear part and of the anchors' offsets against the grid.
+    fn linear_roundoff(&self) -> f64 {
+        let n = self.n as f64;
+        4.0 * EPS
+            * self.law.kappa
+            * ((self.x0[0]).abs()
+                + n * self.radius()
+                + self.spread
+                + n * ((self.base - self.origin).abs() + self.base.abs() + self.origin.abs()))
+    }
+
+    /// Bound on `|S(y) - S_true(y)|` for `|y - base| <= radius()`: the truncation,
+    /// `len kappa l0 q^(p+1)/(1-q)` (rigorous), plus the first-order round-off allowance of
+    /// the module doc (which grows with the operations since the last re-base).
     pub fn error_bound(&self) -> f64 {
-        let m = self.live_anchors().map(|c| (self.base - c).abs()).fold(0.0, f64::max);
-        8.0 * f64::EPSILON * (self.n as f64 + 2.0) * self.law.kappa * (m + self.radius() + self.law.l0)
+        let (tf, _) = self.tails();
+        self.n as f64 * self.law.kappa * self.law.l0 * tf + self.coeff_roundoff() + self.linear_roundoff()
     }
-    /// Same for `dS/dy`.
+
+    /// Same for `dS/dy`: `len kappa ((p+1) q^p/(1-q) + q^(p+1)/(1-q)^2)` plus the round-off
+    /// allowance (coefficient part times `p / rho`).
     pub fn stiffness_error_bound(&self) -> f64 {
-        8.0 * f64::EPSILON * (self.n as f64 + 2.0) * self.law.kappa
+        let (_, ts) = self.tails();
+        let n = self.n as f64;
+        n * self.law.kappa * ts + self.coeff_roundoff() * self.p as f64 / self.radius() + 4.0 * EPS * self.law.kappa * n
     }
+}
+
+/// The rounding error of `prod = a * b` (Dekker's TwoProduct without fma).
+#[inline]
+fn two_product_err(a: f64, b: f64, prod: f64) -> f64 {
+    fn split(x: f64) -> (f64, f64) {
+        let c = 134_217_729.0 * x; // 2^27 + 1
+        let hi = c - (c - x);
+        (hi, x - hi)
+    }
+    let (ah, al) = split(a);
+    let (bh, bl) = split(b);
+    ((ah * bh - prod) + ah * bl + al * bh) + al * bl
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::physics::ForceLaw;
 
     /// Low coefficients against the closed forms `f^x`, `d f^x/dx` and a central difference
     /// of `d f^x/dx` for `f''/2`.
