@@ -108,3 +108,90 @@ fn event_log_and_samples_are_consistent() {
     }
     assert_eq!(runs, 40);
 }
+
+/// Stiff and degenerate plates run at a cost set by the events, not by the stiffness: the
+/// accepted integrator steps stay below `STEPS_PER_EVENT` per event plus
+/// `STEPS_PER_LENGTH` per junction length `l0` the drive travels (`V t_end / l0`). An
+/// explicit integrator would need `t_end / sqrt(M / K)` = 1.6e11 steps for the first scene.
+#[test]
+fn stiff_plates_cost_what_their_events_cost() {
+    const STEPS_PER_EVENT: f64 = 12.0;
+    const STEPS_PER_LENGTH: f64 = 200.0;
+    let cases: [&[&str]; 5] = [
+        &["plate.mass=1e-9", "plate.eta=100", "plate.k=1e9"],
+        &["plate.mass=0", "plate.eta=75"],
+        &["plate.eta=0"],
+        &["plate.k=1e9"],
+        &["plate.mass=1e-9", "plate.eta=1e-3"],
+    ];
+    for (i, case) in cases.iter().enumerate() {
+        for bond in ["strong", "weak"] {
+            let mut o = vec![
+                "run.engine=exact",
+                "junctions.force_law=tilted",
+                "junctions.n=300",
+                "junctions.initial=stationary",
+                "run.t_end=50",
+                "output.sample_dt=1",
+            ];
+            let b = format!("junctions.bond={bond}");
+            o.push(&b);
+            o.extend_from_slice(case);
+            let s = scene(stickslip::testkit::FIG1, &o);
+            let (r, c) = record(&s);
+            check(&s, &r, &c);
+            let events = c.events.unwrap() as f64;
+            let lengths = s.plate.v * s.run.t_end / s.junctions.l0;
+            let steps = c.ode_steps.unwrap() as f64;
+            eprintln!("case {i} {bond}: {events} events, {steps} steps, {:?} rejected", c.ode_rejected);
+            assert!(events > 100.0);
+            assert!(
+                steps <= STEPS_PER_EVENT * events + STEPS_PER_LENGTH * lengths,
+                "case {i} {bond}: {steps} steps for {events} events"
+            );
+            assert!(r.samples.iter().all(|s| s.x.is_finite() && s.friction.is_finite()));
+        }
+    }
+}
+
+/// Strong bonds: the series engine and the direct (DOP853, O(N)) engine draw the same
+/// random numbers in the same order (initial state, channel clocks, uniform picks, the
+/// formation acceptance), so with a few junctions they follow the same path: the same
+/// events at the same times, and the plate within the integrators' tolerances. The bound
+/// `1e-6 (1 + |X|)` allows the local tolerance `rtol = 1e-10` of each of up to 1e4 steps.
+#[test]
+fn strong_bonds_follow_the_direct_engine_path_by_path() {
+    for n in [3, 30] {
+        for seed in 1..=3u64 {
+            let base = [
+                "run.engine=exact".to_string(),
+                "junctions.force_law=tilted".into(),
+                format!("junctions.n={n}"),
+                format!("plate.k={}", 0.5 * n as f64),
+                format!("plate.mass={}", 0.25 * n as f64),
+                format!("plate.eta={}", 0.25 * n as f64),
+                format!("run.seed={seed}"),
+                "run.t_end=100".into(),
+                "output.sample_dt=0.5".into(),
+            ];
+            let run = |method: &str| {
+                let mut o: Vec<&str> = base.iter().map(String::as_str).collect();
+                let m = format!("exact.tilted={method}");
+                o.push(&m);
+                let s = scene(stickslip::testkit::FIG1, &o);
+                record(&s).0
+            };
+            let (a, b) = (run("series"), run("direct"));
+            assert!(a.events.len() > 10, "n = {n}: {} events", a.events.len());
+            assert_eq!(a.events.len(), b.events.len(), "n = {n} seed {seed}: event counts");
+            for (x, y) in a.events.iter().zip(&b.events) {
+                assert_eq!((x.t, x.junction, x.kind), (y.t, y.junction, y.kind), "n = {n} seed {seed}");
+                assert!((x.extension - y.extension).abs() <= 1e-6 * (1.0 + y.extension.abs()));
+            }
+            for (x, y) in a.samples.iter().zip(&b.samples) {
+                assert!((x.x - y.x).abs() <= 1e-6 * (1.0 + y.x.abs()), "t = {}: {} vs {}", x.t, x.x, y.x);
+                assert!((x.v - y.v).abs() <= 1e-6 * (1.0 + y.v.abs()), "t = {}: {} vs {}", x.t, x.v, y.v);
+            }
+        }
+    }
+}

@@ -53,18 +53,21 @@
 //! half for round-off. `rtol = 1e-10` gives `p = 17`.
 //!
 //! **Round-off allowance** (first order in `eps`, not a proof). Norm: `|A|_rho =
-//! sum_k |A_k| rho^k`; every present junction contributes at most `kappa l0 /(1-q)` to it.
-//! Each add/remove adds `eps (n + 1 + 8 (p+2)) kappa l0/(1-q)` to an accumulated allowance
-//! (rounding of the increment and of its addition to `A`); a re-base resets it to
-//! `eps (n (bins (p+1) + 8 (p+2)) + sum_b mu_b) kappa l0/(1-q)`, `mu_b` the bin's own
-//! accumulated moment round-off `eps (n_b + 2)` per operation on it. At evaluation we add
-//! `eps (2p + 4) n kappa l0/(1-q)` (Horner) and `4 eps kappa (|X0| + n rho + sum_b n_b (|x_b| +
-//! w/2) + n (|y0 - origin| + |y0| + |origin|))` (the linear part, and the anchors' rounding
-//! against the grid: the caller's shifted anchors `fl(c - dy)` and ours, `origin + e`, differ
-//! by rounding in the absolute coordinates).
-//! For `dS/dy` the coefficient allowance is multiplied by `p/rho` (a perturbation with
-//! `|dA|_rho <= D` changes the derivative by at most `p D / rho`). The allowance grows with
-//! the number of operations since the last re-base; `rebase(base())` resets it.
+//! sum_k |A_k| rho^k`; every junction's term contributes at most `kappa l0 /(1-q)` to it.
+//! `A` and the bins' moments are double-double accumulators (`TwoSum`), so adding or
+//! removing a term is exact to `O(eps^2)` and an attach/detach pair with the same anchor
+//! cancels exactly; what remains is the rounding of each increment (powers `e^m`, `G_b`,
+//! products, sums), charged as `9 (p+2) eps kappa l0/(1-q)` per add/remove and, at a
+//! re-base, `(10 p + 19) eps kappa l0/(1-q)` per present junction (which resets the
+//! per-operation part). At evaluation we add `eps (2p + 4) n kappa l0/(1-q)` (Horner) and
+//! `4 eps kappa (|X0| + n rho + sum_b n_b (|x_b| + w/2) + n (|y0 - origin| + |y0| + |origin|))`
+//! (the linear part, and the anchors' rounding against the grid: the caller's shifted
+//! anchors `fl(c - dy)` and ours, `origin + e`, differ by rounding in the absolute
+//! coordinates). For `dS/dy` the coefficient allowance is multiplied by `p/rho` (a
+//! perturbation with `|dA|_rho <= D` changes the derivative by at most `p D / rho`). The
+//! per-operation part grows by `~ 1.5e-13 kappa l0` per operation at `p = 17`, so it
+//! reaches `(rtol/2) kappa l0 n` only after `~ 3e2 n` operations without a re-base at
+//! `rtol = 1e-10`; `rebase(base())` (O(bins p^2)) resets it.
 
 use serde::{Deserialize, Serialize};
 
@@ -142,10 +145,10 @@ struct Bin {
     j: i64,
     /// Number of anchors; 0 marks a free slab slot.
     count: u64,
-    /// `M_m = sum e_i^m`, `m = 0..=p`.
+    /// `M_m = sum e_i^m`, `m = 0..=p`, double-double: high parts ...
     m: [f64; PMAX],
-    /// Accumulated moment round-off, in units of `(w/2)^m`.
-    mu: f64,
+    /// ... and low parts.
+    ml: [f64; PMAX],
 }
 
 /// Serialized form of `SeriesSum`: everything but the per-bin matrices `G_b`, which are a
@@ -160,6 +163,7 @@ struct Wire {
     n: u64,
     x0: [f64; 2],
     a: [f64; PMAX],
+    al: [f64; PMAX],
     bins: Vec<Bin>,
     free: Vec<u32>,
     index: Vec<(i64, u32)>,
@@ -185,8 +189,10 @@ pub struct SeriesSum {
     n: u64,
     /// `X0 = sum (y0 - c_i)`, double-double.
     x0: [f64; 2],
-    /// Series coefficients of `Phi(y0 + d)`.
+    /// Series coefficients of `Phi(y0 + d)`, double-double: high parts ...
     a: [f64; PMAX],
+    /// ... and low parts.
+    al: [f64; PMAX],
     /// Slab of bins; `count == 0` slots are on `free`.
     bins: Vec<Bin>,
     free: Vec<u32>,
@@ -194,7 +200,8 @@ pub struct SeriesSum {
     index: Vec<(i64, u32)>,
     /// Per slot, `G_b[m][k]` for `m + k <= p`, rows `m` of length `p + 1 - m`, concatenated.
     g: Vec<f64>,
-    /// Accumulated coefficient round-off allowance, in units of `eps kappa l0 / (1 - q)`.
+    /// Accumulated coefficient round-off allowance since the last re-base, in units of
+    /// `eps kappa l0 / (1 - q)`.
     roff: f64,
     /// `sum_b n_b (|x_b| + w/2)`, an upper bound on `sum |y0 - c_i|` (round-off allowance).
     spread: f64,
@@ -211,6 +218,7 @@ impl From<Wire> for SeriesSum {
             n: w.n,
             x0: w.x0,
             a: w.a,
+            al: w.al,
             bins: w.bins,
             free: w.free,
             index: w.index,
@@ -239,6 +247,7 @@ impl From<SeriesSum> for Wire {
             n: s.n,
             x0: s.x0,
             a: s.a,
+            al: s.al,
             bins: s.bins,
             free: s.free,
             index: s.index,
@@ -277,6 +286,7 @@ impl SeriesSum {
             n: 0,
             x0: [0.0; 2],
             a: [0.0; PMAX],
+            al: [0.0; PMAX],
             bins: Vec::new(),
             free: Vec::new(),
             index: Vec::new(),
@@ -363,7 +373,7 @@ impl SeriesSum {
         match self.index.binary_search_by_key(&j, |&(jj, _)| jj) {
             Ok(i) => self.index[i].1 as usize,
             Err(i) => {
-                let bin = Bin { j, count: 0, m: [0.0; PMAX], mu: 0.0 };
+                let bin = Bin { j, count: 0, m: [0.0; PMAX], ml: [0.0; PMAX] };
                 let slot = match self.free.pop() {
                     Some(s) => {
                         self.bins[s as usize] = bin;
@@ -393,10 +403,11 @@ impl SeriesSum {
             v *= e;
         }
         let bin = &mut self.bins[slot];
-        for (m, x) in bin.m.iter_mut().zip(&pw).take(p + 1) {
-            *m += x;
+        for m in 0..=p {
+            let (hi, lo) = two_sum(bin.m[m], pw[m]);
+            bin.m[m] = hi;
+            bin.ml[m] += lo;
         }
-        bin.mu += (bin.count + 2) as f64;
         let t = self.tri();
         let g = &self.g[slot * t..(slot + 1) * t];
         let mut dt = [0.0; PMAX];
@@ -408,10 +419,20 @@ impl SeriesSum {
             }
             off += len;
         }
-        for (a, d) in self.a.iter_mut().zip(&dt).take(p + 1) {
-            *a += d;
+        for k in 0..=p {
+            let (hi, lo) = two_sum(self.a[k], dt[k]);
+            self.a[k] = hi;
+            self.al[k] += lo;
         }
-        self.roff += self.n as f64 + 1.0 + 8.0 * (p as f64 + 2.0);
+        self.roff += self.op_roundoff();
+    }
+
+    /// Round-off of one junction's increment `sum_m G_b[m][k] e^m` (powers, `G_b`, products
+    /// and sums), in units of `eps kappa l0 / (1 - q)`; the double-double accumulation adds
+    /// only `O(eps^2)`.
+    #[inline]
+    fn op_roundoff(&self) -> f64 {
+        9.0 * (self.p as f64 + 2.0)
     }
 
     /// A junction with anchor `c` attached. O(p^2) flops (plus a binary search over the
@@ -436,7 +457,7 @@ impl SeriesSum {
         let slot = h as usize;
         let w = self.width();
         let j = self.bins[slot].j;
-        debug_assert!(self.bins[slot].count > 0, "SeriesSum::remove: handle {h} has no junction");
+        assert!(self.bins[slot].count > 0, "SeriesSum::remove: handle {h} has no junction");
         let e = (c - self.origin) - (j as f64 + 0.5) * w;
         self.n -= 1;
         self.bins[slot].count -= 1;
@@ -447,7 +468,7 @@ impl SeriesSum {
             self.apply(slot, e, -1.0);
             let bin = &mut self.bins[slot];
             bin.m = [0.0; PMAX];
-            bin.mu = 0.0;
+            bin.ml = [0.0; PMAX];
             if let Ok(i) = self.index.binary_search_by_key(&j, |&(jj, _)| jj) {
                 self.index.remove(i);
             }
@@ -458,6 +479,7 @@ impl SeriesSum {
         if self.n == 0 {
             self.x0 = [0.0; 2];
             self.a = [0.0; PMAX];
+            self.al = [0.0; PMAX];
             self.spread = 0.0;
             self.roff = 0.0;
         }
@@ -479,7 +501,7 @@ impl SeriesSum {
         let t = self.tri();
         let w = self.width();
         let mut a = [0.0; PMAX];
-        let mut mu = 0.0;
+        let mut al = [0.0; PMAX];
         let mut spread = 0.0;
         for i in 0..self.index.len() {
             let (j, slot) = self.index[i];
@@ -487,22 +509,28 @@ impl SeriesSum {
             self.fill_g(slot);
             let g = &self.g[slot * t..(slot + 1) * t];
             let bin = &self.bins[slot];
+            let mut tb = [0.0; PMAX];
             let mut off = 0;
             for m in 0..=p {
                 let len = p + 1 - m;
-                let mm = bin.m[m];
-                for (ak, gv) in a[..len].iter_mut().zip(&g[off..off + len]) {
-                    *ak += gv * mm;
+                let mm = bin.m[m] + bin.ml[m];
+                for (tk, gv) in tb[..len].iter_mut().zip(&g[off..off + len]) {
+                    *tk += gv * mm;
                 }
                 off += len;
             }
-            mu += bin.mu;
+            for k in 0..=p {
+                let (hi, lo) = two_sum(a[k], tb[k]);
+                a[k] = hi;
+                al[k] += lo;
+            }
             spread += bin.count as f64 * (self.x_of(j).abs() + 0.5 * w);
         }
         self.a = a;
+        self.al = al;
         self.spread = spread;
-        let bins = self.index.len() as f64;
-        self.roff = n * (bins * (p as f64 + 1.0) + 8.0 * (p as f64 + 2.0)) + mu;
+        // Each present junction's term, as in `apply`, plus the bin's sum over m.
+        self.roff = n * (self.op_roundoff() + p as f64 + 1.0);
     }
 
     /// The coordinate frame moved: every anchor `c -> c - dy` and the base `-> base - dy`.
@@ -522,8 +550,8 @@ impl SeriesSum {
     pub fn force(&self, y: f64) -> f64 {
         let d = y - self.base;
         let mut s = 0.0;
-        for &ak in self.a[..=self.p].iter().rev() {
-            s = s * d + ak;
+        for k in (0..=self.p).rev() {
+            s = s * d + (self.a[k] + self.al[k]);
         }
         self.linear(d) + s
     }
@@ -533,9 +561,9 @@ impl SeriesSum {
         let d = y - self.base;
         let mut s = 0.0;
         let mut ds = 0.0;
-        for &ak in self.a[..=self.p].iter().rev() {
+        for k in (0..=self.p).rev() {
             ds = ds * d + s;
-            s = s * d + ak;
+            s = s * d + (self.a[k] + self.al[k]);
         }
         (self.linear(d) + s, self.law.kappa * self.n as f64 + ds)
     }
@@ -549,11 +577,11 @@ impl SeriesSum {
         let d1 = y1 - self.base;
         let mut sk = 1.0;
         let mut d1k = 1.0;
-        let mut acc = self.a[0];
+        let mut acc = self.a[0] + self.al[0];
         for k in 1..=self.p {
             d1k *= d1;
             sk = d0 * sk + d1k;
-            acc += self.a[k] * sk / (k as f64 + 1.0);
+            acc += (self.a[k] + self.al[k]) * sk / (k as f64 + 1.0);
         }
         (y1 - y0) * (self.linear(0.5 * (d0 + d1)) + acc)
     }
@@ -632,5 +660,44 @@ mod tests {
             let fd = (law.stiffness_x(x + h) - law.stiffness_x(x - h)) / (2.0 * h) / 2.0;
             assert!((c[2] - fd).abs() <= 1e-8, "x = {x}: {} vs {fd}", c[2]);
         }
+    }
+
+    /// `p` is the smallest order whose truncation tail meets `rtol/2`; non-finite or
+    /// non-positive `rtol` give the cap.
+    #[test]
+    fn order_is_minimal() {
+        assert_eq!(order_for(1e-10), 17);
+        for rtol in [1e-1, 1e-4, 1e-10, 1e-13, 1e-18] {
+            let p = order_for(rtol);
+            let tail = |p: usize| Q.powi(p as i32 + 1) / (1.0 - Q);
+            assert!(tail(p) <= 0.5 * rtol, "rtol {rtol}: p = {p}");
+            assert!(p == 1 || tail(p - 1) > 0.5 * rtol, "rtol {rtol}: p = {p} not minimal");
+        }
+        for rtol in [0.0, -1.0, f64::NAN, 1e-300] {
+            assert_eq!(order_for(rtol), PMAX - 1);
+        }
+        let s = SeriesSum::new(Tilted { kappa: 1.0, l0: 2.0 }, 1e-10);
+        assert_eq!((s.order(), s.radius(), s.width()), (17, 0.25, 0.5));
+    }
+
+    /// An attach/detach pair with the same anchor leaves the series exactly as it was
+    /// (double-double accumulation), and the count-0 bin is freed.
+    #[test]
+    fn attach_detach_cancels() {
+        let law = Tilted { kappa: 0.4, l0: 1.0 };
+        let mut s = SeriesSum::new(law, 1e-10);
+        for i in 0..50 {
+            s.add(-0.01 * i as f64);
+        }
+        s.rebase(0.05);
+        let before = s.force_and_stiffness(0.1);
+        let bins = s.bin_count();
+        let h = s.add(7.3);
+        assert_eq!(s.bin_count(), bins + 1);
+        let h2 = s.add(-0.2);
+        s.remove(-0.2, h2);
+        s.remove(7.3, h);
+        assert_eq!(s.bin_count(), bins);
+        assert_eq!(s.force_and_stiffness(0.1), before);
     }
 }

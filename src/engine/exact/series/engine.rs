@@ -321,7 +321,7 @@ impl<K: Kinetics, P: Motion> Engine for ExactSeries<K, P> {
     fn sample(&self) -> Sample {
         let y = self.y();
         let fb = self.series.force(y);
-        let friction = if P::KINEMATIC { fb } else { -self.plate.k * self.frame.lag(y, self.tau) };
+        let friction = if P::KINEMATIC { fb } else { -self.plate.k * self.motion.lag(self.tau, &self.frame) };
         Sample {
             t: self.time(),
             x: self.frame.position(y),

@@ -35,7 +35,7 @@ pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output
         (BondKind::Strong, false) => Ok(visitor.visit(ExactSeries::new(
             scene,
             StrongKinetics { k0: j.k0 },
-            Dynamic::new(plate, e.rtol, e.atol)?,
+            Dynamic::new(plate, j.kappa * j.n as f64, e.rtol, e.atol)?,
         )?)),
         (BondKind::Strong, true) => {
             Ok(visitor.visit(ExactSeries::new(scene, StrongKinetics { k0: j.k0 }, Kinematic::new(plate.v))?))
@@ -43,7 +43,7 @@ pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output
         (BondKind::Weak, false) => Ok(visitor.visit(ExactSeries::new(
             scene,
             WeakKinetics::new(j.k0, j.beta_dx(), j.kappa, j.n),
-            Dynamic::new(plate, e.rtol, e.atol)?,
+            Dynamic::new(plate, j.kappa * j.n as f64, e.rtol, e.atol)?,
         )?)),
         (BondKind::Weak, true) => Ok(visitor.visit(ExactSeries::new(
             scene,

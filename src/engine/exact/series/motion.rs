@@ -67,6 +67,8 @@ pub trait Motion: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send 
     const KINEMATIC: bool;
     /// Plate position at the current local time `tau`.
     fn y(&self, tau: f64) -> f64;
+    /// The lag `X - V t` now (0 for the kinematic drive).
+    fn lag(&self, tau: f64, frame: &Frame) -> f64;
     /// Plate velocity now.
     fn velocity(&self, series: &SeriesSum, frame: &Frame, tau: f64) -> f64;
     /// Starts a piece (segment) at `tau`.
@@ -90,7 +92,7 @@ pub trait Motion: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send 
 /// Where each quantity sits in the integrated state.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 struct Layout {
-    /// Velocity index (`None` for the overdamped plate).
+    /// Index of `w = Xd - V` (`None` for the overdamped plate).
     vel: Option<usize>,
     /// `L`; `L2 = l + 1`, `B = l + 2`.
     l: usize,
@@ -104,126 +106,173 @@ impl Layout {
     }
 }
 
-/// The plate equation with the series force, and its quadratures.
+/// The plate equation in the lag `u = X - V t` and `w = Xd - V`, with the series force at
+/// `y = u + V t - lag_ref`, and the quadratures `L = int (u - u0)`, `L2 = int (u - u0)^2`,
+/// `B = int S`. In these variables the drive's force `K u` has no cancellation (in `y`,
+/// `K (y - V t)` loses `K eps |y|`, which at `K = 1e9` exceeds any velocity tolerance), and
+/// the tolerance on `u` is one on the friction `-K u`.
 struct System<'a> {
     series: &'a SeriesSum,
     plate: Plate,
-    frame: Frame,
-    lag0: f64,
+    lag_ref: f64,
+    u0: f64,
     layout: Layout,
+    /// Velocity scale `tau_w`: the state holds `W = tau_w w`.
+    tau_w: f64,
+}
+
+impl System<'_> {
+    #[inline]
+    fn y(&self, u: f64, t: f64) -> f64 {
+        u + self.plate.v * t - self.lag_ref
+    }
 }
 
 impl StiffSystem for System<'_> {
+    /// `u' = w`, `M w' = -(eta (w + V) + S + K u)` (in `W = tau_w w`); overdamped:
+    /// `u' = -(S + K u)/eta - V`.
     fn rhs(&mut self, t: f64, s: &[f64], d: &mut [f64]) {
-        let y = s[0];
-        let fb = self.series.force(y);
-        let lag = self.frame.lag(y, t);
+        let u = s[0];
+        let fb = self.series.force(self.y(u, t));
         let p = &self.plate;
         match self.layout.vel {
             Some(iv) => {
-                d[0] = s[iv];
-                d[iv] = p.acceleration(lag, s[iv], fb);
+                let w = s[iv] / self.tau_w;
+                d[0] = w;
+                d[iv] = self.tau_w * p.acceleration(u, w + p.v, fb);
             }
-            None => d[0] = p.overdamped_velocity(lag, fb),
+            None => d[0] = p.overdamped_velocity(u, fb) - p.v,
         }
-        let dl = lag - self.lag0;
+        let du = u - self.u0;
         let l = self.layout.l;
-        d[l] = dl;
-        d[l + 1] = dl * dl;
+        d[l] = du;
+        d[l + 1] = du * du;
         d[l + 2] = fb;
     }
 
-    /// `d/dy` of the plate rows is `-(S'(y) + K) / M` (or `/ eta`), `d/dv = -eta/M`; the
-    /// explicit time dependence is through `lag = y - V t + lag_ref` only.
+    /// `d/du` of the plate rows is `-(S' + K) / M` (or `/ eta`), `d/dw = -eta/M`; the time
+    /// enters only through `S(u + V t - lag_ref)`: `d/dt = -S' V / M` (or `/ eta`).
     fn jacobian(&mut self, t: f64, s: &[f64], j: &mut [f64], dt: &mut [f64]) {
-        let (y, n) = (s[0], self.layout.dim);
-        let (_, ds) = self.series.force_and_stiffness(y);
+        let (u, n) = (s[0], self.layout.dim);
+        let (_, ds) = self.series.force_and_stiffness(self.y(u, t));
         let p = &self.plate;
-        let dl = self.frame.lag(y, t) - self.lag0;
         j.iter_mut().for_each(|v| *v = 0.0);
         match self.layout.vel {
             Some(iv) => {
-                j[iv] = 1.0;
-                j[iv * n] = -(ds + p.k) / p.mass;
+                let tw = self.tau_w;
+                j[iv] = 1.0 / tw;
+                j[iv * n] = -tw * (ds + p.k) / p.mass;
                 j[iv * n + iv] = -p.eta / p.mass;
                 dt[0] = 0.0;
-                dt[iv] = p.k * p.v / p.mass;
+                dt[iv] = -tw * ds * p.v / p.mass;
             }
             None => {
                 j[0] = -(ds + p.k) / p.eta;
-                dt[0] = p.k * p.v / p.eta;
+                dt[0] = -ds * p.v / p.eta;
             }
         }
         let l = self.layout.l;
         j[l * n] = 1.0;
-        j[(l + 1) * n] = 2.0 * dl;
+        j[(l + 1) * n] = 2.0 * (u - self.u0);
         j[(l + 2) * n] = ds;
-        dt[l] = -p.v;
-        dt[l + 1] = -2.0 * dl * p.v;
-        dt[l + 2] = 0.0;
+        dt[l] = 0.0;
+        dt[l + 1] = 0.0;
+        dt[l + 2] = ds * p.v;
     }
 }
 
 /// Retakes of one step (validity or spread) before giving up.
 const MAX_RETAKES: u32 = 200;
 
-/// The dynamic plate: Rosenbrock on `[y, v, L, L2, B]` (`[y, L, L2, B]` when `M = 0`).
+/// The dynamic plate: Rosenbrock on `[u, W, L, L2, B]` (`[u, L, L2, B]` when `M = 0`),
+/// `u = X - V t` the lag, `W = tau_w (Xd - V)`.
+///
+/// The velocity is held in length units, scaled by its own time scale
+/// `tau_w = min(M / eta, sqrt(M / (K + kappa N)))`: an error `dw` in the velocity moves the
+/// plate by at most about `tau_w dw` before the plate's damping (or, undamped, its
+/// oscillation) takes it back, so the one tolerance `atol + rtol |.|` applied to `u` and `W`
+/// is a tolerance on the position. Without the scaling a stiff plate (M/eta = 1e-11)
+/// would resolve every event's velocity transient, invisible in the position, to `atol`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Dynamic {
     plate: Plate,
     layout: Layout,
+    tau_w: f64,
     ode: Rosenbrock,
     state: Vec<f64>,
     /// State before the last step (restored when a step is retaken).
     saved: Vec<f64>,
+    /// `lag_ref` of the frame: `y = u + V tau - lag_ref`.
+    lag_ref: f64,
+    /// Local time of the state (the last step's end, or the event inside it).
+    tau: f64,
     tau0: f64,
-    y0: f64,
-    lag0: f64,
+    u0: f64,
 }
 
 impl Dynamic {
-    pub fn new(plate: Plate, rtol: f64, atol: f64) -> Result<Dynamic, EngineError> {
+    /// `kappa_n = kappa N`, the junctions' largest stiffness (`d f^x / dx <= kappa`).
+    pub fn new(plate: Plate, kappa_n: f64, rtol: f64, atol: f64) -> Result<Dynamic, EngineError> {
         let layout = Layout::new(plate.mass == 0.0);
+        let k = plate.k + kappa_n;
+        let mut tau_w = if plate.eta > 0.0 { plate.mass / plate.eta } else { f64::INFINITY };
+        if k > 0.0 {
+            tau_w = tau_w.min((plate.mass / k).sqrt());
+        }
+        if !(tau_w.is_finite() && tau_w > 0.0) {
+            tau_w = 1.0;
+        }
         let cfg = RosenbrockConfig { rtol, atol, ..RosenbrockConfig::default() };
         let ode = Rosenbrock::with_config(layout.dim, cfg).map_err(|e| ode_error(e, 0.0, rtol))?;
         Ok(Dynamic {
             plate,
             layout,
+            tau_w,
             ode,
             state: vec![0.0; layout.dim],
             saved: vec![0.0; layout.dim],
+            lag_ref: 0.0,
+            tau: 0.0,
             tau0: 0.0,
-            y0: 0.0,
-            lag0: 0.0,
+            u0: 0.0,
         })
+    }
+    #[inline]
+    fn y_of(&self, u: f64, tau: f64) -> f64 {
+        u + self.plate.v * tau - self.lag_ref
     }
 }
 
 impl Motion for Dynamic {
     const KINEMATIC: bool = false;
     #[inline]
-    fn y(&self, _tau: f64) -> f64 {
+    fn y(&self, tau: f64) -> f64 {
+        self.y_of(self.state[0], tau)
+    }
+    #[inline]
+    fn lag(&self, _tau: f64, _frame: &Frame) -> f64 {
         self.state[0]
     }
-    fn velocity(&self, series: &SeriesSum, frame: &Frame, tau: f64) -> f64 {
+    fn velocity(&self, series: &SeriesSum, _frame: &Frame, tau: f64) -> f64 {
+        let p = &self.plate;
         match self.layout.vel {
-            Some(iv) => self.state[iv],
+            Some(iv) => self.state[iv] / self.tau_w + p.v,
             None => {
-                let y = self.state[0];
-                self.plate.overdamped_velocity(frame.lag(y, tau), series.force(y))
+                let u = self.state[0];
+                p.overdamped_velocity(u, series.force(self.y_of(u, tau)))
             }
         }
     }
-    fn open_piece(&mut self, tau: f64, _series: &SeriesSum, frame: &Frame) {
+    fn open_piece(&mut self, tau: f64, _series: &SeriesSum, _frame: &Frame) {
         let l = self.layout.l;
         self.state[l..l + 3].iter_mut().for_each(|v| *v = 0.0);
         self.tau0 = tau;
-        self.y0 = self.state[0];
-        self.lag0 = frame.lag(self.y0, tau);
+        self.tau = tau;
+        self.u0 = self.state[0];
         self.ode.reset();
     }
     fn step(&mut self, ctx: &mut StepCtx<'_>, tau: f64, target: f64) -> Result<Step, EngineError> {
-        if ctx.recentre(self.state[0]) {
+        if ctx.recentre(self.y(tau)) {
             self.ode.reset();
         }
         let rtol = self.ode.config().rtol;
@@ -234,18 +283,23 @@ impl Motion for Dynamic {
             let mut sys = System {
                 series: ctx.series,
                 plate: self.plate,
-                frame: *ctx.frame,
-                lag0: self.lag0,
+                lag_ref: self.lag_ref,
+                u0: self.u0,
                 layout: self.layout,
+                tau_w: self.tau_w,
             };
             self.ode
                 .step(&mut sys, &mut t, &mut self.state, target)
                 .map_err(|e| ode_error(e, ctx.frame.time(tau), rtol))?;
-            let (lo, hi) = self.ode.component_bounds(0).map_err(|e| ode_error(e, ctx.frame.time(tau), rtol))?;
+            let (ulo, uhi) = self.ode.component_bounds(0).map_err(|e| ode_error(e, ctx.frame.time(tau), rtol))?;
+            // y = u + V s - lag_ref with V >= 0: bounded by the u bounds at the two ends.
+            let (lo, hi) = (self.y_of(ulo, tau), self.y_of(uhi, t));
+            let (lo, hi) = (lo - 4.0 * f64::EPSILON * lo.abs(), hi + 4.0 * f64::EPSILON * hi.abs());
             let (base, r) = (ctx.series.base(), ctx.series.radius());
             let valid = lo >= base - r && hi <= base + r;
             let tight = hi - lo <= ctx.max_spread;
             if valid && tight {
+                self.tau = t;
                 return Ok(Step { s0: tau, s1: t, y_lo: lo, y_hi: hi });
             }
             retakes += 1;
@@ -254,9 +308,10 @@ impl Motion for Dynamic {
             }
             // Restore the state before the step and retake it, shorter.
             self.state.copy_from_slice(&self.saved);
+            let y0 = self.y_of(self.saved[0], tau);
             let mut factor: f64 = 0.5;
-            if !valid && self.saved[0] != base {
-                ctx.rebase_series(self.saved[0]);
+            if !valid && y0 != base {
+                ctx.rebase_series(y0);
             }
             if !tight {
                 factor = factor.min(0.5 * ctx.max_spread / (hi - lo));
@@ -267,12 +322,14 @@ impl Motion for Dynamic {
     }
     #[inline]
     fn y_at(&mut self, s: f64) -> Result<f64, EngineError> {
-        self.ode.dense_component(0, s).map_err(|e| ode_error(e, s, 0.0))
+        let u = self.ode.dense_component(0, s).map_err(|e| ode_error(e, s, 0.0))?;
+        Ok(self.y_of(u, s))
     }
     fn finish(&mut self, step: &Step, s: f64, _series: &SeriesSum) -> Result<(), EngineError> {
         if s < step.s1 {
             self.ode.dense(s, &mut self.state).map_err(|e| ode_error(e, s, 0.0))?;
         }
+        self.tau = s;
         Ok(())
     }
     fn segment(&self, tau: f64, frame: &Frame, plate: &Plate, _series: &SeriesSum) -> Option<Segment> {
@@ -287,17 +344,18 @@ impl Motion for Dynamic {
         Some(Segment {
             t0: frame.time(self.tau0),
             t1: frame.time(tau),
-            friction: -k * (self.lag0 + li / h),
+            friction: -k * (self.u0 + li / h),
             friction_m2: k * k * (l2 - li * li / h).max(0.0),
             bond_force: s[l + 2] / h,
-            viscous: plate.eta * (s[0] - self.y0) / h,
+            // eta (X1 - X0) / h = eta (V + (u1 - u0) / h).
+            viscous: plate.eta * (plate.v + (s[0] - self.u0) / h),
             attached: 0,
         })
     }
     fn rebase(&mut self, dtau: f64, dy: f64) {
-        self.state[0] -= dy;
-        self.y0 -= dy;
+        self.lag_ref += dy - self.plate.v * dtau;
         self.tau0 -= dtau;
+        self.tau -= dtau;
         self.ode.reset();
     }
     fn sync_counters(&self, c: &mut Counters) {
@@ -341,6 +399,10 @@ impl Motion for Kinematic {
     #[inline]
     fn y(&self, tau: f64) -> f64 {
         self.v * tau
+    }
+    #[inline]
+    fn lag(&self, _tau: f64, _frame: &Frame) -> f64 {
+        0.0
     }
     #[inline]
     fn velocity(&self, _series: &SeriesSum, _frame: &Frame, _tau: f64) -> f64 {
