@@ -44,6 +44,11 @@ const TILTED: Case = Case {
     sets: &["run.engine=exact", "junctions.bond=weak", "output.events=true", "run.t_warmup=10"],
     t_end: 300.0,
 };
+const TILTED_KINEMATIC: Case = Case {
+    name: "exact, tilted law (series), kinematic plate, weak bonds, events.csv",
+    sets: &["run.engine=exact", "junctions.bond=weak", "plate.kinematic=true", "output.events=true", "run.t_warmup=10"],
+    t_end: 2000.0,
+};
 
 fn scene_args(dir: &Path, case: &Case, t_end: f64) -> Vec<String> {
     let scene = dir.join("scene.toml");
@@ -232,6 +237,11 @@ fn killed_twice_and_resumed_exact_linear_weak() {
 #[test]
 fn killed_and_resumed_exact_tilted() {
     kill_and_resume(&TILTED, 1);
+}
+
+#[test]
+fn killed_and_resumed_exact_tilted_kinematic() {
+    kill_and_resume(&TILTED_KINEMATIC, 1);
 }
 
 #[test]

@@ -112,17 +112,18 @@ fn event_log_and_samples_are_consistent() {
 /// Stiff and degenerate plates run at a cost set by the events, not by the stiffness: the
 /// accepted integrator steps stay below `STEPS_PER_EVENT` per event plus
 /// `STEPS_PER_LENGTH` per junction length `l0` the drive travels (`V t_end / l0`). An
-/// explicit integrator would need `t_end / sqrt(M / K)` = 1.6e11 steps for the first scene.
+/// explicit integrator would need `t_end / sqrt(M / K)` = 5e10 steps for the first scene.
+/// (An underdamped stiff plate, `k = 1e9` with `M = eta = 75`, is not here: its physical
+/// oscillation at `omega = 3700`, excited by every event, is resolved to the tolerance.)
 #[test]
 fn stiff_plates_cost_what_their_events_cost() {
     const STEPS_PER_EVENT: f64 = 12.0;
     const STEPS_PER_LENGTH: f64 = 200.0;
-    let cases: [&[&str]; 5] = [
+    let cases: [&[&str]; 4] = [
         &["plate.mass=1e-9", "plate.eta=100", "plate.k=1e9"],
         &["plate.mass=0", "plate.eta=75"],
         &["plate.eta=0"],
-        &["plate.k=1e9"],
-        &["plate.mass=1e-9", "plate.eta=1e-3"],
+        &["plate.mass=1e-6", "plate.eta=100", "plate.k=1e9"],
     ];
     for (i, case) in cases.iter().enumerate() {
         for bond in ["strong", "weak"] {
@@ -186,7 +187,13 @@ fn strong_bonds_follow_the_direct_engine_path_by_path() {
             assert_eq!(a.events.len(), b.events.len(), "n = {n} seed {seed}: event counts");
             for (x, y) in a.events.iter().zip(&b.events) {
                 assert_eq!((x.t, x.junction, x.kind), (y.t, y.junction, y.kind), "n = {n} seed {seed}");
-                assert!((x.extension - y.extension).abs() <= 1e-6 * (1.0 + y.extension.abs()));
+                assert!(
+                    (x.extension - y.extension).abs() <= 1e-6 * (1.0 + y.extension.abs()),
+                    "n = {n} seed {seed} t = {}: extension {} vs {}",
+                    x.t,
+                    x.extension,
+                    y.extension
+                );
             }
             for (x, y) in a.samples.iter().zip(&b.samples) {
                 assert!((x.x - y.x).abs() <= 1e-6 * (1.0 + y.x.abs()), "t = {}: {} vs {}", x.t, x.x, y.x);

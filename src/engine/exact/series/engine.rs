@@ -290,7 +290,8 @@ impl<K: Kinetics, P: Motion> Engine for ExactSeries<K, P> {
             }
             self.check()?;
             // A NaN time is never due (it would stop the loop, not spin it).
-            if !(t_next <= tau_stop) {
+            let due = t_next <= tau_stop;
+            if !due {
                 self.close_piece(obs);
                 self.maybe_rebase(obs);
                 self.motion.open_piece(self.tau, &self.series, &self.frame);

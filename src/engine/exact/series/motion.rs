@@ -224,12 +224,17 @@ impl Dynamic {
         }
         let cfg = RosenbrockConfig { rtol, atol, ..RosenbrockConfig::default() };
         let ode = Rosenbrock::with_config(layout.dim, cfg).map_err(|e| ode_error(e, 0.0, rtol))?;
+        // At rest at X = 0: u = 0, W = tau_w (0 - V).
+        let mut state = vec![0.0; layout.dim];
+        if let Some(iv) = layout.vel {
+            state[iv] = -tau_w * plate.v;
+        }
         Ok(Dynamic {
             plate,
             layout,
             tau_w,
             ode,
-            state: vec![0.0; layout.dim],
+            state,
             saved: vec![0.0; layout.dim],
             lag_ref: 0.0,
             tau: 0.0,
@@ -469,4 +474,88 @@ impl Motion for Kinematic {
         self.tau0 -= dtau;
     }
     fn sync_counters(&self, _c: &mut Counters) {}
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::{ForceLaw, Tilted};
+
+    fn ctx<'a>(series: &'a mut SeriesSum, frame: &'a Frame, counters: &'a mut Counters) -> StepCtx<'a> {
+        StepCtx { series, frame, counters, max_spread: f64::INFINITY }
+    }
+
+    /// No junctions, overdamped: `u(t) = -(V eta / K) (1 - exp(-K t / eta))` (the plate
+    /// starts at rest at the drive), and the piece's quadratures match its integrals.
+    #[test]
+    fn dynamic_plate_follows_the_closed_form() {
+        let plate = Plate { mass: 0.0, eta: 2.0, k: 3.0, v: 0.5 };
+        let law = Tilted { kappa: 0.1, l0: 1.0 };
+        let mut series = SeriesSum::new(law, 1e-10);
+        let frame = Frame::new(plate.v);
+        let mut counters = Counters::default();
+        let mut m = Dynamic::new(plate, 0.0, 1e-10, 1e-12).unwrap();
+        m.open_piece(0.0, &series, &frame);
+        let (mut tau, target) = (0.0, 2.0);
+        while tau < target {
+            let step = m.step(&mut ctx(&mut series, &frame, &mut counters), tau, target).unwrap();
+            m.finish(&step, step.s1, &series).unwrap();
+            tau = step.s1;
+        }
+        let r = plate.k / plate.eta;
+        let u = -(plate.v / r) * (1.0 - (-r * target).exp());
+        assert!((m.lag(tau, &frame) - u).abs() < 1e-9, "{} vs {u}", m.lag(tau, &frame));
+        // Mean friction -K mean(u): int u = -(V/r) (T - (1 - e^{-rT})/r).
+        let int_u = -(plate.v / r) * (target - (1.0 - (-r * target).exp()) / r);
+        let seg = m.segment(tau, &frame, &plate, &series).unwrap();
+        assert!((seg.friction - (-plate.k * int_u / target)).abs() < 1e-8, "{}", seg.friction);
+        assert_eq!(seg.bond_force, 0.0);
+    }
+
+    /// Kinematic drive past one junction: the segment's mean is `int S dt / h` (compared
+    /// with a fine Simpson rule on the law itself), its spread `int (S - mean)^2 dt`.
+    #[test]
+    fn kinematic_segment_integrates_the_bond_force() {
+        let law = Tilted { kappa: 0.3, l0: 1.0 };
+        let mut series = SeriesSum::new(law, 1e-12);
+        let c = -0.4;
+        series.add(c);
+        let frame = Frame::new(0.7);
+        let mut counters = Counters::default();
+        let mut m = Kinematic::new(0.7);
+        m.open_piece(0.0, &series, &frame);
+        let (mut tau, target) = (0.0, 3.0);
+        while tau < target {
+            let step = m.step(&mut ctx(&mut series, &frame, &mut counters), tau, target).unwrap();
+            assert!(step.y_hi - series.base() <= series.radius() * (1.0 + 1e-12));
+            m.finish(&step, step.s1, &series).unwrap();
+            tau = step.s1;
+        }
+        assert!(counters.series_rebases.unwrap() >= 10);
+        let n = 20_000;
+        let f = |t: f64| law.force_x(0.7 * t - c);
+        let simpson = |g: &dyn Fn(f64) -> f64| {
+            let h = target / n as f64;
+            (0..=n)
+                .map(|i| {
+                    g(i as f64 * h)
+                        * if i == 0 || i == n {
+                            1.0
+                        } else if i % 2 == 1 {
+                            4.0
+                        } else {
+                            2.0
+                        }
+                })
+                .sum::<f64>()
+                * h
+                / 3.0
+        };
+        let mean = simpson(&f) / target;
+        let m2 = simpson(&|t| (f(t) - mean).powi(2));
+        let seg = m.segment(tau, &frame, &Plate { mass: 1.0, eta: 1.0, k: 1.0, v: 0.7 }, &series).unwrap();
+        assert!((seg.friction - mean).abs() < 1e-9 * mean.abs(), "{} vs {mean}", seg.friction);
+        assert!((seg.friction_m2 - m2).abs() < 1e-7 * m2, "{} vs {m2}", seg.friction_m2);
+        assert_eq!(seg.viscous, 0.0);
+    }
 }
