@@ -43,8 +43,11 @@ fn runs(scene: &Scene, seeds: impl Iterator<Item = u64>) -> Vec<Summary> {
         .collect()
 }
 
+/// A named observable of a run's summary.
+type Observable = (&'static str, fn(&Summary) -> f64);
+
 /// The observables compared between two sets of runs.
-const OBSERVABLES: [(&str, fn(&Summary) -> f64); 3] = [
+const OBSERVABLES: [Observable; 3] = [
     ("friction_mean", |s| s.friction_mean),
     ("friction_std", |s| s.friction_std),
     ("attached_fraction_mean", |s| s.attached_fraction_mean),
