@@ -29,7 +29,19 @@ fn series(c: &mut Criterion) {
     let mut g = c.benchmark_group("series");
     g.measurement_time(Duration::from_secs(3)).warm_up_time(Duration::from_secs(1));
 
-    g.bench_function("add+remove", |bn| {
+    // The engine's pattern: a junction forms at the plate (one bin, the bin search predicted)
+    // and one detaches by its handle.
+    g.bench_function("add+remove/at-plate", |bn| {
+        let mut i = 0usize;
+        bn.iter(|| {
+            i = (i + 1) & 63;
+            let c = black_box(-0.001 * i as f64);
+            let h = s.add(c);
+            s.remove(c, h);
+        })
+    });
+    // Anchors in random bins (each add searches the 100 bins unpredictably).
+    g.bench_function("add+remove/random-bin", |bn| {
         let mut i = 0usize;
         bn.iter(|| {
             i = (i + 7919) % N;

@@ -60,6 +60,11 @@ fn oracle_integral(law: &Tilted, y0: f64, y1: f64, anchors: &[(f64, u32)]) -> f6
     s.hi() + s.lo()
 }
 
+/// `|err| <= bound`, false for NaN.
+fn within(err: f64, bound: f64) -> bool {
+    err.abs() <= bound
+}
+
 /// Worst `error / bound` ratios seen.
 #[derive(Default, Debug)]
 struct Worst {
@@ -86,7 +91,7 @@ fn check(
     }
     let (fo, ko) = oracle(law, y, anchors);
     let (eb, ekb) = (s.error_bound(), s.stiffness_error_bound());
-    if !((f - fo).abs() <= eb) || !((k - ko).abs() <= ekb) {
+    if !within(f - fo, eb) || !within(k - ko, ekb) {
         return Err(format!(
             "n = {}, y - base = {}: S = {f} vs {fo} (err {:e}, bound {eb:e}); S' = {k} vs {ko} (err {:e}, bound {ekb:e})",
             anchors.len(),
@@ -99,7 +104,7 @@ fn check(
     let i = s.integral(y, y1);
     let io = oracle_integral(law, y, y1, anchors);
     let ib = (y1 - y).abs() * eb + 4.0 * f64::EPSILON * io.abs();
-    if !((i - io).abs() <= ib) {
+    if !within(i - io, ib) {
         return Err(format!(
             "integral {y} -> {y1}: {i} vs {io} (err {:e}, bound {ib:e}); S {f} vs {fo} bound {eb:e} n {} p {} base {}",
             i - io,

@@ -61,6 +61,7 @@ mod tests {
     //! `gamma_ii = gamma`, in the original parameters `alpha_ij = (A Gamma)_ij`,
     //! `beta_ij = alpha_ij + gamma_ij`, `b = M Gamma`, recovered from the transformed ones by
     //! `Gamma = (diag(1/gamma) - C)^-1`.
+    #![allow(clippy::needless_range_loop)]
     use super::*;
 
     const N: usize = STAGES;

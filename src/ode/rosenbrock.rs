@@ -38,6 +38,8 @@
 //!
 //! See `docs/ode.md` ("The Rosenbrock integrator").
 
+#![allow(clippy::needless_range_loop)] // stage and component loops over fixed arrays read better indexed
+
 use serde::{Deserialize, Serialize};
 
 use super::lu::{Lu, MAX_DIM};
@@ -773,6 +775,33 @@ mod tests {
         let (mut t, mut y) = (0.0, [1.0]);
         ode.step_fixed(&mut Decay(-1e12), &mut t, &mut y, 1.0).unwrap();
         assert!(y[0].abs() < 1e-9, "{}", y[0]);
+    }
+
+    /// The bounds are the cubic's range, not a loose hull: `p(s) = s (1 - s) (1 + 2 s)`
+    /// (`y0 = y1 = 0`, `c2 = 1`, `c3 = 2`) has its maximum `p(s*)` at `s* = (1 + sqrt 7)/6`
+    /// and its minimum 0 at the ends; a cubic with an interior minimum and maximum too.
+    #[test]
+    fn component_bounds_are_the_range_of_the_cubic() {
+        let mut ode = Rosenbrock::new(2, 1e-8, 1e-10).unwrap();
+        ode.cont[0][..2].copy_from_slice(&[0.0, 1.0]);
+        ode.cont[1][..2].copy_from_slice(&[0.0, 1.0]);
+        ode.cont[2][..2].copy_from_slice(&[1.0, 0.0]);
+        // Component 1: p(s) = 1 + (c3 - c2) s^2 - c3 s^3 + c2 s with c2 = 0, c3 = 3:
+        // p = 1 + 3 s^2 - 3 s^3, max at s = 2/3 (p = 1 + 4/9), min 1 at the ends.
+        ode.cont[3][..2].copy_from_slice(&[2.0, 3.0]);
+        ode.dense_valid = true;
+        (ode.t_old, ode.t_new, ode.h_step) = (1.0, 3.0, 2.0);
+        let s = (1.0 + 7f64.sqrt()) / 6.0;
+        let p_max = s * (1.0 - s) * (1.0 + 2.0 * s);
+        // Widening: the documented margin 16 eps sum|c| plus a few ulps of the extremum.
+        let (m0, m1) = (16.0 * f64::EPSILON * 3.0 + 4e-16, 16.0 * f64::EPSILON * 5.0 + 8e-16);
+        let (lo, hi) = ode.component_bounds(0).unwrap();
+        assert!(lo <= 0.0 && lo >= -m0, "{lo}");
+        assert!(hi >= p_max && hi - p_max <= m0, "{hi} vs {p_max}");
+        assert!((ode.dense_component(0, 1.0 + 2.0 * s).unwrap() - p_max).abs() < 1e-15);
+        let (lo, hi) = ode.component_bounds(1).unwrap();
+        assert!(lo <= 1.0 && lo >= 1.0 - m1, "{lo}");
+        assert!(hi >= 13.0 / 9.0 && hi - 13.0 / 9.0 <= m1, "{hi}");
     }
 
     #[test]

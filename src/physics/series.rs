@@ -79,6 +79,18 @@ pub const PMAX: usize = 32;
 const Q: f64 = 0.25;
 const EPS: f64 = f64::EPSILON;
 
+/// `(2k - 1)/k` and `(k - 1)/k`, the Legendre recurrence's factors (no division per step).
+const LEGENDRE: [[f64; 2]; PMAX] = {
+    let mut t = [[0.0; 2]; PMAX];
+    let mut k = 1;
+    while k < PMAX {
+        let kf = k as f64;
+        t[k] = [(2.0 * kf - 1.0) / kf, (kf - 1.0) / kf];
+        k += 1;
+    }
+    t
+};
+
 /// Taylor coefficients of the nonlinear part `phi(x) = f^x(x) - kappa x = -kappa l0 x h(x)`
 /// about `x`, `out[k] = phi_k(x)` (computed directly, without the cancellation of
 /// subtracting `kappa x` from `tilted_taylor`).
@@ -95,8 +107,8 @@ pub fn phi_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
             -t
         } else {
             if k >= 2 {
-                let kf = k as f64;
-                let next = ((2.0 * kf - 1.0) * t * p - (kf - 1.0) * p_prev) / kf;
+                let [a1, a2] = LEGENDRE[k];
+                let next = a1 * t * p - a2 * p_prev;
                 p_prev = p;
                 p = next;
             }
@@ -136,6 +148,16 @@ fn dd_add(acc: &mut [f64; 2], x: f64) {
     let (s, e) = two_sum(acc[0], x);
     let (hi, lo) = two_sum(s, acc[1] + e);
     *acc = [hi, lo];
+}
+
+/// `(hi, lo) += x` elementwise, double-double.
+#[inline]
+fn dd_add_all(hi: &mut [f64], lo: &mut [f64], x: &[f64]) {
+    for ((h, l), &v) in hi.iter_mut().zip(lo.iter_mut()).zip(x) {
+        let (s, e) = two_sum(*h, v);
+        *h = s;
+        *l += e;
+    }
 }
 
 /// One bin of anchors: grid index, count, raw moments about the centre.
@@ -396,34 +418,46 @@ impl SeriesSum {
     #[inline]
     fn apply(&mut self, slot: usize, e: f64, sign: f64) {
         let p = self.p;
+        // Powers `sign e^m` by two interleaved chains (half the latency of one).
         let mut pw = [0.0; PMAX];
-        let mut v = sign;
-        for x in pw.iter_mut().take(p + 1) {
-            *x = v;
-            v *= e;
+        pw[0] = sign;
+        pw[1] = sign * e;
+        let e2 = e * e;
+        for m in 2..=p {
+            pw[m] = pw[m - 2] * e2;
         }
         let bin = &mut self.bins[slot];
-        for m in 0..=p {
-            let (hi, lo) = two_sum(bin.m[m], pw[m]);
-            bin.m[m] = hi;
-            bin.ml[m] += lo;
-        }
+        dd_add_all(&mut bin.m[..=p], &mut bin.ml[..=p], &pw[..=p]);
         let t = self.tri();
         let g = &self.g[slot * t..(slot + 1) * t];
+        // dt_k = sum_m G[m][k] e^m, four rows per pass (a quarter of the stores and reloads
+        // of dt; rows m..m+3 have lengths len, len-1, len-2, len-3), then single rows.
         let mut dt = [0.0; PMAX];
         let mut off = 0;
-        for (m, &em) in pw.iter().enumerate().take(p + 1) {
+        let mut m = 0;
+        while m + 3 <= p {
+            let len = p + 1 - m;
+            let (o1, o2, o3) = (off + len, off + 2 * len - 1, off + 3 * len - 3);
+            let (r0, r1, r2, r3) = (&g[off..o1], &g[o1..o1 + len - 1], &g[o2..o2 + len - 2], &g[o3..o3 + len - 3]);
+            let (e0, e1, e2, e3) = (pw[m], pw[m + 1], pw[m + 2], pw[m + 3]);
+            for ((((d, a), b), c), f) in dt[..len - 3].iter_mut().zip(r0).zip(r1).zip(r2).zip(r3) {
+                *d += (a * e0 + b * e1) + (c * e2 + f * e3);
+            }
+            dt[len - 3] += (r0[len - 3] * e0 + r1[len - 3] * e1) + r2[len - 3] * e2;
+            dt[len - 2] += r0[len - 2] * e0 + r1[len - 2] * e1;
+            dt[len - 1] += r0[len - 1] * e0;
+            off = o3 + len - 3;
+            m += 4;
+        }
+        while m <= p {
             let len = p + 1 - m;
             for (d, gv) in dt[..len].iter_mut().zip(&g[off..off + len]) {
-                *d += gv * em;
+                *d += gv * pw[m];
             }
             off += len;
+            m += 1;
         }
-        for k in 0..=p {
-            let (hi, lo) = two_sum(self.a[k], dt[k]);
-            self.a[k] = hi;
-            self.al[k] += lo;
-        }
+        dd_add_all(&mut self.a[..=p], &mut self.al[..=p], &dt[..=p]);
         self.roff += self.op_roundoff();
     }
 
@@ -519,11 +553,7 @@ impl SeriesSum {
                 }
                 off += len;
             }
-            for k in 0..=p {
-                let (hi, lo) = two_sum(a[k], tb[k]);
-                a[k] = hi;
-                al[k] += lo;
-            }
+            dd_add_all(&mut a[..=p], &mut al[..=p], &tb[..=p]);
             spread += bin.count as f64 * (self.x_of(j).abs() + 0.5 * w);
         }
         self.a = a;
