@@ -8,7 +8,7 @@ pub mod fixed;
 use serde::{Serialize, de::DeserializeOwned};
 
 use crate::observe::{Observer, Sample};
-use crate::scene::{EngineKind, Scene};
+use crate::scene::{EngineKind, ForceLawKind, Scene};
 
 /// Counters an engine keeps; reported in `summary.json`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
@@ -90,7 +90,11 @@ pub trait EngineVisitor {
 /// Builds the engine the scene asks for (`run.engine`), specialised to the scene's force
 /// law, bond kind and options, and hands it to `visitor`.
 pub fn with_engine<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output, EngineError> {
-    if scene.plate.kinematic {
+    // Kinematic plates: the fixed engine (both laws) and the exact linear engine have them.
+    if scene.plate.kinematic
+        && scene.run.engine == EngineKind::Exact
+        && scene.junctions.force_law == ForceLawKind::Tilted
+    {
         return Err(EngineError::Unsupported { engine: "selected", reason: "plate.kinematic is not implemented yet" });
     }
     match scene.run.engine {
