@@ -805,6 +805,28 @@ mod tests {
         }
     }
 
+    /// A kinematic plate has no plate equation: one row, no limit, no warning about it,
+    /// at any `dt` and even at a plate that would be unstable (the letter's Fig. 1 at
+    /// `dt = 1` is at the limit of semi-implicit Euler).
+    #[test]
+    fn kinematic_plate_has_no_limit() {
+        for extra in [&[][..], &["plate.mass=0"][..], &["fixed.dt=5"][..]] {
+            let mut o = vec!["plate.kinematic=true", "run.engine=fixed"];
+            o.extend_from_slice(extra);
+            let s = testkit::fig1_with(&o);
+            let a = analyse(&s);
+            assert!(a.kinematic());
+            assert_eq!(a.plate.len(), 1, "{extra:?}");
+            let r = a.selected();
+            assert_eq!((r.integrator, r.verdict), (Integrator::Kinematic, Verdict::Stable));
+            assert_eq!((r.dt_stable, r.dt_unstable, r.radius_all), (f64::INFINITY, f64::INFINITY, 0.0));
+            let table = a.table("k");
+            assert!(table.contains("no plate stability limit") && table.contains("kinematic *"), "{table}");
+            assert!(a.issues().iter().all(|i| !i.contains("plate step")), "{:?}", a.issues());
+        }
+        assert!(warning(&testkit::fig1_with(&["plate.kinematic=true", "run.engine=fixed"])).is_none());
+    }
+
     #[test]
     fn fig1_limits() {
         let a = analyse(&testkit::fig1());

@@ -61,6 +61,7 @@ fn exact_engine_rupture_times_follow_the_exact_survival() {
     let n = t.len();
     let d = ks_statistic(&mut t, |t| 1.0 - survival(t));
     let crit = ks_critical(n, ALPHA);
+    eprintln!("exact engine: KS D = {d:.5}, critical {crit:.5} (n = {n})");
     assert!(d < crit, "KS D = {d:.5} >= critical {crit:.5} (n = {n})");
 }
 
@@ -121,6 +122,9 @@ fn fixed_engine_approaches_the_exact_survival_as_dt_falls() {
         assert!(d_own < crit, "dt = {dt}: KS against the scheme's own law D = {d_own:.5} >= {crit:.5}");
         let d_bias = sup_distance(&law, dt);
         let d_exact = sup_distance(&empirical, dt);
+        eprintln!(
+            "dt = {dt}: D(own law) = {d_own:.5}, D(exact law) = {d_exact:.5}, D_bias = {d_bias:.5}, crit {crit:.5}"
+        );
         assert!((d_exact - d_bias).abs() < crit, "dt = {dt}: D = {d_exact:.5}, D_bias = {d_bias:.5}, crit {crit:.5}");
         bias.push(d_bias);
     }
@@ -174,6 +178,7 @@ fn strong_bonds_at_a_kinematic_drive_match_the_exact_mean_field() {
         }
         for (what, x, want) in [("n*", &n, n_star), ("F_b / N", &f, f_star)] {
             let (m, hw) = mean_ci(x, ALPHA);
+            eprintln!("{engine} {what}: {m:.5} +- {hw:.2e} vs {want:.5}");
             assert!((m - want).abs() <= hw, "{engine} {what}: {m:.5} +- {hw:.2e} vs {want:.5}");
             assert!(hw < 0.02 * want, "{engine} {what}: interval {hw:.2e} too wide");
         }
