@@ -1,6 +1,7 @@
 //! Exact engine throughput: events per second at N = 1e3, 1e5, 1e6 for strong and weak
-//! bonds (linear law), and the event-queue comparison (hand-written scan vs the
-//! `priority-queue` crate). Run: `cargo bench --bench exact`.
+//! bonds (linear law and the letter's tilted law), and the event-queue comparison
+//! (hand-written scan vs the `priority-queue` crate). Run: `cargo bench --bench exact`
+//! (`-- linear` or `-- tilted` for one law).
 
 use std::time::{Duration, Instant};
 
@@ -8,8 +9,8 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use stickslip::engine::Engine;
 use stickslip::engine::exact::{ArrayQueue, ChannelQueue, PqQueue, strong_linear, weak_linear};
 use stickslip::observe::{Nothing, Observer};
-use stickslip::runner::core_observers;
-use stickslip::testkit::scaled_linear;
+use stickslip::runner::{Simulation, core_observers};
+use stickslip::testkit::{scaled_linear, scaled_tilted};
 
 /// Simulated time per iteration that gives about 1e5 events (about 0.1 events per junction
 /// per unit time in the Fig. 1 physics).
@@ -57,12 +58,50 @@ fn bench_with<E: Engine, O: Observer>(
     g.finish();
 }
 
+/// Like `bench_engine` for the engine the scene selects, behind a [`Simulation`] handle (one
+/// virtual call per iteration of about 1e5 events: negligible). The tilted law's engine is
+/// chosen by `exact.tilted`, so the bench measures whatever a run of the scene would use.
+fn bench_scene(c: &mut Criterion, group: &str, n: usize, scene: &stickslip::Scene) {
+    let make = || Simulation::new(scene).unwrap();
+    let mut pilot = make();
+    pilot.advance(20.0).unwrap();
+    let before = pilot.counters().events.unwrap();
+    pilot.advance(20.0 + span(n)).unwrap();
+    let per_span = pilot.counters().events.unwrap() - before;
+
+    let mut g = c.benchmark_group(group);
+    g.sample_size(10).measurement_time(Duration::from_secs(8)).warm_up_time(Duration::from_secs(1));
+    g.throughput(Throughput::Elements(per_span));
+    g.bench_function(BenchmarkId::from_parameter(n), |b| {
+        b.iter_custom(|iters| {
+            let mut e = make();
+            e.advance(20.0).unwrap();
+            let mut t = 20.0;
+            let start = Instant::now();
+            for _ in 0..iters {
+                t += span(n);
+                e.advance(t).unwrap();
+            }
+            start.elapsed()
+        })
+    });
+    g.finish();
+}
+
 fn sizes(c: &mut Criterion) {
     for n in [1_000, 100_000, 1_000_000] {
         let s = scaled_linear(n, "strong");
         bench_engine(c, "exact/strong-linear", n, || strong_linear::<ArrayQueue>(&s));
         let s = scaled_linear(n, "weak");
         bench_engine(c, "exact/weak-linear", n, || weak_linear::<ArrayQueue>(&s));
+    }
+}
+
+/// The letter's tilted law (scaled Fig. 1, `exact.tilted` at its default, `series`).
+fn tilted(c: &mut Criterion) {
+    for n in [1_000, 100_000, 1_000_000] {
+        bench_scene(c, "exact/strong-tilted", n, &scaled_tilted(n, "strong"));
+        bench_scene(c, "exact/weak-tilted", n, &scaled_tilted(n, "weak"));
     }
 }
 
@@ -92,5 +131,5 @@ fn queues(c: &mut Criterion) {
     both::<PqQueue>(c, "priority-queue");
 }
 
-criterion_group!(benches, sizes, with_statistics, queues);
+criterion_group!(benches, sizes, tilted, with_statistics, queues);
 criterion_main!(benches);

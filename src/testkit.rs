@@ -47,12 +47,23 @@ pub fn fig1() -> Scene {
 /// plate parameters scale with `n` (`K = n/2`, `M = eta = n/4`) so that per-junction forces,
 /// rates and the time unit `M/eta` are the letter's at every size. Used by benches and tests.
 pub fn scaled_linear(n: usize, bond: &str) -> Scene {
+    scaled(n, bond, "linear")
+}
+
+/// The twin of [`scaled_linear`] with the letter's `tilted` law (and the exact engine's
+/// default `exact.tilted`): Fig. 1 at `n` junctions, `K = n/2`, `M = eta = n/4`.
+pub fn scaled_tilted(n: usize, bond: &str) -> Scene {
+    scaled(n, bond, "tilted")
+}
+
+/// Fig. 1 at `n` junctions with force law `law`, exact engine, stationary start, no trace.
+fn scaled(n: usize, bond: &str, law: &str) -> Scene {
     let n_s = n.to_string();
     let k = (0.5 * n as f64).to_string();
     let m = (0.25 * n as f64).to_string();
     fig1_with(&[
         "run.engine=exact",
-        "junctions.force_law=linear",
+        &format!("junctions.force_law={law}"),
         &format!("junctions.bond={bond}"),
         &format!("junctions.n={n_s}"),
         &format!("plate.k={k}"),

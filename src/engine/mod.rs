@@ -8,7 +8,7 @@ pub mod fixed;
 use serde::{Serialize, de::DeserializeOwned};
 
 use crate::observe::{Observer, Sample};
-use crate::scene::{EngineKind, ForceLawKind, Scene};
+use crate::scene::{EngineKind, Scene};
 
 /// Counters an engine keeps; reported in `summary.json`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
@@ -33,6 +33,13 @@ pub struct Counters {
     /// Exact engine: coordinate re-basings (long runs).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rebases: Option<u64>,
+    /// Exact engine, tilted law, series method: re-basings of the bond-force series.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub series_rebases: Option<u64>,
+    /// Exact engine, tilted law, series method: the largest bound of the series' error on
+    /// the bond force over the run, relative to `kappa l0 max(N_att, 1)`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub series_error: Option<f64>,
 }
 
 /// Why an engine could not go on.
@@ -90,13 +97,8 @@ pub trait EngineVisitor {
 /// Builds the engine the scene asks for (`run.engine`), specialised to the scene's force
 /// law, bond kind and options, and hands it to `visitor`.
 pub fn with_engine<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output, EngineError> {
-    // Kinematic plates: the fixed engine (both laws) and the exact linear engine have them.
-    if scene.plate.kinematic
-        && scene.run.engine == EngineKind::Exact
-        && scene.junctions.force_law == ForceLawKind::Tilted
-    {
-        return Err(EngineError::Unsupported { engine: "selected", reason: "plate.kinematic is not implemented yet" });
-    }
+    // Every engine has a kinematic plate: the fixed engine (both laws), the exact linear
+    // engine (`ExactLinear<_, _, Kinematic>`) and the exact tilted law's series engine.
     match scene.run.engine {
         EngineKind::Fixed => fixed::dispatch(scene, visitor),
         EngineKind::Exact => exact::dispatch(scene, visitor),

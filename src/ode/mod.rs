@@ -29,16 +29,26 @@
 //! ode.reset(); // the right-hand side changes at the event
 //! ```
 //!
+//! For stiff plates (tiny mass, large `K/eta`, large `kappa N`) [`Rosenbrock`] is the
+//! linearly implicit, L-stable RODAS4 with analytic Jacobian ([`StiffSystem`]), dense output
+//! and rigorous bounds of it (see `docs/ode.md`, "The Rosenbrock integrator").
+//!
 //! Layout: [`coefficients`] (the Butcher table), `stepper` (step-size control, the public
 //! [`Dop853`] type), `dense` (continuous extension), `root` (crossing detection and Brent's
-//! bracketing root finder).
+//! bracketing root finder); `rosenbrock` (the [`Rosenbrock`] stepper, dense output, bounds),
+//! `rodas4` (its coefficients and their algebraic tests), `lu` (small dense LU).
 
 pub mod coefficients;
 mod dense;
+mod lu;
+mod rodas4;
 mod root;
+mod rosenbrock;
 mod stepper;
 
+pub use lu::MAX_DIM as ROSENBROCK_MAX_DIM;
 pub use root::brent;
+pub use rosenbrock::{Rosenbrock, RosenbrockConfig, StiffSystem};
 pub use stepper::{Dop853, Dop853Config, MIN_RTOL};
 
 use serde::{Deserialize, Serialize};

@@ -4,10 +4,12 @@
 pub mod force;
 pub mod plate;
 pub mod rates;
+pub mod series;
 
 pub use force::{ForceLaw, Linear, Tilted};
 pub use plate::Plate;
 pub use rates::{Bond, Formation, Strong, Weak};
+pub use series::{SeriesSum, tilted_taylor};
 
 use crate::scene::Scene;
 

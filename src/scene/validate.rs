@@ -180,7 +180,17 @@ impl SceneFile {
         }
         // Last: a cost check across sections (plate, junctions, run), after every field is
         // checked on its own.
-        if run.engine == EngineKind::Exact && junctions.force_law == ForceLawKind::Tilted {
+        let direct = run.engine == EngineKind::Exact
+            && junctions.force_law == ForceLawKind::Tilted
+            && exact.tilted == TiltedMethod::Direct;
+        if direct && plate.kinematic {
+            return Err(SceneError::invalid(
+                "exact.tilted",
+                "direct",
+                "cannot run plate.kinematic = true (the direct method integrates the plate equation); use exact.tilted = \"series\"",
+            ));
+        }
+        if direct {
             let steps = tilted_min_steps(&plate, junctions.kappa * junctions.n as f64, t_end);
             if steps > TILTED_STEPS_MAX {
                 return Err(SceneError::invalid(

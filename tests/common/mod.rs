@@ -65,7 +65,49 @@ pub fn mean_ci(x: &[f64], alpha: f64) -> (f64, f64) {
     (m, t * (var / n).sqrt())
 }
 
-/// Records junction events.
+/// Welch's two-sample test of equal means ([`welch`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Welch {
+    /// Difference of the sample means, `mean(x) - mean(y)`.
+    pub diff: f64,
+    /// Its standard error `sqrt(s_x^2/n_x + s_y^2/n_y)`.
+    pub se: f64,
+    /// Welch–Satterthwaite degrees of freedom.
+    pub df: f64,
+    /// Two-sided critical value of `|diff| / se`: the `1 - alpha/2` quantile of Student t(df).
+    pub critical: f64,
+}
+
+impl Welch {
+    /// Whether the means differ significantly: `|diff| > critical se`.
+    pub fn rejects(&self) -> bool {
+        self.diff.abs() > self.critical * self.se
+    }
+    /// The true difference this test detects with probability `power` (normal approximation
+    /// to the non-central t): `(critical + z_power) se`.
+    pub fn detectable(&self, power: f64) -> f64 {
+        use statrs::distribution::Normal;
+        (self.critical + Normal::new(0.0, 1.0).unwrap().inverse_cdf(power)) * self.se
+    }
+}
+
+/// Welch's t test of `mean(x) = mean(y)` for independent samples of unequal variances, at
+/// two-sided level `alpha`: `t = (mean x - mean y) / sqrt(s_x^2/n_x + s_y^2/n_y)`,
+/// `df = (a + b)^2 / (a^2/(n_x - 1) + b^2/(n_y - 1))`, `a = s_x^2/n_x`, `b = s_y^2/n_y`.
+pub fn welch(x: &[f64], y: &[f64], alpha: f64) -> Welch {
+    let moments = |v: &[f64]| {
+        let n = v.len() as f64;
+        let m = v.iter().sum::<f64>() / n;
+        (n, m, v.iter().map(|u| (u - m) * (u - m)).sum::<f64>() / (n - 1.0))
+    };
+    let ((nx, mx, vx), (ny, my, vy)) = (moments(x), moments(y));
+    let (a, b) = (vx / nx, vy / ny);
+    let df = (a + b) * (a + b) / (a * a / (nx - 1.0) + b * b / (ny - 1.0));
+    let critical = StudentsT::new(0.0, 1.0, df).unwrap().inverse_cdf(1.0 - alpha / 2.0);
+    Welch { diff: mx - my, se: (a + b).sqrt(), df, critical }
+}
+
+/// Records junction events./// Records junction events.
 #[derive(Default)]
 pub struct Events(pub Vec<JunctionEvent>);
 impl Observer for Events {

@@ -2,8 +2,9 @@
 //!
 //! Junction rupture and formation events are drawn from their exact, continuously
 //! changing rates, with no time step; the plate moves in closed form between events
-//! (`linear` law) or by an adaptive high-order integrator with a stated tolerance
-//! (`tilted` law). See `docs/engines.md`.
+//! (`linear` law) or, for the `tilted` law, by an L-stable integrator on a truncated series
+//! of the bond force ([`series`]) or, as the O(N) reference, by DOP853 on the direct sum
+//! ([`tilted`]), each with a stated tolerance. See `docs/engines.md`.
 //!
 //! Why no junction needs its own clock: every rate of the model is either shared by all
 //! junctions of a state (strong rupture `k0`, formation `kon0 g(v)`) or, for weak bonds,
@@ -19,12 +20,13 @@ pub mod linear;
 pub mod motion;
 pub mod pick;
 pub mod rupture;
+pub mod series;
 pub mod sumtree;
 pub mod tilted;
 
 use super::{EngineError, EngineVisitor};
 use crate::physics::{Strong, Weak};
-use crate::scene::{BondKind, ForceLawKind, Scene};
+use crate::scene::{BondKind, ForceLawKind, Scene, TiltedMethod};
 
 pub use clocks::{ArrayQueue, ChannelQueue, PqQueue};
 pub use linear::ExactLinear;
@@ -56,7 +58,9 @@ pub fn weak_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> Exact
     ExactLinear::new(scene, |_| WeakRupture::new(j.k0, j.beta_dx() * j.kappa, j.n))
 }
 
-/// Builds the exact engine for `scene`, specialised to its force law and bond kind.
+/// Builds the exact engine for `scene`, specialised to its force law and bond kind: for the
+/// tilted law, the series engine ([`series`]) unless `exact.tilted = "direct"` (the O(N)
+/// reference [`ExactTilted`], which has no kinematic plate).
 pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output, EngineError> {
     let kinematic = scene.plate.kinematic;
     match (scene.junctions.force_law, scene.junctions.bond) {
@@ -68,6 +72,9 @@ pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output
         }
         (ForceLawKind::Linear, BondKind::Strong) => Ok(visitor.visit(strong_linear::<DefaultQueue>(scene))),
         (ForceLawKind::Linear, BondKind::Weak) => Ok(visitor.visit(weak_linear::<DefaultQueue>(scene))),
+        (ForceLawKind::Tilted, _) if scene.exact.tilted == TiltedMethod::Series || scene.plate.kinematic => {
+            series::dispatch(scene, visitor)
+        }
         (ForceLawKind::Tilted, BondKind::Strong) => {
             Ok(visitor.visit(ExactTilted::new(scene, Strong::from_scene(scene))?))
         }

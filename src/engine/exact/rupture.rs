@@ -183,6 +183,26 @@ impl WeakRupture {
         let w = self.tree.total();
         (self.e_hi * w[0], self.e_lo * w[1])
     }
+    /// The envelope for any plate path with `y_lo <= y <= y_hi` (tilted law,
+    /// [`crate::engine::exact::series`]): sets the bounds and returns the total candidate
+    /// rate `B / k0 = exp(a y_hi) W- + exp(-a y_lo) W+` (in units of `k0`; may be `+inf`).
+    #[inline]
+    pub fn envelope(&mut self, y_lo: f64, y_hi: f64) -> f64 {
+        self.set_bounds(y_lo, y_hi);
+        let (m, p) = self.terms();
+        m + p
+    }
+    /// A candidate of the envelope last set by [`WeakRupture::envelope`]: the slot, drawn
+    /// with probability `b_i / B`, and its bound `b_i / k0 = exp(a (y_hi - c_i)) + exp(a (c_i - y_lo))`.
+    #[inline]
+    pub fn envelope_candidate(&self, rng: &mut Pcg64, n_att: usize) -> (usize, f64) {
+        let (m, p) = self.terms();
+        let u = rng.uniform() * (m + p);
+        let slot = if u < m { self.tree.find(0, u / self.e_hi) } else { self.tree.find(1, (u - m) / self.e_lo) };
+        let slot = slot.min(n_att - 1);
+        let w = self.tree.get(slot);
+        (slot, self.e_hi * w[0] + self.e_lo * w[1])
+    }
 }
 
 impl RuptureModel for WeakRupture {

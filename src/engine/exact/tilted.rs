@@ -404,7 +404,7 @@ fn step_cap(plate: &Plate, kappa_n: f64) -> Option<f64> {
     Some(2.0 * t)
 }
 
-fn ode_error(e: OdeError, t: f64, rtol: f64) -> EngineError {
+pub(crate) fn ode_error(e: OdeError, t: f64, rtol: f64) -> EngineError {
     match e {
         OdeError::StepSizeUnderflow { h, .. } => EngineError::StepSizeUnderflow { t, h, rtol },
         OdeError::NonFiniteRhs { .. } | OdeError::NonFiniteState { .. } | OdeError::NonFiniteStep { .. } => {

@@ -1,0 +1,339 @@
+//! The series engine: event loop, junction bookkeeping, frame re-basing.
+
+use rand::RngExt;
+use serde::{Deserialize, Serialize};
+
+use super::SeriesSum;
+use super::kinetics::Kinetics;
+use super::motion::{Motion, Step, StepCtx};
+use crate::engine::exact::bags::{Bags, Detached};
+use crate::engine::exact::clocks::{ArrayQueue, Channels};
+use crate::engine::exact::frame::Frame;
+use crate::engine::{Counters, Engine, EngineError};
+use crate::observe::{EventKind, JunctionEvent, Observer, Sample};
+use crate::physics::{ForceLaw, Formation, Plate, Tilted};
+use crate::rng::{Pcg64, UniformSource, pcg};
+use crate::scene::{EngineKind, Reattach, Scene};
+
+const FORMATION: usize = 0;
+const RUPTURE: usize = 1;
+
+/// Soft re-basing limits (as in the linear engine): re-base once enough events have passed
+/// to pay for the O(N) shift.
+const SOFT_Y: f64 = 4096.0;
+const SOFT_TAU: f64 = 1048576.0;
+/// Hard limits: re-base whatever the cost.
+const HARD_Y: f64 = 1.0737418e9;
+const HARD_TAU: f64 = 4.2949673e9;
+
+/// Exact engine for the tilted law with the bond force kept as a [`SeriesSum`]: rupture
+/// kinetics `K`, plate motion `P`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(bound = "")]
+pub struct ExactSeries<K: Kinetics, P: Motion> {
+    n: usize,
+    plate: Plate,
+    law: Tilted,
+    lambda: f64,
+    reattach: Reattach,
+    formation: Formation,
+    frame: Frame,
+    /// Local time.
+    tau: f64,
+    bags: Bags,
+    /// `SeriesSum` handle of each attached junction, parallel to `bags.attached`.
+    handles: Vec<u32>,
+    series: SeriesSum,
+    kinetics: K,
+    motion: P,
+    channels: Channels<ArrayQueue>,
+    rng: Pcg64,
+    counters: Counters,
+    events_since_rebase: u64,
+}
+
+impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
+    /// The engine at `t = 0`; `kinetics` and `motion` are built by the caller.
+    pub fn new(scene: &Scene, kinetics: K, motion: P) -> Result<Self, EngineError> {
+        let j = &scene.junctions;
+        let mut rng = pcg(scene.run.seed);
+        let bags = Bags::initial(j, &mut rng);
+        let plate = Plate::from_scene(scene);
+        let law = Tilted::from_scene(scene);
+        let series = SeriesSum::new(law, scene.exact.rtol);
+        let mut e = ExactSeries {
+            n: j.n,
+            plate,
+            law,
+            lambda: j.lambda,
+            reattach: j.reattach,
+            formation: Formation::from_scene(scene),
+            frame: Frame::new(plate.v),
+            tau: 0.0,
+            handles: Vec::with_capacity(j.n),
+            bags,
+            series,
+            kinetics,
+            motion,
+            channels: Channels::new(2),
+            rng,
+            counters: Counters {
+                events: Some(0),
+                candidates: Some(0),
+                rebases: Some(0),
+                series_rebases: Some(0),
+                series_error: Some(0.0),
+                ..Default::default()
+            },
+            events_since_rebase: 0,
+        };
+        if !P::KINEMATIC {
+            e.counters.ode_steps = Some(0);
+            e.counters.ode_rejected = Some(0);
+        }
+        for slot in 0..e.bags.n_attached() {
+            let c = e.bags.attached[slot].c;
+            e.handles.push(e.series.add(c));
+            // Every initial junction is unstretched (x = 0): its rate cannot overflow.
+            e.kinetics.attached(slot, c, 0.0);
+        }
+        e.track_error();
+        e.motion.open_piece(0.0, &e.series, &e.frame);
+        e.refresh_clocks(None);
+        Ok(e)
+    }
+
+    #[inline]
+    fn y(&self) -> f64 {
+        self.motion.y(self.tau)
+    }
+
+    /// Records the largest relative bound of the series' error, `error_bound / (kappa l0
+    /// max(N_att, 1))`.
+    #[inline]
+    fn track_error(&mut self) {
+        let scale = self.law.kappa * self.law.l0 * self.bags.n_attached().max(1) as f64;
+        let rel = self.series.error_bound() / scale;
+        let e = self.counters.series_error.get_or_insert(0.0);
+        if rel > *e {
+            *e = rel;
+        }
+    }
+
+    fn refresh_clocks(&mut self, fired: Option<usize>) {
+        let rates =
+            [self.formation.kon0 * self.bags.n_detached() as f64, self.kinetics.channel_rate(self.bags.n_attached())];
+        self.channels.set_rates(self.tau, rates, fired, &mut self.rng);
+    }
+
+    /// Reports the piece up to now.
+    fn close_piece<O: Observer>(&mut self, obs: &mut O) {
+        if let Some(mut s) = self.motion.segment(self.tau, &self.frame, &self.plate, &self.series) {
+            s.attached = self.bags.n_attached() as u64;
+            obs.segment(&s);
+        }
+    }
+
+    fn emit<O: Observer>(&self, obs: &mut O, kind: EventKind, id: u32, x: f64) {
+        if O::EVENTS {
+            obs.event(&JunctionEvent {
+                t: self.frame.time(self.tau),
+                junction: id,
+                kind,
+                extension: x,
+                tension: self.law.tension(x),
+            });
+        }
+    }
+
+    fn rupture_slot<O: Observer>(&mut self, slot: usize, obs: &mut O) {
+        let last = self.bags.n_attached() - 1;
+        let a = self.bags.take_attached(slot);
+        let h = self.handles.swap_remove(slot);
+        self.series.remove(a.c, h);
+        self.kinetics.detached(slot, last);
+        let x = self.y() - a.c;
+        self.bags.detached.push(Detached { x, t: self.tau, id: a.id });
+        self.counters.ruptures += 1;
+        self.emit(obs, EventKind::Rupture, a.id, x);
+    }
+
+    fn form_one<O: Observer>(&mut self, obs: &mut O) {
+        if self.kinetics.needs_rebase(self.y()) {
+            self.rebase(obs);
+        }
+        let slot = self.rng.random_range(0..self.bags.n_detached());
+        let d = self.bags.take_detached(slot);
+        let x = match self.reattach {
+            Reattach::Residual => d.x * (-self.lambda * (self.tau - d.t)).exp(),
+            Reattach::Unstretched => 0.0,
+        };
+        let y = self.y();
+        let c = y - x;
+        self.bags.attach(c, d.id);
+        self.handles.push(self.series.add(c));
+        self.counters.formations += 1;
+        self.emit(obs, EventKind::Formation, d.id, x);
+        let slot = self.bags.n_attached() - 1;
+        if !self.kinetics.attached(slot, c, y) {
+            self.rupture_slot(slot, obs);
+        }
+    }
+
+    fn maybe_rebase<O: Observer>(&mut self, obs: &mut O) {
+        let (ya, ta) = (self.y().abs(), self.tau.abs());
+        let hard = ya > HARD_Y || ta > HARD_TAU || self.kinetics.needs_rebase(self.y());
+        let soft = (ya > SOFT_Y || ta > SOFT_TAU) && self.events_since_rebase >= (self.n as u64 / 4).max(1);
+        if hard || soft {
+            self.rebase(obs);
+        }
+    }
+
+    /// Moves the local origin to the current time and position (at a piece boundary: the
+    /// piece's own origin moves with it).
+    fn rebase<O: Observer>(&mut self, obs: &mut O) {
+        let (dtau, dy) = (self.tau, self.y());
+        self.frame.shift(dtau, dy);
+        self.bags.rebase(dtau, dy);
+        self.channels.shift(dtau);
+        self.series.shift(dy);
+        self.motion.rebase(dtau, dy);
+        self.tau = 0.0;
+        self.events_since_rebase = 0;
+        *self.counters.rebases.get_or_insert(0) += 1;
+        let mut over = self.kinetics.rebuild(&self.bags.attached);
+        over.sort_unstable_by(|a, b| b.cmp(a));
+        for slot in over {
+            self.rupture_slot(slot, obs);
+        }
+    }
+
+    fn after_event<O: Observer>(&mut self, fired: Option<usize>, obs: &mut O) {
+        self.events_since_rebase += 1;
+        *self.counters.events.get_or_insert(0) = self.counters.ruptures + self.counters.formations;
+        self.maybe_rebase(obs);
+        self.motion.open_piece(self.tau, &self.series, &self.frame);
+        self.refresh_clocks(fired);
+    }
+
+    fn check(&self) -> Result<(), EngineError> {
+        let y = self.y();
+        if !y.is_finite() {
+            return Err(EngineError::NonFinite { t: self.time(), quantity: "X", value: y });
+        }
+        Ok(())
+    }
+
+    /// One plate step towards `target`; weak bonds thin their rupture candidates over it.
+    /// Returns the slot that ruptured inside the step, if one did (the state is then at
+    /// the rupture time).
+    fn plate_step(&mut self, target: f64) -> Result<Option<usize>, EngineError> {
+        let mut ctx = StepCtx {
+            series: &mut self.series,
+            frame: &self.frame,
+            counters: &mut self.counters,
+            max_spread: self.kinetics.max_spread(),
+        };
+        let step: Step = self.motion.step(&mut ctx, self.tau, target)?;
+        let mut hit = None;
+        if K::WEAK {
+            let mut cands = 0;
+            let motion = &mut self.motion;
+            hit = self.kinetics.thin(
+                &mut self.rng,
+                (step.s0, step.s1),
+                (step.y_lo, step.y_hi),
+                &self.bags.attached,
+                &self.law,
+                |s| motion.y_at(s),
+                &mut cands,
+            )?;
+            *self.counters.candidates.get_or_insert(0) += cands;
+        }
+        let end = hit.map_or(step.s1, |(s, _)| s);
+        self.motion.finish(&step, end, &self.series)?;
+        self.tau = end;
+        self.motion.sync_counters(&mut self.counters);
+        self.track_error();
+        Ok(hit.map(|(_, slot)| slot))
+    }
+}
+
+impl<K: Kinetics, P: Motion> Engine for ExactSeries<K, P> {
+    const KIND: EngineKind = EngineKind::Exact;
+
+    fn time(&self) -> f64 {
+        self.frame.time(self.tau)
+    }
+
+    fn time_step(&self) -> Option<f64> {
+        None
+    }
+
+    fn advance<O: Observer>(&mut self, t_stop: f64, obs: &mut O) -> Result<(), EngineError> {
+        loop {
+            // In the local frame, which a re-basing inside this loop moves.
+            let tau_stop = self.frame.local(t_stop).max(self.tau);
+            let (ch, t_next) = self.channels.first();
+            let target = t_next.min(tau_stop);
+            if self.tau < target {
+                if let Some(slot) = self.plate_step(target)? {
+                    self.check()?;
+                    self.close_piece(obs);
+                    self.rupture_slot(slot, obs);
+                    self.after_event(None, obs);
+                    continue;
+                }
+                if self.tau < target {
+                    continue;
+                }
+            }
+            self.check()?;
+            // A NaN time is never due (it would stop the loop, not spin it).
+            if !(t_next <= tau_stop) {
+                self.close_piece(obs);
+                self.maybe_rebase(obs);
+                self.motion.open_piece(self.tau, &self.series, &self.frame);
+                return Ok(());
+            }
+            *self.counters.candidates.get_or_insert(0) += 1;
+            match ch {
+                FORMATION => {
+                    let g = self.formation.g(self.motion.velocity(&self.series, &self.frame, self.tau));
+                    if g >= 1.0 || self.rng.uniform() < g {
+                        self.close_piece(obs);
+                        self.form_one(obs);
+                        self.after_event(Some(FORMATION), obs);
+                    } else {
+                        self.channels.redraw(FORMATION, self.tau, &mut self.rng);
+                    }
+                }
+                _ => {
+                    self.close_piece(obs);
+                    let slot = self.rng.random_range(0..self.bags.n_attached());
+                    self.rupture_slot(slot, obs);
+                    self.after_event(Some(RUPTURE), obs);
+                }
+            }
+        }
+    }
+
+    fn sample(&self) -> Sample {
+        let y = self.y();
+        let fb = self.series.force(y);
+        let friction = if P::KINEMATIC { fb } else { -self.plate.k * self.frame.lag(y, self.tau) };
+        Sample {
+            t: self.time(),
+            x: self.frame.position(y),
+            v: self.motion.velocity(&self.series, &self.frame, self.tau),
+            friction,
+            bond_force: fb,
+            attached: self.bags.n_attached() as u64,
+            n: self.n as u64,
+        }
+    }
+
+    fn counters(&self) -> Counters {
+        self.counters.clone()
+    }
+}

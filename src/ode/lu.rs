@@ -1,0 +1,136 @@
+//! Small dense LU factorisation with partial pivoting, for the linearly implicit stages of
+//! [`super::Rosenbrock`] (dimension at most [`MAX_DIM`]; fixed arrays, no allocation).
+//!
+//! `P A = L U` (Doolittle, `L` unit lower triangular), stored in place row-major with stride
+//! `n`; `solve` does the permutation, forward and back substitution (Golub & Van Loan,
+//! *Matrix Computations*, Alg. 3.4.1).
+
+/// Largest system dimension of the Rosenbrock integrator.
+pub const MAX_DIM: usize = 8;
+
+/// An `n x n` matrix factorised in place, `n <= MAX_DIM`.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Lu {
+    n: usize,
+    /// `L` (strictly lower, unit diagonal implied) and `U`, row-major, stride `n`.
+    a: [f64; MAX_DIM * MAX_DIM],
+    /// Row `i` of `P A` is row `piv[i]` of `A`.
+    piv: [usize; MAX_DIM],
+}
+
+impl Default for Lu {
+    fn default() -> Self {
+        Self { n: 0, a: [0.0; MAX_DIM * MAX_DIM], piv: [0; MAX_DIM] }
+    }
+}
+
+impl Lu {
+    /// Factorises `fac I - J` (`jac` row-major `n x n`) in place. Returns `false` if a pivot
+    /// is zero or any entry non-finite (the matrix is then unusable).
+    #[inline]
+    pub(super) fn factor_shifted(&mut self, n: usize, fac: f64, jac: &[f64]) -> bool {
+        debug_assert!(n <= MAX_DIM && jac.len() >= n * n);
+        self.n = n;
+        let a = &mut self.a;
+        for i in 0..n {
+            for j in 0..n {
+                a[i * n + j] = -jac[i * n + j];
+            }
+            a[i * n + i] += fac;
+            self.piv[i] = i;
+        }
+        for k in 0..n {
+            // Partial pivoting: the largest |a[i][k]|, i >= k.
+            let mut p = k;
+            let mut best = a[k * n + k].abs();
+            for i in k + 1..n {
+                let v = a[i * n + k].abs();
+                if v > best {
+                    best = v;
+                    p = i;
+                }
+            }
+            if !(best > 0.0 && best.is_finite()) {
+                return false;
+            }
+            if p != k {
+                for j in 0..n {
+                    a.swap(k * n + j, p * n + j);
+                }
+                self.piv.swap(k, p);
+            }
+            let inv = 1.0 / a[k * n + k];
+            for i in k + 1..n {
+                let l = a[i * n + k] * inv;
+                a[i * n + k] = l;
+                if l != 0.0 {
+                    for j in k + 1..n {
+                        a[i * n + j] -= l * a[k * n + j];
+                    }
+                }
+            }
+        }
+        a[..n * n].iter().all(|v| v.is_finite())
+    }
+
+    /// Solves `(fac I - J) x = b` with the stored factors; `b` is overwritten by `x`.
+    #[inline]
+    pub(super) fn solve(&self, b: &mut [f64]) {
+        let n = self.n;
+        let a = &self.a;
+        let mut x = [0.0; MAX_DIM];
+        for i in 0..n {
+            let mut s = b[self.piv[i]];
+            for j in 0..i {
+                s -= a[i * n + j] * x[j];
+            }
+            x[i] = s;
+        }
+        for i in (0..n).rev() {
+            let mut s = x[i];
+            for j in i + 1..n {
+                s -= a[i * n + j] * x[j];
+            }
+            x[i] = s / a[i * n + i];
+        }
+        b[..n].copy_from_slice(&x[..n]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `(fac I - J) x = b` recovered for a matrix that needs pivoting (zero leading entry).
+    #[test]
+    fn solves_a_system_that_needs_pivoting() {
+        // fac I - J = [[0, 2, 1], [1, 1, 0], [3, 0, 5]] with fac = 1.
+        let m = [[0.0, 2.0, 1.0], [1.0, 1.0, 0.0], [3.0, 0.0, 5.0]];
+        let mut jac = [0.0; 9];
+        for i in 0..3 {
+            for j in 0..3 {
+                jac[i * 3 + j] = if i == j { 1.0 } else { 0.0 } - m[i][j];
+            }
+        }
+        let mut lu = Lu::default();
+        assert!(lu.factor_shifted(3, 1.0, &jac));
+        let x = [1.5, -2.0, 0.25];
+        let mut b = [0.0; 3];
+        for i in 0..3 {
+            b[i] = (0..3).map(|j| m[i][j] * x[j]).sum();
+        }
+        lu.solve(&mut b);
+        for i in 0..3 {
+            assert!((b[i] - x[i]).abs() < 1e-14, "{b:?}");
+        }
+    }
+
+    #[test]
+    fn singular_and_non_finite_matrices_are_refused() {
+        let mut lu = Lu::default();
+        // fac I - J = 0.
+        assert!(!lu.factor_shifted(2, 1.0, &[1.0, 0.0, 0.0, 1.0]));
+        assert!(!lu.factor_shifted(1, 1.0, &[f64::NAN]));
+        assert!(!lu.factor_shifted(1, f64::INFINITY, &[0.0]));
+    }
+}
