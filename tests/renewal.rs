@@ -75,10 +75,13 @@ fn tilted_force_x(x: f64) -> f64 {
     tilted_tension(x) * x / x.hypot(L0)
 }
 
-fn linear() -> Renewal<fn(f64) -> f64, fn(f64) -> f64> {
+/// A force law's `(f, f^x)` as plain functions.
+type Law = Renewal<fn(f64) -> f64, fn(f64) -> f64>;
+
+fn linear() -> Law {
     Renewal { k0: K0, beta_dx: 1.0, v: V, kon: kon(), tension: linear_tension, force_x: linear_force_x }
 }
-fn tilted() -> Renewal<fn(f64) -> f64, fn(f64) -> f64> {
+fn tilted() -> Law {
     Renewal { k0: K0, beta_dx: 1.0, v: V, kon: kon(), tension: tilted_tension, force_x: tilted_force_x }
 }
 
