@@ -119,6 +119,8 @@ pub fn dt_limit(integrator: Integrator, o: Oscillator) -> f64 {
                 2.0 * eta / k
             }
         }
+        // No plate equation (`X = V t`): nothing to become unstable.
+        Integrator::Kinematic => f64::INFINITY,
     }
 }
 
@@ -294,8 +296,10 @@ pub fn analyse(scene: &Scene) -> Analysis {
     let (j, p, dt) = (&scene.junctions, &scene.plate, scene.fixed.dt);
     let k_none = p.k;
     let k_all = p.k + j.kappa * j.n as f64;
-    let selected = Integrator::new(scene.fixed.integrator, p.mass);
-    let candidates: &[Integrator] = if p.mass == 0.0 {
+    let selected = Integrator::of_scene(scene);
+    let candidates: &[Integrator] = if p.kinematic {
+        &[Integrator::Kinematic]
+    } else if p.mass == 0.0 {
         &[Integrator::Overdamped]
     } else {
         &[Integrator::SemiImplicitEuler, Integrator::ExplicitEuler, Integrator::VelocityVerlet]
@@ -344,6 +348,7 @@ pub fn integrator_name(i: Integrator) -> &'static str {
         Integrator::ExplicitEuler => "explicit-euler",
         Integrator::VelocityVerlet => "velocity-verlet",
         Integrator::Overdamped => "overdamped-euler",
+        Integrator::Kinematic => "kinematic",
     }
 }
 
@@ -381,6 +386,11 @@ pub fn num(x: f64) -> String {
 }
 
 impl Analysis {
+    /// Whether the scene's plate is kinematic (no plate equation, no plate limit).
+    pub fn kinematic(&self) -> bool {
+        self.plate.iter().any(|r| r.integrator == Integrator::Kinematic)
+    }
+
     /// The plate row of the integrator the scene uses.
     pub fn selected(&self) -> &PlateLimit {
         self.plate.iter().find(|r| r.selected).expect("the scene's integrator is analysed")
@@ -397,6 +407,9 @@ impl Analysis {
 
     /// The verdict of one row in words.
     pub fn explain(&self, r: &PlateLimit) -> String {
+        if r.integrator == Integrator::Kinematic {
+            return "no plate equation (plate.kinematic: X = V t): no limit".into();
+        }
         let neutral = if self.eta == 0.0 && r.integrator != Integrator::ExplicitEuler {
             " (undamped: oscillations keep their amplitude, as in the exact solution)"
         } else {
@@ -438,16 +451,25 @@ impl Analysis {
             &mut out,
             format!("# stability of the fixed-step scheme: scene {scene_name}, fixed.dt = {}", num(self.dt)),
         );
-        push(
-            &mut out,
-            format!(
-                "# plate linearised as M Xdd + eta Xd + k X = 0 with M = {}, eta = {}, k from K = {} (no junction attached) to {}",
-                num(self.mass),
-                num(self.eta),
-                num(self.k_none),
-                self.stiffest()
-            ),
-        );
+        if self.kinematic() {
+            push(
+                &mut out,
+                "# plate.kinematic = true: the plate follows its drive (X = V t), there is no plate equation and so \
+                 no plate stability limit"
+                    .into(),
+            );
+        } else {
+            push(
+                &mut out,
+                format!(
+                    "# plate linearised as M Xdd + eta Xd + k X = 0 with M = {}, eta = {}, k from K = {} (no junction attached) to {}",
+                    num(self.mass),
+                    num(self.eta),
+                    num(self.k_none),
+                    self.stiffest()
+                ),
+            );
+        }
         push(
             &mut out,
             "# dt limit: stable below it whatever the attached count; unstable above: unstable beyond it whatever \
@@ -781,6 +803,28 @@ mod tests {
                 assert!(radius(i, o, 1.001 * l) > 1.0, "{i:?} {o:?}");
             }
         }
+    }
+
+    /// A kinematic plate has no plate equation: one row, no limit, no warning about it,
+    /// at any `dt` and even at a plate that would be unstable (the letter's Fig. 1 at
+    /// `dt = 1` is at the limit of semi-implicit Euler).
+    #[test]
+    fn kinematic_plate_has_no_limit() {
+        for extra in [&[][..], &["plate.mass=0"][..], &["fixed.dt=5"][..]] {
+            let mut o = vec!["plate.kinematic=true", "run.engine=fixed"];
+            o.extend_from_slice(extra);
+            let s = testkit::fig1_with(&o);
+            let a = analyse(&s);
+            assert!(a.kinematic());
+            assert_eq!(a.plate.len(), 1, "{extra:?}");
+            let r = a.selected();
+            assert_eq!((r.integrator, r.verdict), (Integrator::Kinematic, Verdict::Stable));
+            assert_eq!((r.dt_stable, r.dt_unstable, r.radius_all), (f64::INFINITY, f64::INFINITY, 0.0));
+            let table = a.table("k");
+            assert!(table.contains("no plate stability limit") && table.contains("kinematic *"), "{table}");
+            assert!(a.issues().iter().all(|i| !i.contains("plate step")), "{:?}", a.issues());
+        }
+        assert!(warning(&testkit::fig1_with(&["plate.kinematic=true", "run.engine=fixed"])).is_none());
     }
 
     #[test]

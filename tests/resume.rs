@@ -2,7 +2,7 @@
 //! continued with `stickslip resume` gives the same `trace.csv` and `events.csv`, byte for
 //! byte, and the same `summary.json` apart from `wall_seconds`, as an uninterrupted run
 //! with the same seed; for the fixed engine and the exact engine (linear law with strong
-//! and weak bonds, tilted law). Also: the progress display changes nothing, a finished run
+//! and weak bonds, tilted law), and for kinematic plates. Also: the progress display changes nothing, a finished run
 //! is not resumed, and bad `resume` inputs and bad `--checkpoint-every` values are refused
 //! with one line and exit code 2, with nothing changed on disk.
 
@@ -48,6 +48,24 @@ const TILTED_KINEMATIC: Case = Case {
     name: "exact, tilted law (series), kinematic plate, weak bonds, events.csv",
     sets: &["run.engine=exact", "junctions.bond=weak", "plate.kinematic=true", "output.events=true", "run.t_warmup=10"],
     t_end: 2000.0,
+};
+
+const KINEMATIC_EXACT: Case = Case {
+    name: "exact, linear law, weak bonds, kinematic plate, events.csv",
+    sets: &[
+        "run.engine=exact",
+        "junctions.force_law=linear",
+        "junctions.bond=weak",
+        "plate.kinematic=true",
+        "output.events=true",
+        "run.t_warmup=100",
+    ],
+    t_end: 20000.0,
+};
+const KINEMATIC_FIXED: Case = Case {
+    name: "fixed (tilted law, weak bonds), kinematic plate",
+    sets: &["junctions.bond=weak", "plate.kinematic=true", "fixed.dt=0.2", "output.events=false"],
+    t_end: 20000.0,
 };
 
 fn scene_args(dir: &Path, case: &Case, t_end: f64) -> Vec<String> {
@@ -232,6 +250,12 @@ fn killed_and_resumed_exact_linear_strong() {
 #[test]
 fn killed_twice_and_resumed_exact_linear_weak() {
     kill_and_resume(&LINEAR_WEAK, 2);
+}
+
+#[test]
+fn killed_and_resumed_kinematic_plates() {
+    kill_and_resume(&KINEMATIC_EXACT, 1);
+    kill_and_resume(&KINEMATIC_FIXED, 1);
 }
 
 #[test]

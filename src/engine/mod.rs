@@ -97,10 +97,8 @@ pub trait EngineVisitor {
 /// Builds the engine the scene asks for (`run.engine`), specialised to the scene's force
 /// law, bond kind and options, and hands it to `visitor`.
 pub fn with_engine<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output, EngineError> {
-    let tilted = scene.junctions.force_law == crate::scene::ForceLawKind::Tilted;
-    if scene.plate.kinematic && !(tilted && scene.run.engine == EngineKind::Exact) {
-        return Err(EngineError::Unsupported { engine: "selected", reason: "plate.kinematic is not implemented yet" });
-    }
+    // Every engine has a kinematic plate: the fixed engine (both laws), the exact linear
+    // engine (`ExactLinear<_, _, Kinematic>`) and the exact tilted law's series engine.
     match scene.run.engine {
         EngineKind::Fixed => fixed::dispatch(scene, visitor),
         EngineKind::Exact => exact::dispatch(scene, visitor),

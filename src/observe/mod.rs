@@ -25,7 +25,7 @@ pub struct Sample {
     pub x: f64,
     /// Plate velocity `Xd`.
     pub v: f64,
-    /// Driving-spring force `F = K (V t - X)` (the friction force).
+    /// Driving-spring force `F = K (V t - X)` (the friction force; with a kinematic plate, `F_b`).
     pub friction: f64,
     /// Bond force `F_b = sum_i q_i f_i^x`.
     pub bond_force: f64,
@@ -81,7 +81,7 @@ pub struct JunctionEvent {
 pub struct Segment {
     pub t0: f64,
     pub t1: f64,
-    /// Mean driving-spring force `F = K (V t - X)` over the segment.
+    /// Mean driving-spring force `F = K (V t - X)` over the segment (kinematic plate: mean `F_b`).
     pub friction: f64,
     /// `int (F - mean)^2 dt` over the segment (>= 0).
     pub friction_m2: f64,

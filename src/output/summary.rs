@@ -17,7 +17,7 @@ pub struct Summary {
     pub n: u64,
     pub t_end: f64,
     pub t_warmup: f64,
-    /// Time-weighted mean of `F = K (V t - X)` over `[t_warmup, t_end]`.
+    /// Time-weighted mean of `F = K (V t - X)` over `[t_warmup, t_end]` (kinematic plate: of `F_b`).
     pub friction_mean: f64,
     /// Time-weighted standard deviation of `F` over the window.
     pub friction_std: f64,

@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod moments;
+pub mod renewal;
 
 use statrs::distribution::{ChiSquared, ContinuousCDF, StudentsT};
 use stickslip::Scene;

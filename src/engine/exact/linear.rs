@@ -12,12 +12,21 @@
 //! The trajectory restarts (a new closed-form solution from the current state) at every
 //! event, horizon end and stop; each restart reports the exact time integrals of the
 //! observables over the finished piece as a [`Segment`].
+//!
+//! With a kinematic plate (type parameter [`Kinematic`](super::motion::Kinematic), `plate.kinematic = true`) there is
+//! no plate equation: `y = V tau` in local coordinates (so the lag `X - V t` is exactly 0),
+//! `y' = V`, and `F_b = kappa (N_att V tau - C)` is linear in time between events, so a
+//! segment's mean is `F_b` at its midpoint and `int (F_b - mean)^2 = (kappa N_att V)^2 h^3 / 12`.
+//! Formation has the constant acceptance `g(V)`, folded into the candidate rate (every
+//! candidate is an event). Weak bonds bound their rates over a horizon from
+//! `y_lo = y(tau)`, `y_hi = y(tau + H)` ([`Drive`]). The friction reported is `F_b`.
 
 use serde::{Deserialize, Serialize};
 
 use super::bags::Bags;
 use super::clocks::{ChannelQueue, Channels};
 use super::frame::Frame;
+use super::motion::{Drive, Dynamic, PlateMotion};
 use super::pick::Pick;
 use super::rupture::RuptureModel;
 use crate::engine::{Counters, Engine, EngineError};
@@ -54,10 +63,11 @@ struct Piece {
     traj: Trajectory,
 }
 
-/// Exact event-driven engine, linear force law, rupture kinetics `R`, event queue `Q`.
+/// Exact event-driven engine, linear force law, rupture kinetics `R`, event queue `Q`, plate
+/// motion `M` (the plate equation, or a kinematic plate).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(bound = "")]
-pub struct ExactLinear<R: RuptureModel, Q: ChannelQueue> {
+pub struct ExactLinear<R: RuptureModel, Q: ChannelQueue, M: PlateMotion = Dynamic> {
     n: usize,
     plate: Plate,
     kappa: f64,
@@ -80,6 +90,8 @@ pub struct ExactLinear<R: RuptureModel, Q: ChannelQueue> {
     events_since_rebase: u64,
     #[serde(skip)]
     plates: PlateCache,
+    #[serde(skip)]
+    motion: std::marker::PhantomData<M>,
 }
 
 /// Classified plates `M y'' + eta y' + (K + kappa n) y` for recent attached counts `n`: the
@@ -106,7 +118,7 @@ impl PlateCache {
     }
 }
 
-impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
+impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
     /// The engine at `t = 0` for `scene`, with rupture kinetics made by `rupture` (after the
     /// initial state has been drawn from the generator).
     pub fn new(scene: &Scene, rupture: impl FnOnce(&mut Pcg64) -> R) -> Self {
@@ -141,6 +153,7 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
             counters: Counters { events: Some(0), candidates: Some(0), rebases: Some(0), ..Default::default() },
             events_since_rebase: 0,
             plates: PlateCache::default(),
+            motion: std::marker::PhantomData,
         };
         let attached = std::mem::take(&mut e.bags.attached);
         for (slot, a) in attached.iter().enumerate() {
@@ -148,14 +161,21 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
         }
         e.bags.attached = attached;
         e.open_piece();
-        // At rest at t = 0; for M = 0 the velocity follows from the forces.
-        e.yd = e.piece.traj.at(0.0).1;
+        // At rest at t = 0; for M = 0 the velocity follows from the forces. A kinematic
+        // plate moves at V from the start.
+        e.yd = if M::KINEMATIC { e.plate.v } else { e.piece.traj.at(0.0).1 };
         e.refresh_clocks(None);
         e
     }
 
     /// Starts a new closed-form piece at the current time and state.
     fn open_piece(&mut self) {
+        if M::KINEMATIC {
+            self.piece.tau0 = self.tau;
+            self.piece.y0 = self.y;
+            self.piece.v0 = self.yd;
+            return;
+        }
         let p = &self.plate;
         // M y'' + eta y' + k y = K (V (tau + s) - lag_ref) + kappa C.
         let a = p.k * (p.v * self.tau - self.frame.lag_ref) + self.kappa * self.bags.anchor_sum();
@@ -170,6 +190,9 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
     /// Moves along the piece to local time `tau1` and reports `[piece.tau0, tau1]` as a
     /// segment. Returns the plate state at `tau1`.
     fn close_piece<O: Observer>(&mut self, tau1: f64, obs: &mut O) -> (f64, f64) {
+        if M::KINEMATIC {
+            return self.close_kinematic(tau1, obs);
+        }
         let h = (tau1 - self.piece.tau0).max(0.0);
         let (y1, v1, ints) = self.piece.traj.at_with_integrals(h, self.plate.v);
         self.report_piece(tau1, y1, v1, ints, obs);
@@ -205,11 +228,52 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
         self.yd = v1;
     }
 
+    /// Kinematic plate: reports `[piece.tau0, tau1]` (friction = `F_b`, linear in time) and
+    /// moves to `y = V tau1`.
+    fn close_kinematic<O: Observer>(&mut self, tau1: f64, obs: &mut O) -> (f64, f64) {
+        let pc = &self.piece;
+        let v = self.plate.v;
+        let y1 = v * tau1;
+        let h = tau1 - pc.tau0;
+        if h > 0.0 {
+            let n_att = self.bags.n_attached() as f64;
+            // F_b(s) = kappa (N y(s) - C): its mean is its midpoint value, and
+            // int (F_b - mean)^2 ds = (kappa N V)^2 h^3 / 12.
+            let bond = self.kappa * (n_att * (0.5 * (pc.y0 + y1)) - self.bags.anchor_sum());
+            let slope = self.kappa * n_att * v;
+            obs.segment(&Segment {
+                t0: self.frame.time(pc.tau0),
+                t1: self.frame.time(tau1),
+                friction: bond,
+                friction_m2: slope * slope * h * h * h / 12.0,
+                bond_force: bond,
+                viscous: 0.0,
+                attached: n_att as u64,
+            });
+        }
+        self.tau = tau1;
+        self.y = y1;
+        self.yd = v;
+        (y1, v)
+    }
+
+    /// The plate along the current piece, as a kinematic drive.
+    #[inline]
+    fn drive(&self) -> Drive {
+        Drive { y0: self.piece.y0, v: self.plate.v }
+    }
+
     /// Sets every channel's rate after a change of state; channel `fired` draws afresh.
     fn refresh_clocks(&mut self, fired: Option<usize>) {
         let now = self.tau;
-        let plan = self.rupture.plan(&self.piece.traj, self.bags.n_attached());
-        let rates = [self.formation.kon0 * self.bags.n_detached() as f64, plan.rate];
+        let n_att = self.bags.n_attached();
+        let (plan, accept) = if M::KINEMATIC {
+            // Constant g(V): folded into the formation rate, every candidate is an event.
+            (self.rupture.plan(&self.drive(), n_att), self.formation.g(self.plate.v))
+        } else {
+            (self.rupture.plan(&self.piece.traj, n_att), 1.0)
+        };
+        let rates = [self.formation.kon0 * accept * self.bags.n_detached() as f64, plan.rate];
         self.channels.set_rates(now, rates, fired, &mut self.rng);
         self.channels.set_time(HORIZON, if R::WEAK { now + plan.horizon } else { f64::INFINITY });
     }
@@ -310,7 +374,7 @@ impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
     }
 }
 
-impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
+impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Engine for ExactLinear<R, Q, M> {
     const KIND: EngineKind = EngineKind::Exact;
 
     fn time(&self) -> f64 {
@@ -338,6 +402,24 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
             }
             self.count_candidate();
             match ch {
+                FORMATION if M::KINEMATIC => {
+                    let (y, v) = self.close_kinematic(t_next, obs);
+                    self.check(y, v)?;
+                    self.form_one(obs);
+                    self.after_event(Some(FORMATION), obs);
+                }
+                RUPTURE if M::KINEMATIC => {
+                    let drive = self.drive();
+                    match self.rupture.pick(&mut self.rng, &drive, t_next - self.piece.tau0, &self.bags.attached) {
+                        Some(slot) => {
+                            let (y, v) = self.close_kinematic(t_next, obs);
+                            self.check(y, v)?;
+                            self.rupture_slot(slot, obs);
+                            self.after_event(Some(RUPTURE), obs);
+                        }
+                        None => self.channels.redraw(RUPTURE, t_next, &mut self.rng),
+                    }
+                }
                 FORMATION => {
                     // The state (and, if accepted, the piece's integrals) at the candidate.
                     let h = t_next - self.piece.tau0;
@@ -380,12 +462,13 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
 
     fn sample(&self) -> Sample {
         let n_att = self.bags.n_attached();
+        let bond_force = self.kappa * (n_att as f64 * self.y - self.bags.anchor_sum());
         Sample {
             t: self.time(),
             x: self.frame.position(self.y),
             v: self.yd,
-            friction: -self.plate.k * self.frame.lag(self.y, self.tau),
-            bond_force: self.kappa * (n_att as f64 * self.y - self.bags.anchor_sum()),
+            friction: if M::KINEMATIC { bond_force } else { -self.plate.k * self.frame.lag(self.y, self.tau) },
+            bond_force,
             attached: n_att as u64,
             n: self.n as u64,
         }
@@ -396,7 +479,7 @@ impl<R: RuptureModel, Q: ChannelQueue> Engine for ExactLinear<R, Q> {
     }
 }
 
-impl<R: RuptureModel, Q: ChannelQueue> ExactLinear<R, Q> {
+impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
     /// Non-finite plate state is an error, never an output.
     #[inline]
     fn check(&self, y: f64, v: f64) -> Result<(), EngineError> {

@@ -17,6 +17,7 @@ pub mod bags;
 pub mod clocks;
 pub mod frame;
 pub mod linear;
+pub mod motion;
 pub mod pick;
 pub mod rupture;
 pub mod series;
@@ -29,6 +30,7 @@ use crate::scene::{BondKind, ForceLawKind, Scene, TiltedMethod};
 
 pub use clocks::{ArrayQueue, ChannelQueue, PqQueue};
 pub use linear::ExactLinear;
+pub use motion::{Dynamic, Kinematic, PlateMotion};
 pub use rupture::{StrongRupture, WeakRupture};
 pub use tilted::ExactTilted;
 
@@ -37,11 +39,21 @@ pub type DefaultQueue = ArrayQueue;
 
 /// The exact engine for a `linear`-law scene with strong bonds.
 pub fn strong_linear<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<StrongRupture, Q> {
-    ExactLinear::new(scene, |rng| StrongRupture::new(scene.junctions.k0, rng))
+    strong_linear_with::<Q, Dynamic>(scene)
 }
 
 /// The exact engine for a `linear`-law scene with weak bonds.
 pub fn weak_linear<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<WeakRupture, Q> {
+    weak_linear_with::<Q, Dynamic>(scene)
+}
+
+/// [`strong_linear`] with plate motion `M` ([`Kinematic`] for `plate.kinematic`).
+pub fn strong_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> ExactLinear<StrongRupture, Q, M> {
+    ExactLinear::new(scene, |rng| StrongRupture::new(scene.junctions.k0, rng))
+}
+
+/// [`weak_linear`] with plate motion `M` ([`Kinematic`] for `plate.kinematic`).
+pub fn weak_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> ExactLinear<WeakRupture, Q, M> {
     let j = &scene.junctions;
     ExactLinear::new(scene, |_| WeakRupture::new(j.k0, j.beta_dx() * j.kappa, j.n))
 }
@@ -50,7 +62,14 @@ pub fn weak_linear<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<WeakRupture, Q
 /// tilted law, the series engine ([`series`]) unless `exact.tilted = "direct"` (the O(N)
 /// reference [`ExactTilted`], which has no kinematic plate).
 pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output, EngineError> {
+    let kinematic = scene.plate.kinematic;
     match (scene.junctions.force_law, scene.junctions.bond) {
+        (ForceLawKind::Linear, BondKind::Strong) if kinematic => {
+            Ok(visitor.visit(strong_linear_with::<DefaultQueue, Kinematic>(scene)))
+        }
+        (ForceLawKind::Linear, BondKind::Weak) if kinematic => {
+            Ok(visitor.visit(weak_linear_with::<DefaultQueue, Kinematic>(scene)))
+        }
         (ForceLawKind::Linear, BondKind::Strong) => Ok(visitor.visit(strong_linear::<DefaultQueue>(scene))),
         (ForceLawKind::Linear, BondKind::Weak) => Ok(visitor.visit(weak_linear::<DefaultQueue>(scene))),
         (ForceLawKind::Tilted, _) if scene.exact.tilted == TiltedMethod::Series || scene.plate.kinematic => {

@@ -19,9 +19,9 @@
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
 use super::bags::Attached;
+use super::motion::PlatePath;
 use super::pick::Pick;
 use super::sumtree::SumTree2;
-use crate::propagator::Trajectory;
 use crate::rng::{Pcg64, UniformSource};
 
 /// Rates whose exponent `a |x|` exceeds this are treated as infinite: the junction
@@ -60,10 +60,10 @@ pub trait RuptureModel: Clone + std::fmt::Debug + Serialize + DeserializeOwned +
     /// junction that moved from the last slot `last` into `slot`, if any.
     fn detached(&mut self, slot: usize, last: usize, moved: Option<f64>);
     /// The candidate rate over the trajectory that starts now, and its horizon.
-    fn plan(&mut self, traj: &Trajectory, n_att: usize) -> Plan;
+    fn plan<P: PlatePath>(&mut self, traj: &P, n_att: usize) -> Plan;
     /// A candidate at time `s` on the piece `traj`: the slot that ruptures, or `None` if
     /// rejected.
-    fn pick(&mut self, rng: &mut Pcg64, traj: &Trajectory, s: f64, attached: &[Attached]) -> Option<usize>;
+    fn pick<P: PlatePath>(&mut self, rng: &mut Pcg64, traj: &P, s: f64, attached: &[Attached]) -> Option<usize>;
     /// The coordinates were re-based: recompute everything from `attached`. Returns the
     /// slots whose rate is beyond [`EXPONENT_CAP`].
     fn rebuild(&mut self, attached: &[Attached]) -> Vec<usize>;
@@ -98,11 +98,11 @@ impl RuptureModel for StrongRupture {
     #[inline]
     fn detached(&mut self, _slot: usize, _last: usize, _moved: Option<f64>) {}
     #[inline]
-    fn plan(&mut self, _traj: &Trajectory, n_att: usize) -> Plan {
+    fn plan<P: PlatePath>(&mut self, _traj: &P, n_att: usize) -> Plan {
         Plan { rate: self.k0 * n_att as f64, horizon: f64::INFINITY }
     }
     #[inline]
-    fn pick(&mut self, rng: &mut Pcg64, _traj: &Trajectory, _s: f64, attached: &[Attached]) -> Option<usize> {
+    fn pick<P: PlatePath>(&mut self, rng: &mut Pcg64, _traj: &P, _s: f64, attached: &[Attached]) -> Option<usize> {
         Some(self.next.take(attached.len(), rng))
     }
     #[inline]
@@ -225,7 +225,7 @@ impl RuptureModel for WeakRupture {
         }
         self.tree.set(last, [0.0; 2]);
     }
-    fn plan(&mut self, traj: &Trajectory, n_att: usize) -> Plan {
+    fn plan<P: PlatePath>(&mut self, traj: &P, n_att: usize) -> Plan {
         self.immediate = false;
         self.bounding = false;
         if n_att == 0 || self.k0 == 0.0 {
@@ -275,11 +275,11 @@ impl RuptureModel for WeakRupture {
         Plan { rate, horizon: h }
     }
     #[inline]
-    fn pick(&mut self, rng: &mut Pcg64, traj: &Trajectory, s: f64, attached: &[Attached]) -> Option<usize> {
+    fn pick<P: PlatePath>(&mut self, rng: &mut Pcg64, traj: &P, s: f64, attached: &[Attached]) -> Option<usize> {
         if self.immediate {
             return Some(attached.len() - 1);
         }
-        let y = traj.at(s).0;
+        let y = traj.position(s);
         let (m, p) = self.terms();
         let u = rng.uniform() * (m + p);
         let slot = if u < m { self.tree.find(0, u / self.e_hi) } else { self.tree.find(1, (u - m) / self.e_lo) };

@@ -121,7 +121,7 @@ impl<L: Law, B: Rupture, R: Generator, F: Flip> FixedEngine<L, B, R, F> {
             flip: PhantomData,
             formation: Formation::from_scene(scene),
             plate: Plate::from_scene(scene),
-            integrator: Integrator::new(scene.fixed.integrator, scene.plate.mass),
+            integrator: Integrator::of_scene(scene),
             rng,
             dt,
             relax: 1.0 - j.lambda * dt,
@@ -129,7 +129,8 @@ impl<L: Law, B: Rupture, R: Generator, F: Flip> FixedEngine<L, B, R, F> {
             strong_off_threshold: F::threshold(j.k0 * dt),
             steps: 0,
             plate_x: 0.0,
-            plate_v: 0.0,
+            // A kinematic plate moves at V from the start (formation sees g(V)).
+            plate_v: if scene.plate.kinematic { scene.plate.v } else { 0.0 },
             q,
             x: vec![0.0; n],
             pending_dx: 0.0,
@@ -266,6 +267,12 @@ impl<L: Law, B: Rupture, R: Generator, F: Flip> FixedEngine<L, B, R, F> {
         self.plate.k * (self.plate.v * t - self.plate_x)
     }
 
+    /// A kinematic plate (`X = V t`): friction is reported as `F_b`.
+    #[inline]
+    fn kinematic(&self) -> bool {
+        self.integrator == Integrator::Kinematic
+    }
+
     /// One step from `t_n` to `t_{n+1}`: flips, `F_b`, plate, pending junction update.
     #[inline]
     fn step<O: Observer>(&mut self, obs: &mut O) -> Result<(), EngineError> {
@@ -280,16 +287,18 @@ impl<L: Law, B: Rupture, R: Generator, F: Flip> FixedEngine<L, B, R, F> {
                 return Err(EngineError::Diverged { step: self.steps + 1, t: t_next, quantity, value });
             }
         }
+        let kinematic = self.kinematic();
         obs.segment(&Segment {
             t0: t,
             t1: t_next,
-            friction: self.friction(t),
+            friction: if kinematic { pass.bond_force } else { self.friction(t) },
             friction_m2: 0.0,
             bond_force: pass.bond_force,
             viscous: self.plate.eta * next.viscous_v,
             attached: self.attached,
         });
-        self.pending_dx = next.x - self.plate_x;
+        // Kinematic: attached junctions move by exactly V dt per step.
+        self.pending_dx = if kinematic { self.plate.v * self.dt } else { next.x - self.plate_x };
         self.pending_relax = self.relax;
         self.plate_x = next.x;
         self.plate_v = next.v;
@@ -322,12 +331,13 @@ impl<L: Law, B: Rupture, R: Generator, F: Flip> Engine for FixedEngine<L, B, R, 
     /// The state at `t_n`, before step `n`'s flips.
     fn sample(&self) -> Sample {
         let t = self.time();
+        let bond_force = self.bond_force_now();
         Sample {
             t,
             x: self.plate_x,
             v: self.plate_v,
-            friction: self.friction(t),
-            bond_force: self.bond_force_now(),
+            friction: if self.kinematic() { bond_force } else { self.friction(t) },
+            bond_force,
             attached: self.attached,
             n: self.q.len() as u64,
         }

@@ -23,9 +23,22 @@ pub enum Integrator {
     VelocityVerlet,
     /// `M = 0`: `v_n = -(F_b + K u_n) / eta`, `X_{n+1} = X_n + dt v_n`, `Xd_{n+1} = v_n`.
     Overdamped,
+    /// `plate.kinematic`: no plate equation, `X_{n+1} = V t_{n+1}` (from the step count),
+    /// `Xd = V`.
+    Kinematic,
 }
 
 impl Integrator {
+    /// The plate update of `scene`: [`Integrator::Kinematic`] for `plate.kinematic`, else
+    /// [`Integrator::new`] of its option and mass.
+    pub fn of_scene(scene: &crate::scene::Scene) -> Integrator {
+        if scene.plate.kinematic {
+            Integrator::Kinematic
+        } else {
+            Integrator::new(scene.fixed.integrator, scene.plate.mass)
+        }
+    }
+
     /// The integrator for a scene's option and plate mass.
     pub fn new(kind: IntegratorKind, mass: f64) -> Integrator {
         if mass == 0.0 {
@@ -78,7 +91,8 @@ impl Integrator {
     ///   term taken implicitly (so `eta` adds no stability limit):
     ///   `Xd_{n+1} (1 + dt eta/(2M)) = Xd_n + dt/2 (a_n + (-F_b' - K u_{n+1}) / M)`;
     /// - overdamped (`M = 0`): `v_n = -(F_b + K u_n) / eta`, `X_{n+1} = X_n + dt v_n`,
-    ///   `Xd_{n+1} = v_n`.
+    ///   `Xd_{n+1} = v_n`;
+    /// - kinematic: `X_{n+1} = V t_{n+1}`, `Xd_{n+1} = V`, no viscous force.
     #[inline]
     pub fn step(self, p: &Plate, dt: f64, s: PlateState, bond_force_moved: impl FnOnce(f64) -> f64) -> PlateStep {
         let lag = s.x - p.v * s.t;
@@ -104,6 +118,7 @@ impl Integrator {
                 let v = p.overdamped_velocity(lag, s.bond_force);
                 PlateStep { x: s.x + dt * v, v, viscous_v: v }
             }
+            Integrator::Kinematic => PlateStep { x: p.v * s.t_next, v: p.v, viscous_v: 0.0 },
         }
     }
 }
@@ -146,6 +161,12 @@ mod tests {
         let v1 = vv.v;
         let residual = v1 - (-0.2 + 0.5 * dt * (a + a1_without_damping - 0.5 * v1 / 2.0));
         assert!(residual.abs() < 1e-16, "{residual}");
+    }
+
+    #[test]
+    fn kinematic_follows_the_drive() {
+        let k = Integrator::Kinematic.step(&P, 0.1, state(), |_| unreachable!());
+        assert_eq!(k, PlateStep { x: 0.25 * 1.1, v: 0.25, viscous_v: 0.0 });
     }
 
     #[test]
