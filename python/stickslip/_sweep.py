@@ -15,7 +15,7 @@ import time
 from dataclasses import dataclass
 from typing import Any, Callable, Optional, Sequence, Union
 
-from ._overrides import SceneLike, as_scene, override_texts
+from ._overrides import SceneLike, as_scene, override_texts, value_text
 from ._stickslip import Sweep, SweepOutcome, parse_values, run_summary_json
 
 Values = Union[str, Sequence[Union[float, int, str]]]
@@ -41,12 +41,12 @@ def _texts(values: Values) -> list[str]:
     """Values as ``--values`` texts (numbers in their shortest round-trip form)."""
     if isinstance(values, str):
         return [values]
-    from ._overrides import value_text
-
     return [value_text(v) for v in values]
 
 
-def _axes(param, values, log) -> list[tuple[str, list[str], bool]]:
+def _axes(param: Union[str, Sequence[str]], values: Any, log: Any) -> list[tuple[str, list[str], bool]]:
+    """The axes of a 1-D sweep (``param`` a field, ``values`` its values) or a 2-D one
+    (two fields, two value lists)."""
     if isinstance(param, str):
         return [(param, _texts(values), bool(log))]
     params = list(param)
@@ -86,7 +86,7 @@ class SweepResult:
 def run_sweep(
     scene: SceneLike,
     param: Union[str, Sequence[str]],
-    values: Any,
+    values: Union[Values, Sequence[Values]],
     replicas: int = 1,
     client: Any = None,
     *,
@@ -148,7 +148,7 @@ def run_sweep(
 def sweep(
     scene: SceneLike,
     param: Union[str, Sequence[str]],
-    values: Any,
+    values: Union[Values, Sequence[Values]],
     replicas: int = 1,
     client: Any = None,
     *,
