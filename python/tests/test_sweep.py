@@ -86,3 +86,17 @@ def test_bad_sweeps_are_value_errors_with_the_cli_message(cli, repo, monkeypatch
         with pytest.raises(ValueError) as e:
             stickslip.sweep(SCENE, **kwargs)  # refused before any cluster starts
         assert p.stderr.strip() == "error: " + str(e.value)
+
+
+def test_a_failed_run_fails_the_sweep_with_the_cli_message(cli, repo, tmp_path, client):
+    # A light plate diverges within steps under the explicit integrator: the first run in
+    # the order of the sweep's runs is the one named.
+    sets = {"plate.mass": "1e-6", "fixed.integrator": "explicit-euler"}
+    args = [a for k, v in sets.items() for a in ("--set", f"{k}={v}")]
+    p = cli("sweep", "scenarios/fig1.toml", *args, "--param", "plate.k", "--values", "150,1e9", "--replicas", "2",
+            "--out", tmp_path / "cli")
+    assert p.returncode == 1, p.stderr
+    with pytest.raises(RuntimeError) as e:
+        stickslip.sweep(repo / "scenarios/fig1.toml", "plate.k", "150,1e9", 2, client, **sets)
+    assert p.stderr.strip() == "error: " + str(e.value)
+    assert str(e.value).startswith("the run for plate.k = 150, replica 0 (seed ")
