@@ -124,14 +124,14 @@ def run_sweep(
         keys = [f"stickslip-run-{i}-{token}" for i in range(len(runs))]
         futures = client.map(task, tomls, names, key=keys, pure=False)
         wait(futures)
-        summaries = []
         for (point, replica, s), f in zip(runs, futures):
             if f.status == "error":
-                # The CLI's message for a failed run of a sweep (SweepError::Run).
+                # The first failed run in the order of the runs, with the CLI's message
+                # (SweepError::Run).
                 raise RuntimeError(
                     f"the run for {plan.describe(point)}, replica {replica} (seed {s.seed}) failed: {f.exception()}"
                 )
-            summaries.append(f.result())
+        summaries = client.gather(futures)
         workers = len(client.scheduler_info().get("workers", {}))
         outcome = plan.outcome(summaries, time.perf_counter() - started, workers)
         del futures
