@@ -1,0 +1,35 @@
+"""stickslip: junction (bond) friction, the Filippov-Klafter-Urbakh model, from Python.
+
+The simulator is the Rust crate ``stickslip`` (exact event-driven kinetic Monte Carlo and
+the letter's fixed-step scheme); this package binds it with PyO3:
+
+- :class:`Scene` -- a validated scene, from a TOML file or text, with overrides;
+- :func:`run` -- one run, the same files as ``stickslip run`` (byte for byte) and the
+  summary as a dict, the trace and events as pandas DataFrames (numpy record arrays
+  without pandas);
+- :func:`sweep` -- a parameter sweep on Dask distributed (a LocalCluster when no client is
+  given), the same seeds and the same ``sweep.csv`` table as ``stickslip sweep``.
+
+Bad input raises ``ValueError`` with the command line's one-line message; a run that fails
+(numerical trouble) raises ``RuntimeError``. Overrides are ``section.key=value`` fields,
+given as keyword arguments with ``__`` for the dot (``plate__v=0.5``) or as a dict
+(``**{"plate.v": 0.5}``).
+"""
+
+from ._stickslip import Scene, __version__
+from ._run import Result, StabilityWarning, load, run
+from ._sweep import SweepResult, log_range, linear_range, run_sweep, sweep
+
+__all__ = [
+    "Scene",
+    "Result",
+    "StabilityWarning",
+    "SweepResult",
+    "load",
+    "run",
+    "sweep",
+    "run_sweep",
+    "log_range",
+    "linear_range",
+    "__version__",
+]

@@ -1,0 +1,70 @@
+"""Type stubs of the native module (python/src/): scenes, runs and sweeps of the Rust
+library. Use the package's functions (``stickslip.run``, ``stickslip.sweep``); these are
+their building blocks."""
+
+from typing import Optional
+
+__version__: str
+
+# (column names, column bytes, kind names): f64 columns, ``junction`` uint32, ``kind`` uint8
+# codes into the kind names.
+_Columns = tuple[list[str], list[bytes], list[str]]
+
+class Scene:
+    """A validated scene. Immutable; pickles as its complete TOML text and name."""
+
+    def __init__(self, text: str, name: str = "scene", overrides: list[str] = ...) -> None:
+        """Reads TOML text, applies ``section.key=value`` overrides and validates.
+        Raises ValueError with the CLI's one-line message."""
+    @staticmethod
+    def from_file(path: str, overrides: list[str] = ...) -> Scene:
+        """Reads a scene file (its stem is the name), applies the overrides and validates."""
+    def with_overrides(self, overrides: list[str]) -> Scene:
+        """This scene with further overrides applied and validated."""
+    @property
+    def name(self) -> str: ...
+    @property
+    def seed(self) -> int: ...
+    def stability_warning(self) -> Optional[str]:
+        """The warning ``stickslip run`` prints for a fixed step beyond the plate
+        integrator's stability limit, or None."""
+    def to_toml(self) -> str:
+        """The complete scene file (every field explicit); reads back to the same scene."""
+    def to_json(self) -> str:
+        """The resolved parameters as JSON (``parameters`` in summary.json)."""
+    def __eq__(self, other: object) -> bool: ...
+
+def run_to_dir(scene: Scene, out: str) -> tuple[str, Optional[_Columns], Optional[_Columns]]:
+    """Runs the scene into the existing directory ``out`` (the CLI's files) and returns
+    summary.json's text with the trace's and events' columns. Releases the GIL."""
+
+def run_summary_json(scene_toml: str, name: str) -> str:
+    """One run without files: summary.json's text. Releases the GIL."""
+
+def parse_values(flag: str, text: str) -> list[str]:
+    """The values of ``--values``, ``--range`` or ``--log-range`` (flag ``values``,
+    ``range``, ``log-range``) as scene texts."""
+
+class Sweep:
+    """A prepared sweep: validated and seeded as ``stickslip sweep`` does; not run."""
+
+    def __init__(
+        self, base: Scene, axes: list[tuple[str, list[str], bool]], replicas: int, set: list[str] = ...
+    ) -> None: ...
+    def __len__(self) -> int: ...
+    def runs(self) -> list[tuple[int, int, Scene]]:
+        """Every run in order: (grid point, replica, scene with its derived seed)."""
+    @property
+    def params(self) -> list[str]: ...
+    def describe(self, point: int) -> str: ...
+    def outcome(
+        self, summaries: list[str], wall_seconds: Optional[float] = None, workers: Optional[int] = None
+    ) -> SweepOutcome:
+        """The outcome from every run's summary.json text, in the order of ``runs()``."""
+
+class SweepOutcome:
+    def sweep_csv(self) -> str: ...
+    def runs_csv(self) -> str: ...
+    def sweep_json(self) -> str: ...
+    def write(self, out: str) -> None:
+        """Writes sweep.csv, runs.csv, sweep.svg and sweep.json into ``out``."""

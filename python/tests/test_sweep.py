@@ -1,0 +1,102 @@
+"""stickslip.sweep on Dask distributed against `stickslip sweep`: the same tables, byte for
+byte, on a LocalCluster of two worker processes, in 2-D, and when a worker process dies in
+the middle of the sweep."""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+import cloudpickle
+import pandas as pd
+import pytest
+
+import faults
+import stickslip
+from stickslip._stickslip import Sweep
+from stickslip._sweep import read_csv
+
+# Fig. 2 shortened: about 0.1 s a run; sliding, stick-slip and sliding again.
+SCENE = "scenarios/fig2.toml"
+SET = {"run.t_end": 300.0, "run.t_warmup": 100.0}
+SET_ARGS = ["--set", "run.t_end=300", "--set", "run.t_warmup=100"]
+VALUES = [0.3, 1, 3]
+
+# Workers unpickle the fault-injecting task by value (they need not import tests/).
+cloudpickle.register_pickle_by_value(faults)
+
+
+def cli_sweep(cli, out: Path, *args: str) -> Path:
+    p = cli("sweep", SCENE, *SET_ARGS, *args, "--out", out)
+    assert p.returncode == 0, p.stderr
+    return out
+
+
+def assert_same_tables(cli_dir: Path, py_dir: Path, table: pd.DataFrame) -> None:
+    for name in ["sweep.csv", "runs.csv"]:
+        a, b = (cli_dir / name).read_bytes(), (py_dir / name).read_bytes()
+        assert len(a) > 100 and a == b, name
+    expected = read_csv(cli_dir / "sweep.csv")
+    pd.testing.assert_frame_equal(table, expected, check_exact=True)
+
+
+def test_a_sweep_on_a_local_cluster_of_two_processes_is_the_cli_sweep(cli, repo, tmp_path):
+    c = cli_sweep(cli, tmp_path / "cli", "--param", "plate.v", "--values", "0.3,1,3", "--replicas", "2")
+    # No client: the sweep starts (and closes) its own LocalCluster of 2 processes.
+    table = stickslip.sweep(repo / SCENE, "plate.v", VALUES, 2, n_workers=2, out=str(tmp_path / "py"), **SET)
+    assert_same_tables(c, tmp_path / "py", table)
+    assert list(table["plate.v"]) == VALUES and (table["replicas"] == 2).all()
+    assert table["regime"].nunique() > 1, "the table should not be uniform"
+    for name in ["sweep.svg", "sweep.json"]:
+        assert (tmp_path / "py" / name).stat().st_size > 100
+
+
+def test_a_2d_sweep_on_a_client_is_the_cli_sweep(cli, repo, tmp_path, client):
+    c = cli_sweep(cli, tmp_path / "cli", "--param", "plate.v", "--values", "0.5,2", "--param", "plate.k",
+                  "--log-range", "5:45:3")
+    r = stickslip.run_sweep(repo / SCENE, ("plate.v", "plate.k"), ([0.5, 2], stickslip.log_range("5:45:3")),
+                            client=client, out=str(tmp_path / "py"), **SET)
+    assert_same_tables(c, tmp_path / "py", r.table)
+    assert len(r.table) == 6 and len(r.runs) == 6 and len(r.plan) == 6
+
+
+def test_a_worker_killed_mid_sweep_changes_nothing(cli, repo, tmp_path, client):
+    c = cli_sweep(cli, tmp_path / "cli", "--param", "plate.v", "--values", "0.3,1,3", "--replicas", "2")
+    plan = Sweep(stickslip.load(repo / SCENE, **SET), [("plate.v", ["0.3", "1", "3"], False)], 2)
+    victim = plan.runs()[3][2].seed  # grid point 1 (plate.v = 1), replica 1
+    marker = tmp_path / "killed"
+    before = set(client.scheduler_info()["workers"])
+    task = functools.partial(faults.exit_once, str(marker), victim)
+    table = stickslip.sweep(repo / SCENE, "plate.v", VALUES, 2, client, out=str(tmp_path / "py"), run_task=task, **SET)
+    assert marker.exists(), "no worker was killed"
+    assert set(client.scheduler_info()["workers"]) != before, "the dead worker was not replaced"
+    assert_same_tables(c, tmp_path / "py", table)
+
+
+def test_bad_sweeps_are_value_errors_with_the_cli_message(cli, repo, monkeypatch):
+    monkeypatch.chdir(repo)
+    for args, kwargs in [
+        (["--param", "plate.nope", "--values", "1"], dict(param="plate.nope", values=[1])),
+        (["--param", "run.seed", "--values", "1,2"], dict(param="run.seed", values=[1, 2])),
+        (["--param", "plate.v", "--values", "0.5,-1"], dict(param="plate.v", values=[0.5, -1])),
+        (["--param", "plate.v", "--values", "0.5,abc"], dict(param="plate.v", values="0.5,abc")),
+    ]:
+        p = cli("sweep", SCENE, *args, "--out", repo / "target" / "py-bad-sweep-never-written")
+        assert p.returncode == 2, p.stderr
+        with pytest.raises(ValueError) as e:
+            stickslip.sweep(SCENE, **kwargs)  # refused before any cluster starts
+        assert p.stderr.strip() == "error: " + str(e.value)
+
+
+def test_a_failed_run_fails_the_sweep_with_the_cli_message(cli, repo, tmp_path, client):
+    # A light plate diverges within steps under the explicit integrator: the first run in
+    # the order of the sweep's runs is the one named.
+    sets = {"plate.mass": "1e-6", "fixed.integrator": "explicit-euler"}
+    args = [a for k, v in sets.items() for a in ("--set", f"{k}={v}")]
+    p = cli("sweep", "scenarios/fig1.toml", *args, "--param", "plate.k", "--values", "150,1e9", "--replicas", "2",
+            "--out", tmp_path / "cli")
+    assert p.returncode == 1, p.stderr
+    with pytest.raises(RuntimeError) as e:
+        stickslip.sweep(repo / "scenarios/fig1.toml", "plate.k", "150,1e9", 2, client, **sets)
+    assert p.stderr.strip() == "error: " + str(e.value)
+    assert str(e.value).startswith("the run for plate.k = 150, replica 0 (seed ")
