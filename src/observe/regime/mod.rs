@@ -197,7 +197,7 @@ impl RegimeDetector {
         let smooth = |o: Oscillation| Verdict { regime: Regime::Smooth, cycles: 0, oscillation: o };
         let bins = self.friction.bins();
         let spacing = self.t_second - self.t_first;
-        if bins.len() < 2 * MIN_PERIODS || !(spacing > 0.0) {
+        if bins.len() < 2 * MIN_PERIODS || spacing.is_nan() || spacing <= 0.0 {
             return smooth(o);
         }
         let means: Vec<f64> = bins.iter().map(|b| b.0).collect();
@@ -249,7 +249,7 @@ pub fn regularity(ranges: &[f64]) -> (Option<f64>, Option<f64>) {
     }
     let k = ranges.len() as f64;
     let mean = ranges.iter().sum::<f64>() / k;
-    if !(mean > 0.0) {
+    if mean.is_nan() || mean <= 0.0 {
         return (None, None);
     }
     let var = ranges.iter().map(|r| (r - mean) * (r - mean)).sum::<f64>() / k;
