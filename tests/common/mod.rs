@@ -58,11 +58,20 @@ pub fn chi_square(observed: &[f64], expected: &[f64]) -> (f64, usize) {
 
 /// Mean of `x` and the half-width of its two-sided `1 - alpha` Student-t confidence interval.
 pub fn mean_ci(x: &[f64], alpha: f64) -> (f64, f64) {
+    let (n, m, var) = moments(x);
+    (m, t_critical(n - 1.0, alpha) * (var / n).sqrt())
+}
+
+/// Size, mean and unbiased variance of the sample `x`.
+fn moments(x: &[f64]) -> (f64, f64, f64) {
     let n = x.len() as f64;
     let m = x.iter().sum::<f64>() / n;
-    let var = x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / (n - 1.0);
-    let t = StudentsT::new(0.0, 1.0, n - 1.0).unwrap().inverse_cdf(1.0 - alpha / 2.0);
-    (m, t * (var / n).sqrt())
+    (n, m, x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / (n - 1.0))
+}
+
+/// Two-sided `1 - alpha` critical value of Student's t with `df` degrees of freedom.
+fn t_critical(df: f64, alpha: f64) -> f64 {
+    StudentsT::new(0.0, 1.0, df).unwrap().inverse_cdf(1.0 - alpha / 2.0)
 }
 
 /// Welch's two-sample test of equal means ([`welch`]).
@@ -95,19 +104,14 @@ impl Welch {
 /// two-sided level `alpha`: `t = (mean x - mean y) / sqrt(s_x^2/n_x + s_y^2/n_y)`,
 /// `df = (a + b)^2 / (a^2/(n_x - 1) + b^2/(n_y - 1))`, `a = s_x^2/n_x`, `b = s_y^2/n_y`.
 pub fn welch(x: &[f64], y: &[f64], alpha: f64) -> Welch {
-    let moments = |v: &[f64]| {
-        let n = v.len() as f64;
-        let m = v.iter().sum::<f64>() / n;
-        (n, m, v.iter().map(|u| (u - m) * (u - m)).sum::<f64>() / (n - 1.0))
-    };
     let ((nx, mx, vx), (ny, my, vy)) = (moments(x), moments(y));
     let (a, b) = (vx / nx, vy / ny);
     let df = (a + b) * (a + b) / (a * a / (nx - 1.0) + b * b / (ny - 1.0));
-    let critical = StudentsT::new(0.0, 1.0, df).unwrap().inverse_cdf(1.0 - alpha / 2.0);
+    let critical = t_critical(df, alpha);
     Welch { diff: mx - my, se: (a + b).sqrt(), df, critical }
 }
 
-/// Records junction events./// Records junction events.
+/// Records junction events.
 #[derive(Default)]
 pub struct Events(pub Vec<JunctionEvent>);
 impl Observer for Events {
