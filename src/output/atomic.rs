@@ -130,6 +130,25 @@ pub fn write_whole(dir: &Path, name: &str, bytes: &[u8]) -> io::Result<PathBuf> 
     f.commit()
 }
 
+/// A file of a study's or run's outputs could not be written.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write {path}: {source}")]
+pub struct WriteFileError {
+    pub path: String,
+    #[source]
+    pub source: io::Error,
+}
+
+/// Writes each `(name, text)` to `dir/name` atomically, in order; the first failure names
+/// its path. Used for the whole-file outputs (figures, tables, reports).
+pub fn write_files<S: AsRef<str>>(dir: &Path, files: &[(&str, S)]) -> Result<(), WriteFileError> {
+    for (name, text) in files {
+        write_whole(dir, name, text.as_ref().as_bytes())
+            .map_err(|source| WriteFileError { path: dir.join(name).display().to_string(), source })?;
+    }
+    Ok(())
+}
+
 /// Syncs a directory, so that a rename inside it survives a crash of the machine.
 pub fn sync_dir(dir: &Path) -> io::Result<()> {
     File::open(dir)?.sync_all()

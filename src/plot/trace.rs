@@ -9,7 +9,7 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 
 use super::{Axis, PALETTE, Panel, PlotError, Series, render_svg};
-use crate::output::atomic::write_whole;
+use crate::output::atomic::{WriteFileError, write_files};
 use crate::scene::Scene;
 
 /// Number of time buckets a long trace is thinned to: one per pixel column of the
@@ -71,12 +71,8 @@ pub enum TracePlotError {
     Read { path: String, message: String },
     #[error(transparent)]
     Plot(#[from] PlotError),
-    #[error("cannot write {path}: {source}")]
-    Write {
-        path: String,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Write(#[from] WriteFileError),
 }
 
 /// The two panels of a run's trace: `(t, F/N)` and `(t, n)` points.
@@ -132,9 +128,7 @@ pub fn write_trace_svg(dir: &Path, scene: &Scene) -> Result<(), TracePlotError> 
         a.push(cols[0], cols[5]);
     }
     let svg = render_svg(&trace_panels(scene, f.points(), a.points()), 1000, 380)?;
-    write_whole(dir, "trace.svg", svg.as_bytes())
-        .map_err(|source| TracePlotError::Write { path: dir.join("trace.svg").display().to_string(), source })?;
-    Ok(())
+    Ok(write_files(dir, &[("trace.svg", svg)])?)
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use super::{Study, report};
-use crate::output::atomic::write_whole;
+use crate::output::atomic::{WriteFileError, write_files};
 use crate::plot::PlotError;
 
 /// Why a study's files could not be written.
@@ -13,12 +13,8 @@ use crate::plot::PlotError;
 pub enum WriteError {
     #[error("cannot draw compare.svg: {}", .0.0)]
     Plot(#[from] PlotError),
-    #[error("cannot write {path}: {source}")]
-    Write {
-        path: String,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Write(#[from] WriteFileError),
 }
 
 impl Study {
@@ -29,10 +25,7 @@ impl Study {
         let svg = crate::plot::compare::svg(self)?;
         let files =
             [("compare.csv", report::csv(self)), ("compare.svg", svg), ("compare.md", report::markdown(self, command))];
-        for (name, text) in &files {
-            write_whole(dir, name, text.as_bytes())
-                .map_err(|source| WriteError::Write { path: dir.join(name).display().to_string(), source })?;
-        }
+        write_files(dir, &files)?;
         Ok(())
     }
 }

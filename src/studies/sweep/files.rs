@@ -6,7 +6,7 @@ use std::path::Path;
 
 use super::outcome::SweepOutcome;
 use super::plan::Sweep;
-use crate::output::atomic::write_whole;
+use crate::output::atomic::{WriteFileError, write_files};
 use crate::plot::PlotError;
 
 /// Why a sweep's files could not be written.
@@ -14,12 +14,8 @@ use crate::plot::PlotError;
 pub enum WriteError {
     #[error(transparent)]
     Plot(#[from] PlotError),
-    #[error("cannot write {path}: {source}")]
-    Write {
-        path: String,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Write(#[from] WriteFileError),
 }
 
 impl SweepOutcome {
@@ -33,10 +29,7 @@ impl SweepOutcome {
             ("sweep.svg", svg),
             ("sweep.json", self.sweep_json(sweep)),
         ];
-        for (name, text) in files {
-            write_whole(dir, name, text.as_bytes())
-                .map_err(|source| WriteError::Write { path: dir.join(name).display().to_string(), source })?;
-        }
+        write_files(dir, &files)?;
         Ok(())
     }
 }
