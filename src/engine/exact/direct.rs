@@ -1,6 +1,7 @@
-//! The exact engine for the `tilted` force law (the letter's eq. 3).
+//! The direct exact engine, for any force law (the O(N) reference for the tilted law,
+//! `exact.tilted = "direct"`, and the engine of every law whose `ForceLaw::EXACT` is `Direct`).
 //!
-//! The bond force `F_b(y) = sum_att f^x(y - c_i)` is nonlinear in the plate position, so
+//! The bond force `F_b(y) = sum_att f^x(y - c_i)` is in general nonlinear in the plate position, so
 //! between events the plate is integrated by the adaptive DOP853 method ([`crate::ode`])
 //! to the scene's tolerance (`exact.rtol`, `exact.atol`): **this is the engine's one
 //! approximation**. The integrated state carries, besides the plate, the quadratures the
@@ -28,7 +29,7 @@ use super::frame::Frame;
 use crate::engine::{Counters, Engine, EngineError};
 use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
 use crate::ode::{Dop853, Dop853Config, OdeError, OdeSystem};
-use crate::physics::{Bond, ForceLaw, Formation, Plate, Tilted};
+use crate::physics::{Bond, ForceLaw, Formation, Plate};
 use crate::rng::{Pcg64, UniformSource, pcg};
 use crate::scene::{EngineKind, Reattach, Scene};
 
@@ -58,15 +59,15 @@ impl Layout {
 }
 
 /// The right-hand side: plate, quadratures, hazard.
-struct System<'a, B: Bond> {
+struct System<'a, L: ForceLaw, B: Bond> {
     attached: &'a [super::bags::Attached],
-    p: Params<B>,
+    p: Params<L, B>,
 }
 
 /// Everything the right-hand side needs besides the attached junctions.
 #[derive(Clone, Copy)]
-struct Params<B: Bond> {
-    law: Tilted,
+struct Params<L: ForceLaw, B: Bond> {
+    law: L,
     bond: B,
     plate: Plate,
     frame: Frame,
@@ -76,14 +77,14 @@ struct Params<B: Bond> {
     rate_cap: f64,
 }
 
-impl<B: Bond> std::ops::Deref for System<'_, B> {
-    type Target = Params<B>;
-    fn deref(&self) -> &Params<B> {
+impl<L: ForceLaw, B: Bond> std::ops::Deref for System<'_, L, B> {
+    type Target = Params<L, B>;
+    fn deref(&self) -> &Params<L, B> {
         &self.p
     }
 }
 
-impl<B: Bond> System<'_, B> {
+impl<L: ForceLaw, B: Bond> System<'_, L, B> {
     /// `(F_b, total rupture rate)` at local position `y`. Rates are capped at
     /// `k0 e^EXPONENT_CAP` so the hazard stays finite.
     #[inline]
@@ -108,7 +109,7 @@ impl<B: Bond> System<'_, B> {
 /// `e^EXPONENT_CAP`: rate cap relative to `k0`.
 const CAP_RATE_FACTOR: f64 = 3.7730203009299397e260;
 
-impl<B: Bond> OdeSystem for System<'_, B> {
+impl<L: ForceLaw, B: Bond> OdeSystem for System<'_, L, B> {
     fn rhs(&mut self, tau: f64, s: &[f64], d: &mut [f64]) {
         let y = s[0];
         let (fb, rate) = self.forces(y);
@@ -130,13 +131,13 @@ impl<B: Bond> OdeSystem for System<'_, B> {
     }
 }
 
-/// Exact event-driven engine for the tilted law with bond kind `B`.
+/// Exact event-driven engine for any force law `L` with bond kind `B`: `F_b` summed directly.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(bound = "")]
-pub struct ExactTilted<B: Bond + Serialize + for<'d> Deserialize<'d>> {
+pub struct ExactDirect<L: ForceLaw, B: Bond> {
     n: usize,
     plate: Plate,
-    law: Tilted,
+    law: L,
     bond: B,
     lambda: f64,
     reattach: Reattach,
@@ -160,8 +161,10 @@ pub struct ExactTilted<B: Bond + Serialize + for<'d> Deserialize<'d>> {
     events_since_rebase: u64,
 }
 
-impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
-    pub fn new(scene: &Scene, bond: B) -> Result<Self, EngineError> {
+impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
+    /// The engine for `scene` with the law and bond kind given (built by `scene::laws` for
+    /// a scene's own; any [`ForceLaw`] works).
+    pub fn new(scene: &Scene, law: L, bond: B) -> Result<Self, EngineError> {
         let j = &scene.junctions;
         let mut rng = pcg(scene.run.seed);
         let bags = Bags::initial(j, &mut rng);
@@ -170,14 +173,14 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
         let cfg = Dop853Config {
             rtol: scene.exact.rtol,
             atol: scene.exact.atol,
-            h_max: step_cap(&plate, j.kappa * j.n as f64),
+            h_max: step_cap(&plate, law, j.n),
             ..Dop853Config::default()
         };
         let ode = Dop853::with_config(layout.dim, cfg).map_err(|e| ode_error(e, 0.0, scene.exact.rtol))?;
-        let mut e = ExactTilted {
+        let mut e = ExactDirect {
             n: j.n,
             plate,
-            law: Tilted::from_scene(scene),
+            law,
             bond,
             lambda: j.lambda,
             reattach: j.reattach,
@@ -209,11 +212,11 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
         Ok(e)
     }
 
-    fn system(&self) -> System<'_, B> {
+    fn system(&self) -> System<'_, L, B> {
         System { attached: &self.bags.attached, p: self.params() }
     }
 
-    fn params(&self) -> Params<B> {
+    fn params(&self) -> Params<L, B> {
         Params {
             law: self.law,
             bond: self.bond,
@@ -393,10 +396,12 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
 }
 
 /// Largest integrator step: twice the plate's fastest time scale with every junction
-/// attached (the tilted law's stiffness `d f^x/dx` never exceeds `kappa`), so the dense
-/// output used for event location stays within the tolerance on long quiet stretches.
-fn step_cap(plate: &Plate, kappa_n: f64) -> Option<f64> {
-    let k = plate.k + kappa_n;
+/// attached (`k = K + s N`, `s` the largest `|d f^x/dx|` of the law's stiffness range; `s =
+/// kappa` for the tilted law), so the dense output used for event location stays within the
+/// tolerance on long quiet stretches.
+fn step_cap<L: ForceLaw>(plate: &Plate, law: L, n: usize) -> Option<f64> {
+    let (lo, hi) = law.stiffness_range();
+    let k = plate.k + hi.max(-lo) * n as f64;
     if k <= 0.0 {
         return None;
     }
@@ -414,7 +419,7 @@ pub(crate) fn ode_error(e: OdeError, t: f64, rtol: f64) -> EngineError {
     }
 }
 
-impl<B: Bond + Serialize + for<'d> Deserialize<'d>> Engine for ExactTilted<B> {
+impl<L: ForceLaw, B: Bond> Engine for ExactDirect<L, B> {
     const KIND: EngineKind = EngineKind::Exact;
 
     fn time(&self) -> f64 {
@@ -541,7 +546,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> Engine for ExactTilted<B> {
     }
 }
 
-impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
+impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
     fn check(&self) -> Result<(), EngineError> {
         let y = self.state[0];
         if !y.is_finite() {
