@@ -33,6 +33,8 @@ use crate::physics::{Bond, ForceLaw, Formation, Plate};
 use crate::rng::{Pcg64, UniformSource, pcg};
 use crate::scene::{EngineKind, Reattach, Scene};
 
+/// Index of the plate's local position `y` in the integrated state (the linear engine's `y`).
+const Y: usize = 0;
 const FORMATION: usize = 0;
 const RUPTURE: usize = 1;
 
@@ -111,15 +113,15 @@ const CAP_RATE_FACTOR: f64 = 3.7730203009299397e260;
 
 impl<L: ForceLaw, B: Bond> OdeSystem for System<'_, L, B> {
     fn rhs(&mut self, tau: f64, s: &[f64], d: &mut [f64]) {
-        let y = s[0];
+        let y = s[Y];
         let (fb, rate) = self.forces(y);
         let lag = self.frame.lag(y, tau);
         match self.layout.vel {
             Some(iv) => {
-                d[0] = s[iv];
+                d[Y] = s[iv];
                 d[iv] = self.plate.acceleration(lag, s[iv], fb);
             }
-            None => d[0] = self.overdamped_velocity(fb, lag),
+            None => d[Y] = self.overdamped_velocity(fb, lag),
         }
         let dl = lag - self.lag0;
         d[self.layout.l] = dl;
@@ -238,8 +240,8 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
             Some(iv) => s[iv],
             None => {
                 let sys = self.system();
-                let fb = sys.forces(s[0]).0;
-                sys.overdamped_velocity(fb, self.frame.lag(s[0], tau))
+                let fb = sys.forces(s[Y]).0;
+                sys.overdamped_velocity(fb, self.frame.lag(s[Y], tau))
             }
         }
     }
@@ -252,7 +254,7 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
         self.state[l.l2] = 0.0;
         self.state[l.b] = 0.0;
         self.tau0 = self.tau;
-        self.y0 = self.state[0];
+        self.y0 = self.state[Y];
         self.lag0 = self.frame.lag(self.y0, self.tau);
         if let Some(ih) = l.h {
             self.state[ih] = 0.0;
@@ -277,7 +279,7 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
             friction: -k * (self.lag0 + li / h),
             friction_m2: k * k * (l2 - li * li / h).max(0.0),
             bond_force: s[l.b] / h,
-            viscous: self.plate.eta * (s[0] - self.y0) / h,
+            viscous: self.plate.eta * (s[Y] - self.y0) / h,
             attached: self.bags.n_attached() as u64,
         });
     }
@@ -302,7 +304,7 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
 
     fn rupture_slot<O: Observer>(&mut self, slot: usize, obs: &mut O) {
         let a = self.bags.take_attached(slot);
-        let x = self.state[0] - a.c;
+        let x = self.state[Y] - a.c;
         self.bags.detached.push(Detached { x, t: self.tau, id: a.id });
         self.counters.ruptures += 1;
         self.emit(obs, EventKind::Rupture, a.id, x);
@@ -320,7 +322,7 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
             Reattach::Residual => d.x * (-self.lambda * (self.tau - d.t)).exp(),
             Reattach::Unstretched => 0.0,
         };
-        self.bags.attach(self.state[0] - x, d.id);
+        self.bags.attach(self.state[Y] - x, d.id);
         self.counters.formations += 1;
         self.emit(obs, EventKind::Formation, d.id, x);
         if self.overflows(x) {
@@ -331,7 +333,7 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
 
     /// Weak bonds: the junction that ruptures now, chosen with probability `r_i / sum r`.
     fn pick_weak(&mut self) -> usize {
-        let y = self.state[0];
+        let y = self.state[Y];
         let cap = self.rate_cap();
         let rate = |c: f64| self.bond.k_off(self.law.tension(y - c)).min(cap);
         let total: f64 = self.bags.attached.iter().map(|a| rate(a.c)).sum();
@@ -348,7 +350,7 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
     }
 
     fn maybe_rebase<O: Observer>(&mut self, obs: &mut O) {
-        let (ya, ta) = (self.state[0].abs(), self.tau.abs());
+        let (ya, ta) = (self.state[Y].abs(), self.tau.abs());
         let hard = ya > 1.0737418e9 || ta > 4.2949673e9;
         let soft = (ya > 4096.0 || ta > 1048576.0) && self.events_since_rebase >= (self.n as u64 / 4).max(1);
         if !(hard || soft) {
@@ -361,12 +363,12 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
     /// Moves the local origin to the current time and position. Only at the boundary of a
     /// piece: the caller closes the piece before and opens a new one after.
     fn rebase(&mut self) {
-        let (dtau, dy) = (self.tau, self.state[0]);
+        let (dtau, dy) = (self.tau, self.state[Y]);
         self.frame.shift(dtau, dy);
         self.bags.rebase(dtau, dy);
         self.channels.shift(dtau);
         self.tau = 0.0;
-        self.state[0] = 0.0;
+        self.state[Y] = 0.0;
         self.events_since_rebase = 0;
         *self.counters.rebases.as_mut().expect("set") += 1;
     }
@@ -527,7 +529,7 @@ impl<L: ForceLaw, B: Bond> Engine for ExactDirect<L, B> {
     }
 
     fn sample(&self) -> Sample {
-        let y = self.state[0];
+        let y = self.state[Y];
         let sys = self.system();
         let fb = sys.forces(y).0;
         Sample {
@@ -548,7 +550,7 @@ impl<L: ForceLaw, B: Bond> Engine for ExactDirect<L, B> {
 
 impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
     fn check(&self) -> Result<(), EngineError> {
-        let y = self.state[0];
+        let y = self.state[Y];
         if !y.is_finite() {
             return Err(EngineError::NonFinite { t: self.time(), quantity: "X", value: y });
         }
