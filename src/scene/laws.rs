@@ -202,4 +202,28 @@ mod tests {
         assert_eq!(ForceLawKind::ALL.map(ForceLawKind::name), ["tilted", "linear"]);
         assert_eq!(BondKind::ALL.map(BondKind::name), ["strong", "weak"]);
     }
+
+    /// The two laws' descriptions: both bounded by `kappa`, the methods of docs/engines.md.
+    #[test]
+    fn law_info_of_the_bundled_laws() {
+        let mut j = crate::testkit::fig1().junctions;
+        j.kappa = 0.3;
+        let tilted = law_info(&j).unwrap();
+        assert_eq!(
+            (tilted.name, tilted.exact, tilted.thinning_slope, tilted.stiffness),
+            ("tilted", ExactMethod::Series, 0.3, (0.0, 0.3))
+        );
+        j.force_law = ForceLawKind::Linear;
+        let linear = law_info(&j).unwrap();
+        assert_eq!(
+            (linear.name, linear.exact, linear.thinning_slope, linear.stiffness),
+            ("linear", ExactMethod::ClosedForm, 0.3, (0.3, 0.3))
+        );
+        j.kappa = f64::NAN;
+        assert_eq!(check(&j).unwrap_err().0, "junctions.kappa");
+        j.kappa = 0.3;
+        j.bond = BondKind::Weak;
+        j.temperature = 0.0;
+        assert_eq!(check(&j).unwrap_err().0, "junctions.temperature");
+    }
 }

@@ -139,3 +139,22 @@ impl<L: ForceLaw, V: EngineVisitor> BondVisitor for Direct<'_, L, V> {
         Ok(self.visitor.visit(ExactDirect::new(self.scene, self.law, bond)?))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::{Linear, Tilted};
+    use crate::testkit::fig1_with;
+
+    /// The law's method, except `exact.tilted = "direct"` on a dynamic plate.
+    #[test]
+    fn method_follows_the_law_and_the_scene() {
+        let series = fig1_with(&["run.engine=exact"]);
+        let direct = fig1_with(&["run.engine=exact", "exact.tilted=direct"]);
+        let kinematic = fig1_with(&["run.engine=exact", "plate.kinematic=true"]);
+        assert_eq!(method::<Tilted>(&series), ExactMethod::Series);
+        assert_eq!(method::<Tilted>(&direct), ExactMethod::Direct);
+        assert_eq!(method::<Tilted>(&kinematic), ExactMethod::Series);
+        assert_eq!(method::<Linear>(&direct), ExactMethod::ClosedForm);
+    }
+}
