@@ -3,8 +3,8 @@
 //!
 //! **Plate.** Linearised about any trajectory, the plate of the fixed-step scheme is the
 //! damped oscillator `M Xdd + eta Xd + k X = 0` with `k = K + sum_att d f^x/dx`. The junction
-//! stiffness is `kappa` (linear law) or `kappa (1 - (l0/l)^3) in [0, kappa)` (tilted law), so
-//! `k` lies in `[K, K + kappa N]`: `K` with no junction attached, `K + kappa N` with all of
+//! stiffness lies in the law's `ForceLaw::stiffness_range` `[lo, hi]`: `kappa` (linear law) or
+//! `kappa (1 - (l0/l)^3) in [0, kappa)` (tilted law), so `k` lies in `[K, K + kappa N]`: `K` with no junction attached, `K + kappa N` with all of
 //! them attached (the stiffest case). One step of an integrator maps `(X, Xd)` linearly,
 //! `(X, Xd)_{n+1} = A (X, Xd)_n`; the step is stable when the spectral radius `rho(A) <= 1`
 //! (an eigenvalue 1 only for the neutral translation of a plate with `k = 0`). With
@@ -23,8 +23,10 @@
 
 use crate::engine::fixed::Integrator;
 use crate::engine::fixed::integrator::PlateState;
+use crate::physics::ExactMethod;
 use crate::physics::Plate;
-use crate::scene::{BondKind, EngineKind, FlipRule, ForceLawKind, Scene};
+use crate::scene::laws::{self, LawInfo};
+use crate::scene::{BondKind, EngineKind, FlipRule, ForceLawKind, JunctionParams, Scene};
 
 /// The linearised plate `M Xdd + eta Xd + k X = 0`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -257,6 +259,9 @@ pub struct Analysis {
     pub k_all: f64,
     pub n: usize,
     pub force_law: ForceLawKind,
+    /// Why every junction stiffness is at most the one `k_all` counts (the law's
+    /// `ForceLaw::STIFFNESS_NOTE`).
+    pub stiffness_note: &'static str,
     /// The integrators that apply: the three inertial ones for `M > 0`, the overdamped one
     /// for `M = 0`.
     pub plate: Vec<PlateLimit>,
@@ -291,11 +296,28 @@ fn verdict(dt: f64, dt_stable: f64, dt_unstable: f64) -> Verdict {
     }
 }
 
+/// The scene's force law described by `scene::laws`. A law that refuses its parameters
+/// (only a hand-built scene: validation refuses it) is analysed as a spring whose
+/// stiffness lies in `[0, kappa]`.
+fn law_info(j: &JunctionParams) -> LawInfo {
+    laws::law_info(j).unwrap_or(LawInfo {
+        name: j.force_law.name(),
+        exact: ExactMethod::Direct,
+        thinning_slope: j.kappa,
+        stiffness: (0.0, j.kappa),
+        stiffness_note: "junction stiffness taken as at most kappa",
+    })
+}
+
 /// Analyses the fixed-step scheme of `scene` (whatever its `run.engine`).
 pub fn analyse(scene: &Scene) -> Analysis {
     let (j, p, dt) = (&scene.junctions, &scene.plate, scene.fixed.dt);
-    let k_none = p.k;
-    let k_all = p.k + j.kappa * j.n as f64;
+    let law = law_info(j);
+    let (lo, hi) = law.stiffness;
+    // Softest and stiffest plate: K + min(lo, 0) N and K + max(hi, 0) N (K and K + kappa N
+    // for both current laws).
+    let k_none = p.k + lo.min(0.0) * j.n as f64;
+    let k_all = p.k + hi.max(0.0) * j.n as f64;
     let selected = Integrator::of_scene(scene);
     let candidates: &[Integrator] = if p.kinematic {
         &[Integrator::Kinematic]
@@ -335,6 +357,7 @@ pub fn analyse(scene: &Scene) -> Analysis {
         k_all,
         n: j.n,
         force_law: j.force_law,
+        stiffness_note: law.stiffness_note,
         plate,
         relaxation: Relaxation { lambda_dt, stable: lambda_dt <= 2.0, monotone: lambda_dt <= 1.0 },
         flips: Flips { rule: scene.fixed.flip, k0_dt, kon0_dt: j.kon0 * dt, weak_saturation_tension },
@@ -398,11 +421,7 @@ impl Analysis {
 
     /// What "all attached" means for the scene's force law.
     fn stiffest(&self) -> String {
-        let law = match self.force_law {
-            ForceLawKind::Linear => "each junction adds kappa",
-            ForceLawKind::Tilted => "the tilted law's junction stiffness never exceeds kappa",
-        };
-        format!("K + kappa N = {} with all {} junctions attached ({law})", num(self.k_all), self.n)
+        format!("K + kappa N = {} with all {} junctions attached ({})", num(self.k_all), self.n, self.stiffness_note)
     }
 
     /// The verdict of one row in words.

@@ -63,6 +63,9 @@ pub enum EngineError {
         #[source]
         source: crate::ode::OdeError,
     },
+    /// The scene's force law or bond kind refused its parameters (validation refuses them first).
+    #[error("{0}")]
+    Parameter(#[from] crate::physics::ParamError),
     /// The engine cannot run this scene.
     #[error("the {engine} engine cannot run this scene: {reason}")]
     Unsupported { engine: &'static str, reason: &'static str },

@@ -1,48 +1,7 @@
-//! Rupture and formation rates (docs/model.md, "Equations", items 6 and 7). Pure functions.
+//! Formation rate (docs/model.md, "Equations", item 7). Pure functions. Rupture rates are
+//! the bond kinds of [`crate::physics::bond`].
 
 use serde::{Deserialize, Serialize};
-
-/// A bond kind, chosen once per run: strong-bond scenes run no weak-bond code.
-pub trait Bond: Copy + Send + Sync + std::fmt::Debug + 'static {
-    /// `true` when the rupture rate depends on the tension.
-    const IS_WEAK: bool;
-    /// Rupture rate `k_off(f)` at tension `f >= 0`. May be `+inf`, never NaN.
-    fn k_off(&self, tension: f64) -> f64;
-}
-
-/// Strong bonds: `k_off = k0`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Strong {
-    pub k0: f64,
-}
-
-impl Bond for Strong {
-    const IS_WEAK: bool = false;
-    #[inline]
-    fn k_off(&self, _tension: f64) -> f64 {
-        self.k0
-    }
-}
-
-/// Weak bonds: `k_off = k0 exp(beta dx f)`, `beta dx = dx / temperature`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Weak {
-    pub k0: f64,
-    /// `beta dx`.
-    pub beta_dx: f64,
-}
-
-impl Bond for Weak {
-    const IS_WEAK: bool = true;
-    /// Overflow gives `+inf` (immediate rupture); `k0 = 0` gives 0, never `0 * inf = NaN`.
-    #[inline]
-    fn k_off(&self, tension: f64) -> f64 {
-        if self.k0 == 0.0 {
-            return 0.0;
-        }
-        self.k0 * (self.beta_dx * tension).exp()
-    }
-}
 
 /// Formation kinetics: `k_on = kon0 g(v)`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -84,13 +43,5 @@ mod tests {
             assert!((0.0..=1.0).contains(&g) && g <= last);
             last = g;
         }
-    }
-
-    #[test]
-    fn weak_rate_never_nan() {
-        let w = Weak { k0: 0.1, beta_dx: 1.0 };
-        assert_eq!(w.k_off(0.0), 0.1);
-        assert_eq!(w.k_off(1e6), f64::INFINITY);
-        assert_eq!(Weak { k0: 0.0, beta_dx: 1.0 }.k_off(1e6), 0.0);
     }
 }

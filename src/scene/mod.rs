@@ -3,6 +3,7 @@
 
 pub mod error;
 pub mod file;
+pub mod laws;
 pub mod overrides;
 pub mod params;
 pub mod validate;

@@ -7,25 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Bond kind (docs/model.md, "Equations", item 6).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum BondKind {
-    /// `k_off = k0`, independent of force.
-    Strong,
-    /// `k_off = k0 exp(beta f dx)`.
-    Weak,
-}
-
-/// Junction force law (docs/model.md, "Equations", item 3).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ForceLawKind {
-    /// The letter's eq. 3: a spring of rest length `l0` spanning the gap `l0`.
-    Tilted,
-    /// Hookean shear spring `f^x = kappa x`.
-    Linear,
-}
+pub use super::laws::{BondKind, ForceLawKind};
 
 /// What a junction's extension is when it re-forms (docs/model.md, "Equations", item 4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

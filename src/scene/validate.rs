@@ -4,6 +4,7 @@
 use super::error::SceneError;
 use super::file::SceneFile;
 use super::params::*;
+use crate::physics::ExactMethod;
 
 /// Largest Park–Miller seed: the state must lie in `[1, 2^31 - 2]`.
 pub const PARK_MILLER_SEED_MAX: u64 = (1 << 31) - 2;
@@ -78,6 +79,9 @@ impl SceneFile {
             temperature: finite_gt("junctions.temperature", j.temperature.unwrap_or(1.0), 0.0)?,
             initial: j.initial.unwrap_or(Initial::Detached),
         };
+        // The law's and the bond kind's own checks (scene::laws), after the common ones above.
+        let law =
+            super::laws::check(&junctions).map_err(|(field, e)| SceneError::invalid(field, e.value, e.allowed))?;
         if junctions.initial == Initial::Stationary && junctions.k0 + junctions.kon0 == 0.0 {
             return Err(SceneError::invalid(
                 "junctions.initial",
@@ -180,9 +184,19 @@ impl SceneFile {
         }
         // Last: a cost check across sections (plate, junctions, run), after every field is
         // checked on its own.
-        let direct = run.engine == EngineKind::Exact
-            && junctions.force_law == ForceLawKind::Tilted
-            && exact.tilted == TiltedMethod::Direct;
+        let exact_engine = run.engine == EngineKind::Exact;
+        let by_choice = law.exact == ExactMethod::Series && exact.tilted == TiltedMethod::Direct;
+        let direct = exact_engine && (by_choice || law.exact == ExactMethod::Direct);
+        if direct && plate.kinematic && !by_choice {
+            return Err(SceneError::invalid(
+                "plate.kinematic",
+                true,
+                format!(
+                    "cannot be true with junctions.force_law = \"{}\" on the exact engine (its direct method integrates the plate equation)",
+                    law.name
+                ),
+            ));
+        }
         if direct && plate.kinematic {
             return Err(SceneError::invalid(
                 "exact.tilted",
@@ -191,13 +205,15 @@ impl SceneFile {
             ));
         }
         if direct {
-            let steps = tilted_min_steps(&plate, junctions.kappa * junctions.n as f64, t_end);
+            let (lo, hi) = law.stiffness;
+            let steps = tilted_min_steps(&plate, hi.max(-lo) * junctions.n as f64, t_end);
             if steps > TILTED_STEPS_MAX {
                 return Err(SceneError::invalid(
                     "run.t_end",
                     t_end,
                     format!(
-                        "needs at least {steps:.1e} steps of the exact engine's explicit plate integrator (tilted law; more than {TILTED_STEPS_MAX:e}): its step is bounded by 6 M/eta and 2 sqrt(M/(K + kappa N)) (2 eta/(K + kappa N) when M = 0); shorten the run, use plate.mass = 0 for the limit M/eta -> 0, or junctions.force_law = \"linear\" (closed form)"
+                        "needs at least {steps:.1e} steps of the exact engine's explicit plate integrator ({} law; more than {TILTED_STEPS_MAX:e}): its step is bounded by 6 M/eta and 2 sqrt(M/(K + kappa N)) (2 eta/(K + kappa N) when M = 0); shorten the run, use plate.mass = 0 for the limit M/eta -> 0, or junctions.force_law = \"linear\" (closed form)",
+                        law.name
                     ),
                 ));
             }

@@ -275,7 +275,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
         };
         let rates = [self.formation.kon0 * accept * self.bags.n_detached() as f64, plan.rate];
         self.channels.set_rates(now, rates, fired, &mut self.rng);
-        self.channels.set_time(HORIZON, if R::WEAK { now + plan.horizon } else { f64::INFINITY });
+        self.channels.set_time(HORIZON, if R::IS_WEAK { now + plan.horizon } else { f64::INFINITY });
     }
 
     fn emit<O: Observer>(&self, obs: &mut O, kind: EventKind, id: u32, x: f64) {

@@ -3,8 +3,9 @@
 //! Junction rupture and formation events are drawn from their exact, continuously
 //! changing rates, with no time step; the plate moves in closed form between events
 //! (`linear` law) or, for the `tilted` law, by an L-stable integrator on a truncated series
-//! of the bond force ([`series`]) or, as the O(N) reference, by DOP853 on the direct sum
-//! ([`tilted`]), each with a stated tolerance. See `docs/engines.md`.
+//! of the bond force ([`series`]) or, for any law and as the tilted law's O(N) reference, by
+//! DOP853 on the direct sum ([`direct`]), each with a stated tolerance. The law's
+//! [`ExactMethod`] picks the method (see `docs/engines.md`).
 //!
 //! Why no junction needs its own clock: every rate of the model is either shared by all
 //! junctions of a state (strong rupture `k0`, formation `kon0 g(v)`) or, for weak bonds,
@@ -15,6 +16,7 @@
 
 pub mod bags;
 pub mod clocks;
+pub mod direct;
 pub mod frame;
 pub mod linear;
 pub mod motion;
@@ -22,17 +24,17 @@ pub mod pick;
 pub mod rupture;
 pub mod series;
 pub mod sumtree;
-pub mod tilted;
 
 use super::{EngineError, EngineVisitor};
-use crate::physics::{Strong, Weak};
-use crate::scene::{BondKind, ForceLawKind, Scene, TiltedMethod};
+use crate::physics::{Bond, ExactMethod, ForceLaw};
+use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};
+use crate::scene::{Scene, TiltedMethod};
 
 pub use clocks::{ArrayQueue, ChannelQueue, PqQueue};
+pub use direct::ExactDirect;
 pub use linear::ExactLinear;
 pub use motion::{Dynamic, Kinematic, PlateMotion};
 pub use rupture::{StrongRupture, WeakRupture};
-pub use tilted::ExactTilted;
 
 /// The event queue the engine uses (chosen by `benches/exact.rs`, see docs/performance.md).
 pub type DefaultQueue = ArrayQueue;
@@ -52,32 +54,107 @@ pub fn strong_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> Exa
     ExactLinear::new(scene, |rng| StrongRupture::new(scene.junctions.k0, rng))
 }
 
-/// [`weak_linear`] with plate motion `M` ([`Kinematic`] for `plate.kinematic`).
+/// [`weak_linear`] with plate motion `M` ([`Kinematic`] for `plate.kinematic`): the rupture
+/// envelope's exponent is `beta dx c` with the linear law's thinning slope `c = kappa`.
 pub fn weak_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> ExactLinear<WeakRupture, Q, M> {
     let j = &scene.junctions;
     ExactLinear::new(scene, |_| WeakRupture::new(j.k0, j.beta_dx() * j.kappa, j.n))
 }
 
-/// Builds the exact engine for `scene`, specialised to its force law and bond kind: for the
-/// tilted law, the series engine ([`series`]) unless `exact.tilted = "direct"` (the O(N)
-/// reference [`ExactTilted`], which has no kinematic plate).
+/// The method the exact engine uses for law `L` in `scene`: the law's [`ForceLaw::EXACT`],
+/// except that `exact.tilted = "direct"` turns a dynamic plate's series method into the
+/// direct one (a kinematic plate keeps the series method).
+pub fn method<L: ForceLaw>(scene: &Scene) -> ExactMethod {
+    match L::EXACT {
+        ExactMethod::Series if scene.exact.tilted == TiltedMethod::Direct && !scene.plate.kinematic => {
+            ExactMethod::Direct
+        }
+        m => m,
+    }
+}
+
+/// Builds the exact engine for `scene`, specialised to its force law and bond kind (both
+/// from `scene::laws`) by the law's [`ExactMethod`]: closed form ([`ExactLinear`]), the series
+/// engine ([`series`]), or the direct sum ([`ExactDirect`], which has no kinematic plate).
 pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output, EngineError> {
-    let kinematic = scene.plate.kinematic;
-    match (scene.junctions.force_law, scene.junctions.bond) {
-        (ForceLawKind::Linear, BondKind::Strong) if kinematic => {
-            Ok(visitor.visit(strong_linear_with::<DefaultQueue, Kinematic>(scene)))
+    with_force_law(&scene.junctions, WithLaw { scene, visitor })?
+}
+
+struct WithLaw<'a, V> {
+    scene: &'a Scene,
+    visitor: V,
+}
+
+impl<V: EngineVisitor> LawVisitor for WithLaw<'_, V> {
+    type Output = Result<V::Output, EngineError>;
+    fn visit<L: ForceLaw>(self, law: L) -> Self::Output {
+        let Self { scene, visitor } = self;
+        let kinematic = scene.plate.kinematic;
+        match method::<L>(scene) {
+            ExactMethod::ClosedForm => Ok(with_bond(&scene.junctions, ClosedForm { scene, law, visitor })?),
+            ExactMethod::Series => series::dispatch(scene, visitor),
+            ExactMethod::Direct if kinematic => Err(EngineError::Unsupported {
+                engine: "exact",
+                reason: "the direct method integrates the plate equation, so it cannot run plate.kinematic = true",
+            }),
+            ExactMethod::Direct => with_bond(&scene.junctions, Direct { scene, law, visitor })?,
         }
-        (ForceLawKind::Linear, BondKind::Weak) if kinematic => {
-            Ok(visitor.visit(weak_linear_with::<DefaultQueue, Kinematic>(scene)))
+    }
+}
+
+struct ClosedForm<'a, L, V> {
+    scene: &'a Scene,
+    law: L,
+    visitor: V,
+}
+
+impl<L: ForceLaw, V: EngineVisitor> BondVisitor for ClosedForm<'_, L, V> {
+    type Output = V::Output;
+    /// Weak bonds: the rupture envelope `k0 exp(a |x|)`, `a = s c` from the bond's force
+    /// sensitivity `s = beta dx` and the law's thinning slope `c = kappa`.
+    fn visit<B: Bond>(self, bond: B) -> V::Output {
+        let Self { scene, law, visitor } = self;
+        let (k0, n) = (bond.k0(), scene.junctions.n);
+        let a = bond.force_sensitivity() * law.thinning_slope();
+        let weak = |_: &mut _| WeakRupture::new(k0, a, n);
+        let strong = |rng: &mut _| StrongRupture::new(k0, rng);
+        match (B::IS_WEAK, scene.plate.kinematic) {
+            (true, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::new(scene, weak)),
+            (true, false) => visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::new(scene, weak)),
+            (false, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::new(scene, strong)),
+            (false, false) => visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::new(scene, strong)),
         }
-        (ForceLawKind::Linear, BondKind::Strong) => Ok(visitor.visit(strong_linear::<DefaultQueue>(scene))),
-        (ForceLawKind::Linear, BondKind::Weak) => Ok(visitor.visit(weak_linear::<DefaultQueue>(scene))),
-        (ForceLawKind::Tilted, _) if scene.exact.tilted == TiltedMethod::Series || scene.plate.kinematic => {
-            series::dispatch(scene, visitor)
-        }
-        (ForceLawKind::Tilted, BondKind::Strong) => {
-            Ok(visitor.visit(ExactTilted::new(scene, Strong::from_scene(scene))?))
-        }
-        (ForceLawKind::Tilted, BondKind::Weak) => Ok(visitor.visit(ExactTilted::new(scene, Weak::from_scene(scene))?)),
+    }
+}
+
+struct Direct<'a, L, V> {
+    scene: &'a Scene,
+    law: L,
+    visitor: V,
+}
+
+impl<L: ForceLaw, V: EngineVisitor> BondVisitor for Direct<'_, L, V> {
+    type Output = Result<V::Output, EngineError>;
+    fn visit<B: Bond>(self, bond: B) -> Self::Output {
+        Ok(self.visitor.visit(ExactDirect::new(self.scene, self.law, bond)?))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::{Linear, Tilted};
+    use crate::testkit::fig1_with;
+
+    /// The law's method, except `exact.tilted = "direct"` on a dynamic plate.
+    #[test]
+    fn method_follows_the_law_and_the_scene() {
+        let series = fig1_with(&["run.engine=exact"]);
+        let direct = fig1_with(&["run.engine=exact", "exact.tilted=direct"]);
+        let kinematic = fig1_with(&["run.engine=exact", "plate.kinematic=true"]);
+        assert_eq!(method::<Tilted>(&series), ExactMethod::Series);
+        assert_eq!(method::<Tilted>(&direct), ExactMethod::Direct);
+        assert_eq!(method::<Tilted>(&kinematic), ExactMethod::Series);
+        assert_eq!(method::<Linear>(&direct), ExactMethod::ClosedForm);
     }
 }

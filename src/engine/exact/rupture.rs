@@ -49,10 +49,11 @@ pub struct Plan {
     pub horizon: f64,
 }
 
-/// How attached junctions rupture.
+/// How the closed-form engine samples the ruptures of a bond kind ([`crate::physics::Bond`]):
+/// its channel clock, envelope and sum tree (machinery, not a second kind of bond).
 pub trait RuptureModel: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static {
     /// `true` for force-dependent rates.
-    const WEAK: bool;
+    const IS_WEAK: bool;
     /// A junction was attached into `slot` with anchor `c`. Returns `false` when its rate
     /// is beyond [`EXPONENT_CAP`] (it must rupture at once).
     fn attached(&mut self, slot: usize, c: f64, y: f64) -> bool;
@@ -90,7 +91,7 @@ impl StrongRupture {
 }
 
 impl RuptureModel for StrongRupture {
-    const WEAK: bool = false;
+    const IS_WEAK: bool = false;
     #[inline]
     fn attached(&mut self, _slot: usize, _c: f64, _y: f64) -> bool {
         true
@@ -206,7 +207,7 @@ impl WeakRupture {
 }
 
 impl RuptureModel for WeakRupture {
-    const WEAK: bool = true;
+    const IS_WEAK: bool = true;
     #[inline]
     fn attached(&mut self, slot: usize, c: f64, y: f64) -> bool {
         if self.a * (y - c).abs() > EXPONENT_CAP || self.a * c.abs() > EXPONENT_CAP {

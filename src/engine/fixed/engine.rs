@@ -20,18 +20,6 @@ use crate::physics::{Bond, ForceLaw, Formation, Plate};
 use crate::rng::UniformSource;
 use crate::scene::{EngineKind, Initial, Reattach, Scene};
 
-/// A force law the engine can be built with (and checkpointed).
-pub trait Law: ForceLaw + Serialize + DeserializeOwned {}
-impl<T: ForceLaw + Serialize + DeserializeOwned> Law for T {}
-
-/// A bond kind the engine can be built with (and checkpointed).
-pub trait Rupture: Bond + Serialize + DeserializeOwned {}
-impl<T: Bond + Serialize + DeserializeOwned> Rupture for T {}
-
-/// A uniform generator the engine can be built with (and checkpointed).
-pub trait Generator: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static {}
-impl<T: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static> Generator for T {}
-
 /// Magnitude beyond which the plate is declared diverged.
 pub const DIVERGENCE_LIMIT: f64 = 1e100;
 
@@ -95,7 +83,10 @@ struct Pass {
     attached_extension: f64,
 }
 
-impl<L: Law, B: Rupture, R: Generator, F: Flip> FixedEngine<L, B, R, F> {
+impl<L: ForceLaw, B: Bond, R, F: Flip> FixedEngine<L, B, R, F>
+where
+    R: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static,
+{
     /// Builds the engine at `t = 0`: plate at rest at `X = 0`, junctions per
     /// `junctions.initial`, all with `x_i = 0`.
     ///
@@ -307,7 +298,10 @@ impl<L: Law, B: Rupture, R: Generator, F: Flip> FixedEngine<L, B, R, F> {
     }
 }
 
-impl<L: Law, B: Rupture, R: Generator, F: Flip> Engine for FixedEngine<L, B, R, F> {
+impl<L: ForceLaw, B: Bond, R, F: Flip> Engine for FixedEngine<L, B, R, F>
+where
+    R: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static,
+{
     const KIND: EngineKind = EngineKind::Fixed;
 
     /// `t_n = n dt`, from the integer step count.

@@ -9,61 +9,67 @@ pub mod engine;
 pub mod flip;
 pub mod integrator;
 
-pub use engine::{DIVERGENCE_LIMIT, FixedEngine, Generator, Law, Rupture};
+pub use engine::{DIVERGENCE_LIMIT, FixedEngine};
 pub use flip::{AsPrintedFlip, ExponentialFlip, Flip, LinearFlip};
 pub use integrator::Integrator;
 
 use super::{EngineError, EngineVisitor};
-use crate::physics::{Linear, Strong, Tilted, Weak};
-use crate::rng::{self, ParkMiller};
-use crate::scene::{BondKind, FlipRule, ForceLawKind, RngKind, Scene};
+use crate::physics::{Bond, ForceLaw};
+use crate::rng::{self, ParkMiller, UniformSource};
+use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};
+use crate::scene::{FlipRule, RngKind, Scene};
 
 /// Builds the fixed-step engine for `scene` and hands it to `visitor`.
 ///
-/// Force law, bond kind, generator and flip rule become type parameters here, once per
-/// run, so the step loop is compiled for exactly that combination (a strong-bond scene runs
-/// no weak-bond code). The generator is `ParkMiller` seeded with `run.seed` (which must lie
-/// in `[1, 2^31 - 2]`) or `Pcg64` from [`rng::pcg`]`(run.seed)`.
+/// Force law, bond kind (both from `scene::laws`), generator and flip rule become type
+/// parameters here, once per run, so the step loop is compiled for exactly that combination
+/// (a strong-bond scene runs no weak-bond code). The generator is `ParkMiller` seeded with
+/// `run.seed` (which must lie in `[1, 2^31 - 2]`) or `Pcg64` from [`rng::pcg`]`(run.seed)`.
 pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output, EngineError> {
-    match scene.junctions.force_law {
-        ForceLawKind::Linear => with_law(scene, Linear::from_scene(scene), visitor),
-        ForceLawKind::Tilted => with_law(scene, Tilted::from_scene(scene), visitor),
-    }
+    with_force_law(&scene.junctions, WithLaw { scene, visitor })?
 }
 
-fn with_law<L: Law, V: EngineVisitor>(scene: &Scene, law: L, visitor: V) -> Result<V::Output, EngineError> {
-    match scene.junctions.bond {
-        BondKind::Strong => with_bond(scene, law, Strong::from_scene(scene), visitor),
-        BondKind::Weak => with_bond(scene, law, Weak::from_scene(scene), visitor),
-    }
-}
-
-fn with_bond<L: Law, B: Rupture, V: EngineVisitor>(
-    scene: &Scene,
-    law: L,
-    bond: B,
+struct WithLaw<'a, V> {
+    scene: &'a Scene,
     visitor: V,
-) -> Result<V::Output, EngineError> {
-    let seed = scene.run.seed;
-    match scene.fixed.rng {
-        RngKind::ParkMiller => {
-            let rng = ParkMiller::new(seed).map_err(|_| EngineError::Unsupported {
-                engine: "fixed",
-                reason: "run.seed must lie in [1, 2^31 - 2] for the Park-Miller generator",
-            })?;
-            Ok(with_rng(scene, law, bond, rng, visitor))
+}
+
+impl<V: EngineVisitor> LawVisitor for WithLaw<'_, V> {
+    type Output = Result<V::Output, EngineError>;
+    fn visit<L: ForceLaw>(self, law: L) -> Self::Output {
+        let Self { scene, visitor } = self;
+        with_bond(&scene.junctions, WithBond { scene, law, visitor })?
+    }
+}
+
+struct WithBond<'a, L, V> {
+    scene: &'a Scene,
+    law: L,
+    visitor: V,
+}
+
+impl<L: ForceLaw, V: EngineVisitor> BondVisitor for WithBond<'_, L, V> {
+    type Output = Result<V::Output, EngineError>;
+    fn visit<B: Bond>(self, bond: B) -> Self::Output {
+        let Self { scene, law, visitor } = self;
+        let seed = scene.run.seed;
+        match scene.fixed.rng {
+            RngKind::ParkMiller => {
+                let rng = ParkMiller::new(seed).map_err(|_| EngineError::Unsupported {
+                    engine: "fixed",
+                    reason: "run.seed must lie in [1, 2^31 - 2] for the Park-Miller generator",
+                })?;
+                Ok(with_rng(scene, law, bond, rng, visitor))
+            }
+            RngKind::Pcg => Ok(with_rng(scene, law, bond, rng::pcg(seed), visitor)),
         }
-        RngKind::Pcg => Ok(with_rng(scene, law, bond, rng::pcg(seed), visitor)),
     }
 }
 
-fn with_rng<L: Law, B: Rupture, R: Generator, V: EngineVisitor>(
-    scene: &Scene,
-    law: L,
-    bond: B,
-    rng: R,
-    visitor: V,
-) -> V::Output {
+fn with_rng<L: ForceLaw, B: Bond, R, V: EngineVisitor>(scene: &Scene, law: L, bond: B, rng: R, visitor: V) -> V::Output
+where
+    R: UniformSource + Clone + std::fmt::Debug + serde::Serialize + serde::de::DeserializeOwned + Send + 'static,
+{
     match scene.fixed.flip {
         FlipRule::Linear => visitor.visit(FixedEngine::new(scene, law, bond, rng, LinearFlip)),
         FlipRule::Exponential => visitor.visit(FixedEngine::new(scene, law, bond, rng, ExponentialFlip)),

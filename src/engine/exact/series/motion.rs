@@ -17,8 +17,8 @@
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
 use super::{Rosenbrock, RosenbrockConfig, SeriesSum, StiffSystem};
+use crate::engine::exact::direct::ode_error;
 use crate::engine::exact::frame::Frame;
-use crate::engine::exact::tilted::ode_error;
 use crate::engine::{Counters, EngineError};
 use crate::observe::Segment;
 use crate::physics::Plate;

@@ -1,45 +1,8 @@
-//! Junction force laws (docs/model.md, "Equations", item 3). Pure functions of the extension `x`.
+//! The letter's eq. 3: a spring of rest length `l0` across a gap `l0`, tilted by `x`.
 
 use serde::{Deserialize, Serialize};
 
-/// A junction force law, chosen once per run so that engines are specialised to it.
-pub trait ForceLaw: Copy + Send + Sync + std::fmt::Debug + 'static {
-    /// `true` for the Hookean law, whose bond force is linear in the plate position.
-    const IS_LINEAR: bool;
-    /// Spring tension `f(x) >= 0`.
-    fn tension(&self, x: f64) -> f64;
-    /// Horizontal force component `f^x(x)`.
-    fn force_x(&self, x: f64) -> f64;
-    /// `(f(x), f^x(x))` at once.
-    #[inline]
-    fn tension_and_force_x(&self, x: f64) -> (f64, f64) {
-        (self.tension(x), self.force_x(x))
-    }
-    /// `d f^x / dx`, the junction's horizontal stiffness.
-    fn stiffness_x(&self, x: f64) -> f64;
-}
-
-/// Hookean shear spring: `f^x = kappa x`, `f = kappa |x|`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Linear {
-    pub kappa: f64,
-}
-
-impl ForceLaw for Linear {
-    const IS_LINEAR: bool = true;
-    #[inline]
-    fn tension(&self, x: f64) -> f64 {
-        self.kappa * x.abs()
-    }
-    #[inline]
-    fn force_x(&self, x: f64) -> f64 {
-        self.kappa * x
-    }
-    #[inline]
-    fn stiffness_x(&self, _x: f64) -> f64 {
-        self.kappa
-    }
-}
+use super::{ExactMethod, ForceLaw, LawParams, ParamError, check_kappa};
 
 /// The letter's eq. 3: a spring of rest length `l0` across a gap `l0`, tilted by `x`:
 /// `l = sqrt(x^2 + l0^2)`, `f = kappa (l - l0)`, `f^x = f x / l`.
@@ -59,7 +22,17 @@ impl Tilted {
 }
 
 impl ForceLaw for Tilted {
-    const IS_LINEAR: bool = false;
+    const NAME: &'static str = "tilted";
+    const EXACT: ExactMethod = ExactMethod::Series;
+    const STIFFNESS_NOTE: &'static str = "the tilted law's junction stiffness never exceeds kappa";
+
+    fn new(p: &LawParams) -> Result<Tilted, ParamError> {
+        let kappa = check_kappa(p)?;
+        if !(p.l0.is_finite() && p.l0 > 0.0) {
+            return Err(ParamError { field: "l0", value: p.l0, allowed: "must be a finite number > 0".into() });
+        }
+        Ok(Tilted { kappa, l0: p.l0 })
+    }
     #[inline]
     fn tension(&self, x: f64) -> f64 {
         self.kappa * self.stretch(x).0
@@ -81,18 +54,19 @@ impl ForceLaw for Tilted {
         let r = self.l0 / l;
         self.kappa * (1.0 - r * r * r)
     }
+    /// `f = kappa (l - l0) <= kappa |x|` since `l <= |x| + l0`.
+    fn thinning_slope(&self) -> f64 {
+        self.kappa
+    }
+    /// `kappa (1 - (l0/l)^3)` lies in `[0, kappa)`.
+    fn stiffness_range(&self) -> (f64, f64) {
+        (0.0, self.kappa)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn linear_law() {
-        let law = Linear { kappa: 0.5 };
-        assert_eq!(law.force_x(-2.0), -1.0);
-        assert_eq!(law.tension(-2.0), 1.0);
-    }
 
     #[test]
     fn tilted_law_matches_geometry() {
@@ -108,5 +82,7 @@ mod tests {
         }
         // Small extensions: f = kappa x^2 / (2 l0) to leading order, with no cancellation.
         assert!((law.tension(1e-9) / (0.1 * 1e-18 / 2.0) - 1.0).abs() < 1e-12);
+        super::super::check_law(&law, &[-3.0, -0.5, 0.0, 1e-9, 0.7, 40.0, 1e6]).unwrap();
+        assert_eq!(Tilted::new(&LawParams { kappa: 0.1, l0: 0.0 }).unwrap_err().field, "l0");
     }
 }

@@ -1,6 +1,7 @@
-//! The exact engine for the `tilted` force law (the letter's eq. 3).
+//! The direct exact engine, for any force law (the O(N) reference for the tilted law,
+//! `exact.tilted = "direct"`, and the engine of every law whose `ForceLaw::EXACT` is `Direct`).
 //!
-//! The bond force `F_b(y) = sum_att f^x(y - c_i)` is nonlinear in the plate position, so
+//! The bond force `F_b(y) = sum_att f^x(y - c_i)` is in general nonlinear in the plate position, so
 //! between events the plate is integrated by the adaptive DOP853 method ([`crate::ode`])
 //! to the scene's tolerance (`exact.rtol`, `exact.atol`): **this is the engine's one
 //! approximation**. The integrated state carries, besides the plate, the quadratures the
@@ -28,10 +29,12 @@ use super::frame::Frame;
 use crate::engine::{Counters, Engine, EngineError};
 use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
 use crate::ode::{Dop853, Dop853Config, OdeError, OdeSystem};
-use crate::physics::{Bond, ForceLaw, Formation, Plate, Tilted};
+use crate::physics::{Bond, ForceLaw, Formation, Plate};
 use crate::rng::{Pcg64, UniformSource, pcg};
 use crate::scene::{EngineKind, Reattach, Scene};
 
+/// Index of the plate's local position `y` in the integrated state (the linear engine's `y`).
+const Y: usize = 0;
 const FORMATION: usize = 0;
 const RUPTURE: usize = 1;
 
@@ -58,15 +61,15 @@ impl Layout {
 }
 
 /// The right-hand side: plate, quadratures, hazard.
-struct System<'a, B: Bond> {
+struct System<'a, L: ForceLaw, B: Bond> {
     attached: &'a [super::bags::Attached],
-    p: Params<B>,
+    p: Params<L, B>,
 }
 
 /// Everything the right-hand side needs besides the attached junctions.
 #[derive(Clone, Copy)]
-struct Params<B: Bond> {
-    law: Tilted,
+struct Params<L: ForceLaw, B: Bond> {
+    law: L,
     bond: B,
     plate: Plate,
     frame: Frame,
@@ -76,14 +79,14 @@ struct Params<B: Bond> {
     rate_cap: f64,
 }
 
-impl<B: Bond> std::ops::Deref for System<'_, B> {
-    type Target = Params<B>;
-    fn deref(&self) -> &Params<B> {
+impl<L: ForceLaw, B: Bond> std::ops::Deref for System<'_, L, B> {
+    type Target = Params<L, B>;
+    fn deref(&self) -> &Params<L, B> {
         &self.p
     }
 }
 
-impl<B: Bond> System<'_, B> {
+impl<L: ForceLaw, B: Bond> System<'_, L, B> {
     /// `(F_b, total rupture rate)` at local position `y`. Rates are capped at
     /// `k0 e^EXPONENT_CAP` so the hazard stays finite.
     #[inline]
@@ -108,17 +111,17 @@ impl<B: Bond> System<'_, B> {
 /// `e^EXPONENT_CAP`: rate cap relative to `k0`.
 const CAP_RATE_FACTOR: f64 = 3.7730203009299397e260;
 
-impl<B: Bond> OdeSystem for System<'_, B> {
+impl<L: ForceLaw, B: Bond> OdeSystem for System<'_, L, B> {
     fn rhs(&mut self, tau: f64, s: &[f64], d: &mut [f64]) {
-        let y = s[0];
+        let y = s[Y];
         let (fb, rate) = self.forces(y);
         let lag = self.frame.lag(y, tau);
         match self.layout.vel {
             Some(iv) => {
-                d[0] = s[iv];
+                d[Y] = s[iv];
                 d[iv] = self.plate.acceleration(lag, s[iv], fb);
             }
-            None => d[0] = self.overdamped_velocity(fb, lag),
+            None => d[Y] = self.overdamped_velocity(fb, lag),
         }
         let dl = lag - self.lag0;
         d[self.layout.l] = dl;
@@ -130,13 +133,13 @@ impl<B: Bond> OdeSystem for System<'_, B> {
     }
 }
 
-/// Exact event-driven engine for the tilted law with bond kind `B`.
+/// Exact event-driven engine for any force law `L` with bond kind `B`: `F_b` summed directly.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(bound = "")]
-pub struct ExactTilted<B: Bond + Serialize + for<'d> Deserialize<'d>> {
+pub struct ExactDirect<L: ForceLaw, B: Bond> {
     n: usize,
     plate: Plate,
-    law: Tilted,
+    law: L,
     bond: B,
     lambda: f64,
     reattach: Reattach,
@@ -160,8 +163,10 @@ pub struct ExactTilted<B: Bond + Serialize + for<'d> Deserialize<'d>> {
     events_since_rebase: u64,
 }
 
-impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
-    pub fn new(scene: &Scene, bond: B) -> Result<Self, EngineError> {
+impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
+    /// The engine for `scene` with the law and bond kind given (built by `scene::laws` for
+    /// a scene's own; any [`ForceLaw`] works).
+    pub fn new(scene: &Scene, law: L, bond: B) -> Result<Self, EngineError> {
         let j = &scene.junctions;
         let mut rng = pcg(scene.run.seed);
         let bags = Bags::initial(j, &mut rng);
@@ -170,14 +175,14 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
         let cfg = Dop853Config {
             rtol: scene.exact.rtol,
             atol: scene.exact.atol,
-            h_max: step_cap(&plate, j.kappa * j.n as f64),
+            h_max: step_cap(&plate, law, j.n),
             ..Dop853Config::default()
         };
         let ode = Dop853::with_config(layout.dim, cfg).map_err(|e| ode_error(e, 0.0, scene.exact.rtol))?;
-        let mut e = ExactTilted {
+        let mut e = ExactDirect {
             n: j.n,
             plate,
-            law: Tilted::from_scene(scene),
+            law,
             bond,
             lambda: j.lambda,
             reattach: j.reattach,
@@ -209,11 +214,11 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
         Ok(e)
     }
 
-    fn system(&self) -> System<'_, B> {
+    fn system(&self) -> System<'_, L, B> {
         System { attached: &self.bags.attached, p: self.params() }
     }
 
-    fn params(&self) -> Params<B> {
+    fn params(&self) -> Params<L, B> {
         Params {
             law: self.law,
             bond: self.bond,
@@ -235,8 +240,8 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
             Some(iv) => s[iv],
             None => {
                 let sys = self.system();
-                let fb = sys.forces(s[0]).0;
-                sys.overdamped_velocity(fb, self.frame.lag(s[0], tau))
+                let fb = sys.forces(s[Y]).0;
+                sys.overdamped_velocity(fb, self.frame.lag(s[Y], tau))
             }
         }
     }
@@ -249,7 +254,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
         self.state[l.l2] = 0.0;
         self.state[l.b] = 0.0;
         self.tau0 = self.tau;
-        self.y0 = self.state[0];
+        self.y0 = self.state[Y];
         self.lag0 = self.frame.lag(self.y0, self.tau);
         if let Some(ih) = l.h {
             self.state[ih] = 0.0;
@@ -274,7 +279,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
             friction: -k * (self.lag0 + li / h),
             friction_m2: k * k * (l2 - li * li / h).max(0.0),
             bond_force: s[l.b] / h,
-            viscous: self.plate.eta * (s[0] - self.y0) / h,
+            viscous: self.plate.eta * (s[Y] - self.y0) / h,
             attached: self.bags.n_attached() as u64,
         });
     }
@@ -299,7 +304,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
 
     fn rupture_slot<O: Observer>(&mut self, slot: usize, obs: &mut O) {
         let a = self.bags.take_attached(slot);
-        let x = self.state[0] - a.c;
+        let x = self.state[Y] - a.c;
         self.bags.detached.push(Detached { x, t: self.tau, id: a.id });
         self.counters.ruptures += 1;
         self.emit(obs, EventKind::Rupture, a.id, x);
@@ -317,7 +322,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
             Reattach::Residual => d.x * (-self.lambda * (self.tau - d.t)).exp(),
             Reattach::Unstretched => 0.0,
         };
-        self.bags.attach(self.state[0] - x, d.id);
+        self.bags.attach(self.state[Y] - x, d.id);
         self.counters.formations += 1;
         self.emit(obs, EventKind::Formation, d.id, x);
         if self.overflows(x) {
@@ -328,7 +333,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
 
     /// Weak bonds: the junction that ruptures now, chosen with probability `r_i / sum r`.
     fn pick_weak(&mut self) -> usize {
-        let y = self.state[0];
+        let y = self.state[Y];
         let cap = self.rate_cap();
         let rate = |c: f64| self.bond.k_off(self.law.tension(y - c)).min(cap);
         let total: f64 = self.bags.attached.iter().map(|a| rate(a.c)).sum();
@@ -345,7 +350,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
     }
 
     fn maybe_rebase<O: Observer>(&mut self, obs: &mut O) {
-        let (ya, ta) = (self.state[0].abs(), self.tau.abs());
+        let (ya, ta) = (self.state[Y].abs(), self.tau.abs());
         let hard = ya > 1.0737418e9 || ta > 4.2949673e9;
         let soft = (ya > 4096.0 || ta > 1048576.0) && self.events_since_rebase >= (self.n as u64 / 4).max(1);
         if !(hard || soft) {
@@ -358,12 +363,12 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
     /// Moves the local origin to the current time and position. Only at the boundary of a
     /// piece: the caller closes the piece before and opens a new one after.
     fn rebase(&mut self) {
-        let (dtau, dy) = (self.tau, self.state[0]);
+        let (dtau, dy) = (self.tau, self.state[Y]);
         self.frame.shift(dtau, dy);
         self.bags.rebase(dtau, dy);
         self.channels.shift(dtau);
         self.tau = 0.0;
-        self.state[0] = 0.0;
+        self.state[Y] = 0.0;
         self.events_since_rebase = 0;
         *self.counters.rebases.as_mut().expect("set") += 1;
     }
@@ -393,10 +398,12 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
 }
 
 /// Largest integrator step: twice the plate's fastest time scale with every junction
-/// attached (the tilted law's stiffness `d f^x/dx` never exceeds `kappa`), so the dense
-/// output used for event location stays within the tolerance on long quiet stretches.
-fn step_cap(plate: &Plate, kappa_n: f64) -> Option<f64> {
-    let k = plate.k + kappa_n;
+/// attached (`k = K + s N`, `s` the largest `|d f^x/dx|` of the law's stiffness range; `s =
+/// kappa` for the tilted law), so the dense output used for event location stays within the
+/// tolerance on long quiet stretches.
+fn step_cap<L: ForceLaw>(plate: &Plate, law: L, n: usize) -> Option<f64> {
+    let (lo, hi) = law.stiffness_range();
+    let k = plate.k + hi.max(-lo) * n as f64;
     if k <= 0.0 {
         return None;
     }
@@ -414,7 +421,7 @@ pub(crate) fn ode_error(e: OdeError, t: f64, rtol: f64) -> EngineError {
     }
 }
 
-impl<B: Bond + Serialize + for<'d> Deserialize<'d>> Engine for ExactTilted<B> {
+impl<L: ForceLaw, B: Bond> Engine for ExactDirect<L, B> {
     const KIND: EngineKind = EngineKind::Exact;
 
     fn time(&self) -> f64 {
@@ -522,7 +529,7 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> Engine for ExactTilted<B> {
     }
 
     fn sample(&self) -> Sample {
-        let y = self.state[0];
+        let y = self.state[Y];
         let sys = self.system();
         let fb = sys.forces(y).0;
         Sample {
@@ -541,9 +548,9 @@ impl<B: Bond + Serialize + for<'d> Deserialize<'d>> Engine for ExactTilted<B> {
     }
 }
 
-impl<B: Bond + Serialize + for<'d> Deserialize<'d>> ExactTilted<B> {
+impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
     fn check(&self) -> Result<(), EngineError> {
-        let y = self.state[0];
+        let y = self.state[Y];
         if !y.is_finite() {
             return Err(EngineError::NonFinite { t: self.time(), quantity: "X", value: y });
         }

@@ -1,0 +1,229 @@
+//! The one table of force laws and bond kinds: the scene's name of each, and the type that
+//! implements it ([`ForceLaw`], [`Bond`]). The fixed engine, the exact engine, validation
+//! and the stability analysis all go through [`with_force_law`] and [`with_bond`], so adding
+//! a law is one file in `src/physics/force/` and one line below (docs/engines.md, "Adding a
+//! force law"). Also the one place where physics values are built from a scene.
+
+use serde::{Deserialize, Serialize};
+
+use super::params::{JunctionParams, Scene};
+use crate::physics::{
+    Bond, BondParams, ExactMethod, ForceLaw, Formation, LawParams, Linear, ParamError, Plate, Strong, Tilted, Weak,
+};
+
+/// Something to do with a force law once its type is known.
+pub trait LawVisitor {
+    type Output;
+    fn visit<L: ForceLaw>(self, law: L) -> Self::Output;
+}
+
+/// Something to do with a bond kind once its type is known.
+pub trait BondVisitor {
+    type Output;
+    fn visit<B: Bond>(self, bond: B) -> Self::Output;
+}
+
+/// Generates the scene's name enum (serde names: the variant in kebab case, which a test
+/// checks against the type's `NAME`), its `ALL` list and `name()`, and the dispatch function
+/// that builds the type named by the scene and hands it to a visitor.
+macro_rules! table {
+    (
+        $(#[$meta:meta])*
+        enum $Kind:ident, field $field:ident, $Trait:ident::new($params:ident), fn $with:ident<$Visitor:ident>;
+        $( $(#[$vmeta:meta])* $Variant:ident => $Type:ty, )+
+    ) => {
+        $(#[$meta])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+        #[serde(rename_all = "kebab-case")]
+        pub enum $Kind {
+            $( $(#[$vmeta])* $Variant, )+
+        }
+
+        impl $Kind {
+            /// Every choice, in the table's order.
+            pub const ALL: [$Kind; [$(stringify!($Variant)),+].len()] = [$($Kind::$Variant),+];
+            /// The scene's name of this choice.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $($Kind::$Variant => <$Type as $Trait>::NAME,)+
+                }
+            }
+        }
+
+        /// Builds the type the scene names and hands it to `visitor`; the type is fixed from
+        /// here on, so everything the visitor runs is specialised to it.
+        pub fn $with<V: $Visitor>(j: &JunctionParams, visitor: V) -> Result<V::Output, ParamError> {
+            match j.$field {
+                $($Kind::$Variant => Ok(visitor.visit(<$Type as $Trait>::new(&$params(j))?)),)+
+            }
+        }
+    };
+}
+
+table! {
+    /// Junction force law (docs/model.md, "Equations", item 3).
+    enum ForceLawKind, field force_law, ForceLaw::new(law_params), fn with_force_law<LawVisitor>;
+    /// The letter's eq. 3: a spring of rest length `l0` spanning the gap `l0`.
+    Tilted => Tilted,
+    /// Hookean shear spring `f^x = kappa x`.
+    Linear => Linear,
+}
+
+table! {
+    /// Bond kind (docs/model.md, "Equations", item 6).
+    enum BondKind, field bond, Bond::new(bond_params), fn with_bond<BondVisitor>;
+    /// `k_off = k0`, independent of force.
+    Strong => Strong,
+    /// `k_off = k0 exp(beta f dx)`.
+    Weak => Weak,
+}
+
+/// The numbers a force law is built from.
+pub fn law_params(j: &JunctionParams) -> LawParams {
+    LawParams { kappa: j.kappa, l0: j.l0 }
+}
+
+/// The numbers a bond kind is built from.
+pub fn bond_params(j: &JunctionParams) -> BondParams {
+    BondParams { k0: j.k0, dx: j.dx, temperature: j.temperature }
+}
+
+/// What validation and the stability analysis need to know about the scene's force law.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LawInfo {
+    pub name: &'static str,
+    pub exact: ExactMethod,
+    /// `c` with `f(x) <= c |x|`.
+    pub thinning_slope: f64,
+    /// `[lo, hi]` containing every junction stiffness `d f^x/dx`.
+    pub stiffness: (f64, f64),
+    /// Why `hi` bounds the stiffness, in words.
+    pub stiffness_note: &'static str,
+}
+
+struct Info;
+
+impl LawVisitor for Info {
+    type Output = LawInfo;
+    fn visit<L: ForceLaw>(self, law: L) -> LawInfo {
+        LawInfo {
+            name: L::NAME,
+            exact: L::EXACT,
+            thinning_slope: law.thinning_slope(),
+            stiffness: law.stiffness_range(),
+            stiffness_note: L::STIFFNESS_NOTE,
+        }
+    }
+}
+
+/// The scene's force law, described.
+pub fn law_info(j: &JunctionParams) -> Result<LawInfo, ParamError> {
+    with_force_law(j, Info)
+}
+
+struct Check;
+
+impl BondVisitor for Check {
+    type Output = ();
+    fn visit<B: Bond>(self, _bond: B) {}
+}
+
+/// Builds the scene's force law and bond kind once, so that their own checks run at
+/// validation; the error names the scene's field (`junctions.<field>`).
+pub fn check(j: &JunctionParams) -> Result<LawInfo, (&'static str, ParamError)> {
+    let field = |e: ParamError| (scene_field(e.field), e);
+    with_bond(j, Check).map_err(field)?;
+    law_info(j).map_err(field)
+}
+
+/// The scene's key of a law's or bond's parameter.
+fn scene_field(field: &str) -> &'static str {
+    match field {
+        "kappa" => "junctions.kappa",
+        "l0" => "junctions.l0",
+        "k0" => "junctions.k0",
+        "dx" => "junctions.dx",
+        "temperature" => "junctions.temperature",
+        _ => "junctions.force_law",
+    }
+}
+
+// Physics values of a validated scene (the same numbers the dispatch builds from).
+
+impl Plate {
+    pub fn from_scene(s: &Scene) -> Plate {
+        Plate { mass: s.plate.mass, eta: s.plate.eta, k: s.plate.k, v: s.plate.v }
+    }
+}
+
+impl Formation {
+    pub fn from_scene(s: &Scene) -> Formation {
+        Formation { kon0: s.junctions.kon0, v0: s.junctions.v0() }
+    }
+}
+
+impl Linear {
+    pub fn from_scene(s: &Scene) -> Linear {
+        Linear { kappa: s.junctions.kappa }
+    }
+}
+
+impl Tilted {
+    pub fn from_scene(s: &Scene) -> Tilted {
+        Tilted { kappa: s.junctions.kappa, l0: s.junctions.l0 }
+    }
+}
+
+impl Strong {
+    pub fn from_scene(s: &Scene) -> Strong {
+        Strong { k0: s.junctions.k0 }
+    }
+}
+
+impl Weak {
+    pub fn from_scene(s: &Scene) -> Weak {
+        Weak { k0: s.junctions.k0, beta_dx: s.junctions.beta_dx() }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The serde name of every table entry is its type's `NAME`.
+    #[test]
+    fn serde_names_are_the_types_names() {
+        for k in ForceLawKind::ALL {
+            assert_eq!(serde_json::to_value(k).unwrap(), serde_json::Value::from(k.name()));
+        }
+        for k in BondKind::ALL {
+            assert_eq!(serde_json::to_value(k).unwrap(), serde_json::Value::from(k.name()));
+        }
+        assert_eq!(ForceLawKind::ALL.map(ForceLawKind::name), ["tilted", "linear"]);
+        assert_eq!(BondKind::ALL.map(BondKind::name), ["strong", "weak"]);
+    }
+
+    /// The two laws' descriptions: both bounded by `kappa`, the methods of docs/engines.md.
+    #[test]
+    fn law_info_of_the_bundled_laws() {
+        let mut j = crate::testkit::fig1().junctions;
+        j.kappa = 0.3;
+        let tilted = law_info(&j).unwrap();
+        assert_eq!(
+            (tilted.name, tilted.exact, tilted.thinning_slope, tilted.stiffness),
+            ("tilted", ExactMethod::Series, 0.3, (0.0, 0.3))
+        );
+        j.force_law = ForceLawKind::Linear;
+        let linear = law_info(&j).unwrap();
+        assert_eq!(
+            (linear.name, linear.exact, linear.thinning_slope, linear.stiffness),
+            ("linear", ExactMethod::ClosedForm, 0.3, (0.3, 0.3))
+        );
+        j.kappa = f64::NAN;
+        assert_eq!(check(&j).unwrap_err().0, "junctions.kappa");
+        j.kappa = 0.3;
+        j.bond = BondKind::Weak;
+        j.temperature = 0.0;
+        assert_eq!(check(&j).unwrap_err().0, "junctions.temperature");
+    }
+}
