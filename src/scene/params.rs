@@ -17,6 +17,18 @@ pub enum BondKind {
     Weak,
 }
 
+impl BondKind {
+    /// Every bond kind, for loops that must cover them all (tests, studies).
+    pub const ALL: [Self; 2] = [Self::Strong, Self::Weak];
+    /// The scene-file name (`junctions.bond`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Strong => "strong",
+            Self::Weak => "weak",
+        }
+    }
+}
+
 /// Junction force law (docs/model.md, "Equations", item 3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -25,6 +37,18 @@ pub enum ForceLawKind {
     Tilted,
     /// Hookean shear spring `f^x = kappa x`.
     Linear,
+}
+
+impl ForceLawKind {
+    /// Every force law, for loops that must cover them all (tests, studies).
+    pub const ALL: [Self; 2] = [Self::Tilted, Self::Linear];
+    /// The scene-file name (`junctions.force_law`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Tilted => "tilted",
+            Self::Linear => "linear",
+        }
+    }
 }
 
 /// What a junction's extension is when it re-forms (docs/model.md, "Equations", item 4).
