@@ -10,7 +10,7 @@ use stickslip::engine::Engine;
 use stickslip::engine::exact::{ArrayQueue, ChannelQueue, PqQueue, strong_linear, weak_linear};
 use stickslip::observe::{Nothing, Observer};
 use stickslip::runner::{Simulation, core_observers};
-use stickslip::testkit::{scaled_linear, scaled_tilted};
+use stickslip_testkit::{scaled_linear, scaled_tilted};
 
 /// Simulated time per iteration that gives about 1e5 events (about 0.1 events per junction
 /// per unit time in the Fig. 1 physics).

@@ -3,38 +3,19 @@
 //! `cargo bench --bench fixed`. Scenes: the letter's Fig. 1 with `N` junctions, `kappa`
 //! scaled to `30 / N` (the letter's total junction stiffness `N kappa = 30`, so the plate
 //! dynamics are the same at every `N`), `dt = 0.1` (stable for every integrator), no
-//! observers. Each iteration advances the same engine by a fixed number of steps.
+//! observers. Each iteration advances the same engine (through `runner::Simulation`) by a
+//! fixed number of steps; every force law and bond kind (`testkit::law_bond_pairs`).
 
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use stickslip::engine::fixed;
-use stickslip::engine::{Engine, EngineVisitor};
-use stickslip::observe::Nothing;
-use stickslip::testkit;
+use stickslip::runner::Simulation;
+use stickslip_testkit as testkit;
 
 const DT: f64 = 0.1;
 
-struct Bench<'a, 'b> {
-    bencher: &'a mut criterion::Bencher<'b>,
-    steps: u64,
-}
-
-impl EngineVisitor for Bench<'_, '_> {
-    type Output = ();
-    fn visit<E: Engine>(self, mut engine: E) {
-        let steps = self.steps;
-        // Warm up past the initial transient (all junctions detached).
-        engine.advance(50.0, &mut Nothing).unwrap();
-        self.bencher.iter(|| {
-            let t = engine.time() + steps as f64 * DT;
-            engine.advance(t, &mut Nothing).unwrap();
-        });
-    }
-}
-
 fn junction_steps(c: &mut Criterion) {
-    for (law, bond) in [("linear", "strong"), ("tilted", "strong"), ("linear", "weak"), ("tilted", "weak")] {
+    for (law, bond) in testkit::law_bond_pairs().map(|(l, b)| (l.name(), b.name())) {
         let mut group = c.benchmark_group(format!("fixed/{law}/{bond}"));
         group.sample_size(10);
         for n in [1_000usize, 100_000, 1_000_000] {
@@ -52,7 +33,14 @@ fn junction_steps(c: &mut Criterion) {
                 "output.sample_dt=1e6",
             ]);
             group.bench_function(BenchmarkId::from_parameter(n), |b| {
-                fixed::dispatch(&scene, Bench { bencher: b, steps }).unwrap();
+                // Through the handle: one virtual call per advance of `steps` steps.
+                let mut sim = Simulation::new(&scene).unwrap();
+                // Warm up past the initial transient (all junctions detached).
+                sim.advance(50.0).unwrap();
+                b.iter(|| {
+                    let t = sim.time() + steps as f64 * DT;
+                    sim.advance(t).unwrap();
+                });
             });
         }
         group.finish();

@@ -4,7 +4,8 @@
 //! - `junctions/n`: the plate ODE of the `tilted` law with `n` attached junctions,
 //!   state `[X, X', int X dt, int F_b dt]`,
 //!   `M X'' = -eta X' - k (X - V t) - sum_i kappa x_i (1 - l0 / sqrt(x_i^2 + l0^2))`,
-//!   `x_i = X - c_i` (Fig. 1 parameters); one RHS evaluation costs `n` square roots.
+//!   `x_i = X - c_i` (Fig. 1 parameters; the junction force is the library's
+//!   `physics::Tilted`); one RHS evaluation costs `n` square roots.
 //!   `free`: free adaptive steps; `cut`: the engine's pattern, a step to `t + 0.03` followed
 //!   by `reset` (one step + one restart evaluation per iteration); `rhs`: one evaluation.
 //!
@@ -16,6 +17,7 @@ use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use stickslip::ode::{Dop853, OdeSystem};
+use stickslip::physics::{ForceLaw, Tilted};
 
 struct Osc;
 impl OdeSystem for Osc {
@@ -27,8 +29,7 @@ impl OdeSystem for Osc {
 
 struct Junctions {
     c: Vec<f64>,
-    kappa: f64,
-    l0: f64,
+    law: Tilted,
     m: f64,
     eta: f64,
     k: f64,
@@ -47,23 +48,14 @@ impl Junctions {
                 -2.0 + 4.0 * (s >> 11) as f64 / (1u64 << 53) as f64
             })
             .collect();
-        Self { c, kappa: 0.1, l0: 1.0, m: 75.0, eta: 75.0, k: 150.0, v: 0.5 }
+        Self { c, law: Tilted { kappa: 0.1, l0: 1.0 }, m: 75.0, eta: 75.0, k: 150.0, v: 0.5 }
     }
 }
 
 impl OdeSystem for Junctions {
     fn rhs(&mut self, t: f64, y: &[f64], d: &mut [f64]) {
         let x = y[0];
-        let l0 = self.l0;
-        let fb: f64 = self
-            .c
-            .iter()
-            .map(|&c| {
-                let xi = x - c;
-                xi * (1.0 - l0 / (xi * xi + l0 * l0).sqrt())
-            })
-            .sum::<f64>()
-            * self.kappa;
+        let fb: f64 = self.c.iter().map(|&c| self.law.force_x(x - c)).sum();
         d[0] = y[1];
         d[1] = (-self.eta * y[1] - self.k * (x - self.v * t) - fb) / self.m;
         d[2] = x;

@@ -1,5 +1,5 @@
 //! What the `runner::Simulation` handle costs against the engine it erases: the same
-//! engine advanced directly (type known through `with_engine`) and through the handle (one
+//! engine advanced directly (type known: the test kit's `Direct`) and through the handle (one
 //! virtual call per advance). `cargo bench --bench simulation`; figures in
 //! docs/performance.md.
 //!
@@ -12,9 +12,8 @@ use std::time::{Duration, Instant};
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use stickslip::Scene;
-use stickslip::engine::{Engine, EngineVisitor, with_engine};
 use stickslip::runner::{Observed, Simulation, core_observers};
-use stickslip::testkit::{fig1_with, scaled_linear};
+use stickslip_testkit::{Direct, fig1_with, scaled_linear};
 
 /// One workload: a scene, the time to warm up to, the span of one advance, advances per
 /// iteration, and whether the core observers are fed.
@@ -27,41 +26,22 @@ struct Work<'a> {
     core: bool,
 }
 
-/// Times `iters` iterations of the workload on a fresh engine, advanced directly.
-struct Direct<'a> {
-    work: Work<'a>,
-    iters: u64,
-}
-
-impl EngineVisitor for Direct<'_> {
-    type Output = Duration;
-    fn visit<E: Engine>(self, mut e: E) -> Duration {
-        let w = self.work;
-        let mut core = core_observers(w.scene);
-        let mut t = w.warm;
-        e.advance(t, &mut core).unwrap();
-        let start = Instant::now();
-        for _ in 0..self.iters * w.advances {
-            t += w.span;
-            if w.core {
-                e.advance(t, &mut core).unwrap();
-            } else {
-                e.advance(t, &mut stickslip::observe::Nothing).unwrap();
-            }
-        }
-        start.elapsed()
-    }
+/// Times `iters` iterations of the workload on a fresh engine, advanced directly (the
+/// kit's [`Direct`]: the engine's type known, a local variable).
+fn direct(w: Work, iters: u64) -> Duration {
+    Direct { scene: w.scene, warm: w.warm, span: w.span, advances: iters * w.advances, core: w.core, boxed: false }
+        .run()
+        .elapsed
 }
 
 /// The same through the handle.
 fn through_handle(w: Work, iters: u64) -> Duration {
     let mut sim = Simulation::new(w.scene).unwrap();
     let mut core = core_observers(w.scene);
-    let mut t = w.warm;
-    sim.advance_observed(t, Observed::Core(&mut core)).unwrap();
+    sim.advance_observed(w.warm, Observed::Core(&mut core)).unwrap();
     let start = Instant::now();
-    for _ in 0..iters * w.advances {
-        t += w.span;
+    for k in 1..=iters * w.advances {
+        let t = w.warm + k as f64 * w.span;
         if w.core {
             sim.advance_observed(t, Observed::Core(&mut core)).unwrap();
         } else {
@@ -75,7 +55,7 @@ fn bench(c: &mut Criterion, name: &str, w: Work, elements: u64) {
     let mut g = c.benchmark_group(format!("simulation/{name}"));
     g.sample_size(20).measurement_time(Duration::from_secs(8)).warm_up_time(Duration::from_secs(1));
     g.throughput(Throughput::Elements(elements));
-    g.bench_function("direct", |b| b.iter_custom(|iters| with_engine(w.scene, Direct { work: w, iters }).unwrap()));
+    g.bench_function("direct", |b| b.iter_custom(|iters| direct(w, iters)));
     g.bench_function("handle", |b| b.iter_custom(|iters| through_handle(w, iters)));
     g.finish();
 }

@@ -14,7 +14,7 @@ use stickslip::engine::Engine;
 use stickslip::engine::exact::{ArrayQueue, strong_linear, weak_linear};
 use stickslip::observe::{Nothing, Observer};
 use stickslip::runner::core_observers;
-use stickslip::testkit::scaled_linear;
+use stickslip_testkit::scaled_linear;
 
 const USAGE: &str = "usage: profile_exact strong|weak N SPAN [--stats]";
 

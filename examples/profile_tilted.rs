@@ -1,5 +1,5 @@
 //! Timing of the tilted law's exact engine (the engine the scene selects: `exact.tilted =
-//! "series"` by default) on the scaled Fig. 1 scene (`testkit::scaled_tilted`): warms up to
+//! "series"` by default) on the scaled Fig. 1 scene (`testkit::scaled_tilted`, `testkit::scaled_with`): warms up to
 //! `t = 20`, then advances by `SPAN` time units and prints the events per second of that part.
 //! Extra arguments are scene overrides (`plate.k=1e9`). Speed figures belong to
 //! `cargo bench --bench exact -- tilted`; this is for profilers and quick looks.
@@ -11,7 +11,8 @@
 //! ```
 
 use stickslip::runner::Simulation;
-use stickslip::testkit::scaled_tilted;
+use stickslip::scene::ForceLawKind;
+use stickslip_testkit::{bond_named, scaled_with};
 
 const USAGE: &str = "usage: profile_tilted strong|weak N SPAN [section.key=value ...]";
 
@@ -30,27 +31,8 @@ fn main() {
             std::process::exit(2);
         }
     };
-    let mut scene = scaled_tilted(n, bond);
-    if args.len() > 3 {
-        let overrides: Vec<&str> = args[3..].iter().map(String::as_str).collect();
-        scene = stickslip::testkit::fig1_with(
-            &[
-                &[
-                    "run.engine=exact",
-                    "junctions.force_law=tilted",
-                    &format!("junctions.bond={bond}"),
-                    &format!("junctions.n={n}"),
-                    &format!("plate.k={}", 0.5 * n as f64),
-                    &format!("plate.mass={}", 0.25 * n as f64),
-                    &format!("plate.eta={}", 0.25 * n as f64),
-                    "junctions.initial=stationary",
-                    "output.trace=false",
-                ][..],
-                &overrides[..],
-            ]
-            .concat(),
-        );
-    }
+    let overrides: Vec<&str> = args[3..].iter().map(String::as_str).collect();
+    let scene = scaled_with(n, ForceLawKind::Tilted, bond_named(bond).expect("strong or weak"), &overrides);
     let mut sim = Simulation::new(&scene).expect("the scene runs");
     sim.advance(20.0).expect("warm-up runs");
     let c0 = sim.counters();

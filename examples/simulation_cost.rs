@@ -15,10 +15,8 @@
 //! linear law) feeding the core observers, 200 advances of about 1e4 events each.
 
 use stickslip::Scene;
-use stickslip::engine::{Engine, EngineVisitor, with_engine};
-use stickslip::observe::{Nothing, Recorder};
 use stickslip::runner::{Observed, Simulation, core_observers};
-use stickslip::testkit::{fig1_with, scaled_linear};
+use stickslip_testkit::{Direct, fig1_with, scaled_linear};
 
 /// The work: advances of `span` from `t = 0`, with or without the core observers.
 #[derive(Clone, Copy)]
@@ -29,36 +27,10 @@ struct Work<'a> {
     core: bool,
 }
 
-/// Advances the engine directly, as a local variable or (`boxed`) behind a pointer the
-/// optimiser cannot see through, as behind a handle. The loop also holds the engine's
-/// `advance` for the other observers a `Simulation` offers (a recorder, a recorder and the
-/// core observers), never called: the same code the handle's program holds.
-struct Direct<'a> {
-    work: Work<'a>,
-    boxed: bool,
-}
-
-impl EngineVisitor for Direct<'_> {
-    type Output = f64;
-    fn visit<E: Engine>(self, e: E) -> f64 {
-        if self.boxed { run(self.work, &mut *std::hint::black_box(Box::new(e))) } else { run(self.work, &mut { e }) }
-    }
-}
-
-#[inline(always)]
-fn run<E: Engine>(w: Work, e: &mut E) -> f64 {
-    let mut core = core_observers(w.scene);
-    let mut rec = Recorder::default();
-    for k in 1..=w.advances {
-        let t = k as f64 * w.span;
-        match (w.core, std::hint::black_box(k == 0)) {
-            (true, true) => e.advance(t, &mut (&mut rec, &mut core)).unwrap(),
-            (false, true) => e.advance(t, &mut rec).unwrap(),
-            (true, false) => e.advance(t, &mut core).unwrap(),
-            (false, false) => e.advance(t, &mut Nothing).unwrap(),
-        }
-    }
-    e.sample().friction + rec.events.len() as f64
+/// Advances the engine directly (the test kit's [`Direct`]), as a local variable or
+/// (`boxed`) behind a pointer the optimiser cannot see through, as behind a handle.
+fn direct(w: Work, boxed: bool) -> f64 {
+    Direct { scene: w.scene, warm: 0.0, span: w.span, advances: w.advances.into(), core: w.core, boxed }.run().friction
 }
 
 fn handle(w: Work) -> f64 {
@@ -95,8 +67,8 @@ fn main() {
         _ => Work { scene: &scene, span: 1.0, advances: 200, core: true },
     };
     let friction = match how.as_str() {
-        "direct" => with_engine(&scene, Direct { work, boxed: false }).unwrap(),
-        "direct-boxed" => with_engine(&scene, Direct { work, boxed: true }).unwrap(),
+        "direct" => direct(work, false),
+        "direct-boxed" => direct(work, true),
         "handle" => handle(work),
         _ => {
             eprintln!("{usage}");

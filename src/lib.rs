@@ -21,8 +21,8 @@ pub mod runner;
 pub mod scene;
 pub mod stability;
 pub mod studies;
-#[doc(hidden)]
-pub mod testkit;
+#[cfg(test)]
+mod test_scenes;
 
 pub use runner::{RunError, run_scene};
 pub use scene::{Scene, SceneError};

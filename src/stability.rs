@@ -657,7 +657,7 @@ pub fn warning(scene: &Scene) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testkit;
+    use crate::test_scenes as testkit;
 
     const ALL: [Integrator; 4] =
         [Integrator::SemiImplicitEuler, Integrator::ExplicitEuler, Integrator::VelocityVerlet, Integrator::Overdamped];

@@ -46,7 +46,7 @@ const SCENE: &[&str] = &["scene.toml", "--set", "fixed.dt=0.5", "--set", "run.t_
 
 fn scene_dir() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("scene.toml"), stickslip::testkit::FIG1).unwrap();
+    std::fs::write(dir.path().join("scene.toml"), stickslip_testkit::FIG1).unwrap();
     dir
 }
 

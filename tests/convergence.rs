@@ -6,7 +6,8 @@ mod common;
 
 use common::{ALPHA, chi2_critical};
 use statrs::distribution::{ContinuousCDF, Normal};
-use stickslip::{run_scene, testkit};
+use stickslip::run_scene;
+use stickslip_testkit as testkit;
 
 const REPLICAS: u64 = 256;
 

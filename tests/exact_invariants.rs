@@ -1,24 +1,15 @@
 //! Invariants of the exact engine over many seeds and every option combination.
 
-mod common;
-
-use common::*;
-use stickslip::engine::{Engine, EngineVisitor, with_engine};
+use stickslip::engine::Engine;
 use stickslip::observe::{EventKind, Recorder};
-use stickslip::runner::{OutputGrid, drive};
+use stickslip::runner::Recording;
+use stickslip::scene::{BondKind, ForceLawKind};
+use stickslip_testkit::{BONDS, LAWS, scene};
 
-fn record(scene: &stickslip::Scene) -> Recorder {
-    struct V<'a>(&'a stickslip::Scene);
-    impl EngineVisitor for V<'_> {
-        type Output = (Recorder, stickslip::engine::Counters);
-        fn visit<E: Engine>(self, mut e: E) -> Self::Output {
-            let mut r = Recorder::default();
-            let grid = OutputGrid::new(self.0, e.time_step());
-            drive(&mut e, &grid, &mut r).unwrap();
-            (r, e.counters())
-        }
-    }
-    let (r, c) = with_engine(scene, V(scene)).unwrap();
+fn record(scene: &stickslip::Scene) -> Recording {
+    let r = stickslip::runner::record(scene);
+    assert!(r.completed(), "{:?}", r.error);
+    let c = r.counters.clone();
     let ruptures = r.events.iter().filter(|e| e.kind == EventKind::Rupture).count() as u64;
     assert_eq!(ruptures, c.ruptures);
     assert_eq!(r.events.len() as u64 - ruptures, c.formations);
@@ -32,12 +23,12 @@ fn record(scene: &stickslip::Scene) -> Recorder {
 #[test]
 fn event_log_and_samples_are_consistent() {
     let mut runs = 0;
-    for bond in ["strong", "weak"] {
+    for bond in BONDS.iter().map(|b| b.name()) {
         for reattach in ["residual", "unstretched"] {
             for initial in ["detached", "attached", "stationary"] {
                 for seed in 1..=6u64 {
                     let s = scene(
-                        stickslip::testkit::FIG1,
+                        stickslip_testkit::FIG1,
                         &[
                             "run.engine=exact",
                             "junctions.force_law=linear",
@@ -56,10 +47,10 @@ fn event_log_and_samples_are_consistent() {
             }
         }
     }
-    assert_eq!(runs, 72);
+    assert_eq!(runs, 36 * BONDS.len());
 }
 
-fn check(s: &stickslip::Scene, r: &Recorder) {
+fn check(s: &stickslip::Scene, r: &Recording) {
     let n = s.junctions.n;
     // Replay the event log from the initial state given by the first sample.
     let mut attached = vec![None::<bool>; n];
@@ -106,9 +97,9 @@ fn check(s: &stickslip::Scene, r: &Recorder) {
 /// change of momentum `M (Xd_end - Xd_start) / T` (exact integrals of the exact trajectory).
 #[test]
 fn window_force_balance() {
-    for bond in ["strong", "weak"] {
+    for bond in BONDS.iter().map(|b| b.name()) {
         let s = scene(
-            stickslip::testkit::FIG1,
+            stickslip_testkit::FIG1,
             &["run.engine=exact", "junctions.force_law=linear", &format!("junctions.bond={bond}"), "run.t_end=200"],
         );
         let r = record(&s);
@@ -130,10 +121,11 @@ fn window_force_balance() {
 /// times, and time, samples, segments and the event log must come through intact.
 #[test]
 fn many_rebasings_keep_every_invariant() {
-    for law in ["linear", "tilted"] {
-        let t_end = if law == "linear" { 20_000.0 } else { 12_000.0 };
+    for &law in LAWS {
+        let t_end = if law == ForceLawKind::Linear { 20_000.0 } else { 12_000.0 };
+        let law = law.name();
         let s = scene(
-            stickslip::testkit::FIG1,
+            stickslip_testkit::FIG1,
             &[
                 "run.engine=exact",
                 &format!("junctions.force_law={law}"),
@@ -154,19 +146,23 @@ fn many_rebasings_keep_every_invariant() {
 #[test]
 fn both_event_queues_give_the_same_run() {
     use stickslip::engine::exact::{ArrayQueue, PqQueue, strong_linear, weak_linear};
-    for bond in ["strong", "weak"] {
-        let s = stickslip::testkit::scaled_linear(2000, bond);
+    for &kind in BONDS {
+        let bond = kind.name();
+        let s = stickslip_testkit::scaled(2000, ForceLawKind::Linear, kind);
         let (mut a, mut b) = (Recorder::default(), Recorder::default());
-        let (sa, sb, ca, cb) = if bond == "strong" {
-            let (mut ea, mut eb) = (strong_linear::<ArrayQueue>(&s), strong_linear::<PqQueue>(&s));
-            ea.advance(30.0, &mut a).unwrap();
-            eb.advance(30.0, &mut b).unwrap();
-            (ea.sample(), eb.sample(), ea.counters(), eb.counters())
-        } else {
-            let (mut ea, mut eb) = (weak_linear::<ArrayQueue>(&s), weak_linear::<PqQueue>(&s));
-            ea.advance(30.0, &mut a).unwrap();
-            eb.advance(30.0, &mut b).unwrap();
-            (ea.sample(), eb.sample(), ea.counters(), eb.counters())
+        let (sa, sb, ca, cb) = match kind {
+            BondKind::Strong => {
+                let (mut ea, mut eb) = (strong_linear::<ArrayQueue>(&s), strong_linear::<PqQueue>(&s));
+                ea.advance(30.0, &mut a).unwrap();
+                eb.advance(30.0, &mut b).unwrap();
+                (ea.sample(), eb.sample(), ea.counters(), eb.counters())
+            }
+            BondKind::Weak => {
+                let (mut ea, mut eb) = (weak_linear::<ArrayQueue>(&s), weak_linear::<PqQueue>(&s));
+                ea.advance(30.0, &mut a).unwrap();
+                eb.advance(30.0, &mut b).unwrap();
+                (ea.sample(), eb.sample(), ea.counters(), eb.counters())
+            }
         };
         assert!(ca.events.unwrap() > 1000, "{bond}: too few events to compare ({:?})", ca.events);
         assert_eq!(ca, cb, "{bond}: counters differ");

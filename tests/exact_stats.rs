@@ -5,10 +5,9 @@
 mod common;
 
 use common::*;
-use stickslip::engine::{Engine, EngineVisitor, with_engine};
-use stickslip::observe::{EventKind, Observer, Sample};
+use stickslip::observe::EventKind;
 use stickslip::run_scene;
-use stickslip::runner::{OutputGrid, drive};
+use stickslip_testkit::{events_of, first_rupture, samples_of, scene};
 
 /// One weak linear bond pulled by a plate that follows the driver (M = 0, K/eta = 1e9:
 /// lag behind the driver below 1e-5), no re-formation.
@@ -119,26 +118,8 @@ fn many_weak_bonds_lifetimes_and_waiting_times() {
 }
 
 /// Attached counts on the output grid.
-#[derive(Default)]
-struct Counts(Vec<u64>);
-impl Observer for Counts {
-    fn sample(&mut self, s: &Sample) {
-        self.0.push(s.attached);
-    }
-}
-
 fn counts_of(scene: &stickslip::Scene) -> Vec<u64> {
-    struct V<'a>(&'a stickslip::Scene);
-    impl EngineVisitor for V<'_> {
-        type Output = Vec<u64>;
-        fn visit<E: Engine>(self, mut e: E) -> Vec<u64> {
-            let mut c = Counts::default();
-            let grid = OutputGrid::new(self.0, e.time_step());
-            drive(&mut e, &grid, &mut c).unwrap();
-            c.0
-        }
-    }
-    with_engine(scene, V(scene)).unwrap()
+    samples_of(scene).iter().map(|s| s.attached).collect()
 }
 
 /// Strong bonds, kappa = 0, plate at rest: each junction is an independent two-state

@@ -20,8 +20,8 @@ use stickslip::Scene;
 use stickslip::engine::{Counters, Engine, EngineError, EngineVisitor, with_engine};
 use stickslip::observe::stats::WindowStats;
 use stickslip::observe::{EventKind, Recorder, Sample};
-use stickslip::runner::{OutputGrid, drive};
-use stickslip::testkit::FIG1;
+use stickslip::runner::{OutputGrid, Recording, drive};
+use stickslip_testkit::{BONDS, FIG1, LAWS, law_bond_pairs, scene};
 
 /// `V0 = alpha / tau0` of the Fig. 1 parameters.
 const V0: f64 = 0.5;
@@ -33,18 +33,12 @@ struct Run {
 }
 
 fn try_run(s: &Scene) -> Result<Run, EngineError> {
-    struct V<'a>(&'a Scene);
-    impl EngineVisitor for V<'_> {
-        type Output = Result<Run, EngineError>;
-        fn visit<E: Engine>(self, mut e: E) -> Self::Output {
-            let s = self.0;
-            let mut obs = (Recorder::default(), WindowStats::new(s.run.t_warmup, s.run.t_end, s.junctions.n as u64));
-            let grid = OutputGrid::new(s, e.time_step());
-            drive(&mut e, &grid, &mut obs)?;
-            Ok(Run { rec: obs.0, stats: obs.1, counters: e.counters() })
-        }
+    let r = stickslip::runner::record(s);
+    if let Some(e) = r.error {
+        return Err(e);
     }
-    with_engine(s, V(s))?
+    let Recording { samples, segments, events, core: (stats, _), counters, .. } = r;
+    Ok(Run { rec: Recorder { events, segments, samples }, stats, counters })
 }
 
 fn run(s: &Scene) -> Run {
@@ -218,7 +212,7 @@ fn stiff_driving_spring_gives_the_constant_velocity_bond_force() {
 /// viscous mean.
 #[test]
 fn bond_stiffness_far_above_k_keeps_the_force_balance() {
-    for law in ["linear", "tilted"] {
+    for law in LAWS.iter().map(|l| l.name()) {
         let s = exact(law, "strong", &["junctions.kappa=15000", "junctions.n=300", "run.t_end=100", "run.t_warmup=10"]);
         let r = run(&s);
         balance(&s, &r);
@@ -282,7 +276,7 @@ fn undamped_plate() {
         let x = v * p.t - (v / w) * (w * p.t).sin();
         assert!((p.x - x).abs() <= 1e-12 * (1.0 + x.abs()), "t = {}: X = {} vs {x}", p.t, p.x);
     }
-    for law in ["linear", "tilted"] {
+    for law in LAWS.iter().map(|l| l.name()) {
         let s = exact(law, "strong", &["plate.v=0.2", "plate.eta=0", "run.t_end=100", "run.t_warmup=20"]);
         let r = run(&s);
         assert_eq!(r.stats.viscous_mean(), 0.0);
@@ -307,8 +301,8 @@ fn undamped_plate() {
 /// of the time average (stationary start) give a Student-t interval.
 #[test]
 fn no_drive_leaves_the_plate_at_rest_and_the_junctions_at_equilibrium() {
-    for law in ["linear", "tilted"] {
-        for bond in ["strong", "weak"] {
+    for law in LAWS.iter().map(|l| l.name()) {
+        for bond in BONDS.iter().map(|b| b.name()) {
             for what in ["plate.k=0", "plate.v=0"] {
                 let (m, hw) = replicas(
                     8,
@@ -385,7 +379,7 @@ fn fast_drive_fades_formation() {
 /// time (strong bonds, `g = 1`).
 #[test]
 fn single_junction_is_a_two_state_chain() {
-    for law in ["linear", "tilted"] {
+    for law in LAWS.iter().map(|l| l.name()) {
         let (m, hw) = replicas(
             12,
             |seed| {
@@ -414,7 +408,7 @@ fn single_junction_is_a_two_state_chain() {
 /// Many junctions (scaled Fig. 1 physics, strong bonds, stationary start, `V < V0`): at any
 /// time the attached count is Binomial(N, 1/2), so `|count - N/2| <= z sqrt(N/4)`.
 fn many_junctions(n: usize) {
-    let s = stickslip::testkit::scaled_linear(n, "strong")
+    let s = stickslip_testkit::scaled_linear(n, "strong")
         .with_overrides(&["plate.v=0.2".into(), "run.t_end=1".into(), "output.sample_dt=0.5".into()])
         .unwrap();
     let r = try_run(&s).unwrap();
@@ -445,7 +439,7 @@ fn many_junctions_full_size() {
 /// bounds the chance of seeing one by `mu`; every bound below has `mu < 1e-4`.
 #[test]
 fn rates_from_1e_minus_12_to_1e9() {
-    for law in ["linear", "tilted"] {
+    for law in LAWS.iter().map(|l| l.name()) {
         let base = ["plate.v=0.2", "run.t_end=400", "run.t_warmup=200"];
         // k0 = 1e-12: expected ruptures N k0 T = 1.2e-7; every junction forms (P(one has not
         // by t = 200) = N e^-20 = 6e-7): all attached from then on.
@@ -475,7 +469,7 @@ fn rates_from_1e_minus_12_to_1e9() {
 /// the `reattach = "unstretched"` run with the same seed.
 #[test]
 fn relaxation_rates_zero_and_1e9() {
-    for law in ["linear", "tilted"] {
+    for law in LAWS.iter().map(|l| l.name()) {
         let base = ["plate.v=0.2", "run.t_end=100", "junctions.n=100"];
         let r = run(&exact(law, "strong", &[&base[..], &["junctions.lambda=0"]].concat()));
         let mut last = vec![None; 100];
@@ -616,7 +610,7 @@ fn shifted_coordinates_give_the_same_statistics() {
             (go(&text, 0.0), go(&shifted, t0))
         }
     }
-    for (law, bond) in [("linear", "strong"), ("linear", "weak"), ("tilted", "strong"), ("tilted", "weak")] {
+    for (law, bond) in law_bond_pairs().map(|(l, b)| (l.name(), b.name())) {
         let s = exact(law, bond, &["run.t_end=100", "run.t_warmup=10", "junctions.n=100"]);
         let (a, b) = with_engine(&s, Shifted(&s, T0)).unwrap();
         assert_eq!(a.rec.events.len(), b.rec.events.len(), "{law} {bond}");

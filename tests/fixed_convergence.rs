@@ -12,11 +12,8 @@
 //! two smallest steps must be within 0.1 of that (the next term of the error expansion is
 //! `O(omega dt) ~ 2%` there).
 
-mod fixed_common;
-
-use fixed_common::scene;
-use stickslip::engine::{Engine, EngineVisitor, fixed};
-use stickslip::observe::Nothing;
+use stickslip::runner::Simulation;
+use stickslip_testkit::fixed_fig1 as scene;
 
 const M: f64 = 75.0;
 const ETA: f64 = 75.0;
@@ -36,24 +33,18 @@ fn exact(t: f64, mass: f64) -> f64 {
     u + V * t
 }
 
-/// Largest `|X(t) - X_exact(t)|` over `t = 0.5, 1, ..., 10`.
-struct MaxError {
-    mass: f64,
-}
-
-impl EngineVisitor for MaxError {
-    type Output = f64;
-    fn visit<E: Engine>(self, mut e: E) -> f64 {
-        (1..=20)
-            .map(|k| {
-                let t = k as f64 * 0.5;
-                e.advance(t, &mut Nothing).unwrap();
-                let s = e.sample();
-                assert!((s.t - t).abs() < 1e-9);
-                (s.x - exact(s.t, self.mass)).abs()
-            })
-            .fold(0.0, f64::max)
-    }
+/// Largest `|X(t) - X_exact(t)|` over `t = 0.5, 1, ..., 10` of a run of `scene`.
+fn max_error(scene: &stickslip::Scene, mass: f64) -> f64 {
+    let mut e = Simulation::new(scene).unwrap();
+    (1..=20)
+        .map(|k| {
+            let t = k as f64 * 0.5;
+            e.advance(t).unwrap();
+            let s = e.sample();
+            assert!((s.t - t).abs() < 1e-9);
+            (s.x - exact(s.t, mass)).abs()
+        })
+        .fold(0.0, f64::max)
 }
 
 fn observed_orders(integrator: &str, mass: f64) -> Vec<f64> {
@@ -71,7 +62,7 @@ fn observed_orders(integrator: &str, mass: f64) -> Vec<f64> {
                 "junctions.n=1",
                 "run.t_end=10",
             ]);
-            fixed::dispatch(&s, MaxError { mass }).unwrap()
+            max_error(&s, mass)
         })
         .collect();
     eprintln!("{integrator}, M = {mass}: errors {errors:?}");

@@ -3,19 +3,30 @@
 //! over many seeds and every option combination, step/stop semantics, the window force
 //! balance, determinism and divergence.
 
-mod fixed_common;
-
-use fixed_common::{Trace, park_miller_uniforms, record, scene};
 use stickslip::Scene;
 use stickslip::engine::{Engine, EngineError, EngineVisitor, fixed};
 use stickslip::observe::stats::WindowStats;
-use stickslip::observe::{EventKind, JunctionEvent, Nothing, Observer, Sample, Segment};
+use stickslip::observe::{EventKind, JunctionEvent, Nothing, Observer, Recorder, Sample, Segment};
 use stickslip::physics::{Bond, ForceLaw, Formation, Linear, Strong, Tilted, Weak};
 use stickslip::rng::{self, ParkMiller, UniformSource};
+use stickslip::runner::{Observed, Simulation};
 use stickslip::scene::{BondKind, FlipRule, ForceLawKind, Initial, IntegratorKind, Reattach, RngKind};
+use stickslip_testkit::{BONDS, LAWS, Trace, fixed_fig1 as scene, steps as record};
 
 // ---------------------------------------------------------------------------------------
 // Park–Miller draw order, by hand.
+
+/// The Park-Miller sequence by hand: `s <- 16807 s mod (2^31 - 1)`, `xi = s / (2^31 - 1)`.
+fn park_miller_uniforms(seed: u64, count: usize) -> Vec<f64> {
+    const M: u64 = 2_147_483_647;
+    let mut s = seed;
+    (0..count)
+        .map(|_| {
+            s = s * 16_807 % M;
+            s as f64 / M as f64
+        })
+        .collect()
+}
 
 fn events_of(trace: &Trace) -> Vec<(f64, u32, EventKind)> {
     trace.events.iter().map(|e| (e.t, e.junction, e.kind)).collect()
@@ -211,8 +222,8 @@ impl Reference {
 /// Every option combination, as `--set` overrides.
 fn all_combinations() -> Vec<Vec<String>> {
     let mut out = Vec::new();
-    for law in ["linear", "tilted"] {
-        for bond in ["strong", "weak"] {
+    for law in LAWS.iter().map(|l| l.name()) {
+        for bond in BONDS.iter().map(|b| b.name()) {
             for rng in ["park-miller", "pcg"] {
                 for flip in ["linear", "exponential", "as-printed"] {
                     for integ in ["semi-implicit-euler", "explicit-euler", "velocity-verlet", "overdamped"] {
@@ -381,25 +392,23 @@ fn chain_invariants_hold_for_every_option_and_many_seeds() {
 // ---------------------------------------------------------------------------------------
 // Stop semantics.
 
-struct Stops;
-impl EngineVisitor for Stops {
-    type Output = Vec<f64>;
-    fn visit<E: Engine>(self, mut e: E) -> Vec<f64> {
-        let mut out = vec![e.time()];
-        for stop in [0.0, 0.29, 0.3, 0.3 + 1e-12, 0.31, 1.0, 1.0 - 1e-11, 2.55] {
-            e.advance(stop, &mut Nothing).unwrap();
-            out.push(e.time());
-        }
-        assert_eq!(e.time_step(), Some(0.1));
-        assert_eq!(e.counters().steps, Some((e.time() / 0.1).round() as u64));
-        out
+/// The engine's time after each of a series of stops.
+fn stops(s: &Scene) -> Vec<f64> {
+    let mut e = Simulation::new(s).unwrap();
+    let mut out = vec![e.time()];
+    for stop in [0.0, 0.29, 0.3, 0.3 + 1e-12, 0.31, 1.0, 1.0 - 1e-11, 2.55] {
+        e.advance(stop).unwrap();
+        out.push(e.time());
     }
+    assert_eq!(e.time_step(), Some(0.1));
+    assert_eq!(e.counters().steps, Some((e.time() / 0.1).round() as u64));
+    out
 }
 
 #[test]
 fn advance_stops_on_the_first_step_boundary_at_or_after_the_stop() {
     let s = scene(&["fixed.dt=0.1"]);
-    let t = fixed::dispatch(&s, Stops).unwrap();
+    let t = stops(&s);
     let steps: Vec<u64> = t.iter().map(|t| (t / 0.1).round() as u64).collect();
     // 0.3 is 3 steps although 3 * 0.1 = 0.30000000000000004 > 0.3; 0.3 + 1e-12 too (within 1e-9 dt).
     assert_eq!(steps, vec![0, 0, 3, 3, 3, 4, 10, 10, 26]);
@@ -434,17 +443,20 @@ impl Observer for Sums {
     }
 }
 
-impl EngineVisitor for Balance {
-    /// `(Xd at the window start, Xd at its end, sums, sum_n M |Xd_n|)`.
-    type Output = (f64, f64, Sums, f64);
-    fn visit<E: Engine>(self, mut e: E) -> Self::Output {
-        e.advance(self.t_warmup, &mut Nothing).unwrap();
+impl Balance {
+    /// `(Xd at the window start, Xd at its end, sums, sum_n M |Xd_n|)` of a run of `s`.
+    fn of(self, s: &Scene) -> (f64, f64, Sums, f64) {
+        let mut e = Simulation::new(s).unwrap();
+        e.advance(self.t_warmup).unwrap();
         let start = e.sample().v;
         let dt = e.time_step().unwrap();
         let mut sums = Sums { stats: WindowStats::new(self.t_warmup, self.t_end, 1), residual: 0.0, scale: 0.0 };
         let mut momentum_scale = self.mass * start.abs();
+        let mut rec = Recorder::default();
         while e.time() < self.t_end - 1e-9 * dt {
-            e.advance(e.time() + dt, &mut sums).unwrap();
+            e.advance_observed(e.time() + dt, Observed::Recorder(&mut rec)).unwrap();
+            rec.segments.drain(..).for_each(|g| sums.segment(&g));
+            rec.events.clear();
             momentum_scale += self.mass * e.sample().v.abs();
         }
         (start, e.sample().v, sums, momentum_scale)
@@ -454,7 +466,7 @@ impl EngineVisitor for Balance {
 /// `(residual, round-off bound, residual of the window means times T)` of the balance.
 fn balance(s: &Scene) -> (f64, f64, f64) {
     let (t_warmup, t_end, m) = (s.run.t_warmup, s.run.t_end, s.plate.mass);
-    let (v0, v1, sums, momentum_scale) = fixed::dispatch(s, Balance { t_warmup, t_end, mass: m }).unwrap();
+    let (v0, v1, sums, momentum_scale) = Balance { t_warmup, t_end, mass: m }.of(s);
     let momentum = m * (v1 - v0);
     let residual = sums.residual - momentum;
     // Per step the identity F_n = F_b,n + eta v_n + M (v_{n+1} - v_n)/dt holds up to a few

@@ -15,13 +15,12 @@
 //! fixed seeds, and checks its own power: the same data must reject a nearby wrong rule.
 
 mod common;
-mod fixed_common;
 
-use fixed_common::scene;
 use statrs::distribution::{Binomial, ChiSquared, ContinuousCDF, Discrete, Normal};
 use stickslip::Scene;
-use stickslip::engine::{Engine, EngineVisitor, fixed};
-use stickslip::observe::{Nothing, Observer, Segment};
+use stickslip::observe::{Observer, Recorder, Segment};
+use stickslip::runner::{Observed, Simulation};
+use stickslip_testkit::fixed_fig1 as scene;
 
 /// Per-test false-alarm probability.
 const ALPHA: f64 = 1e-5;
@@ -68,15 +67,20 @@ impl Observer for Acc {
     }
 }
 
-impl EngineVisitor for ChainMean {
-    type Output = (f64, f64);
-    fn visit<E: Engine>(self, mut e: E) -> (f64, f64) {
+impl ChainMean {
+    /// `(mean attached fraction over the steps after the warm-up, largest |Xd|)` of a run
+    /// of `scene`, step by step.
+    fn of(self, scene: &Scene) -> (f64, f64) {
+        let mut e = Simulation::new(scene).unwrap();
         let dt = e.time_step().unwrap();
         let n = e.sample().n;
         let mut acc = Acc { from: self.warmup as f64 * dt - 0.5 * dt, sum: 0, count: 0 };
+        let mut rec = Recorder::default();
         let mut vmax: f64 = 0.0;
         for k in 1..=self.warmup + self.steps {
-            e.advance(k as f64 * dt, &mut acc).unwrap();
+            e.advance_observed(k as f64 * dt, Observed::Recorder(&mut rec)).unwrap();
+            rec.segments.drain(..).for_each(|g| acc.segment(&g));
+            rec.events.clear();
             vmax = vmax.max(e.sample().v.abs());
         }
         assert_eq!(acc.count, self.steps);
@@ -100,7 +104,7 @@ fn run_case(c: &Case) {
     let mut o: Vec<&str> = vec![&nn, "junctions.kappa=0", "fixed.dt=1", "junctions.initial=detached"];
     o.extend(c.overrides.iter().map(String::as_str));
     let s: Scene = scene(&o);
-    let (mean, vmax) = fixed::dispatch(&s, ChainMean { warmup, steps }).unwrap();
+    let (mean, vmax) = ChainMean { warmup, steps }.of(&s);
     assert!(vmax <= s.junctions.v0(), "{}: the plate reached {vmax} > V0, so g < 1", c.name);
     let pi = c.a / (c.a + c.b);
     let rho = 1.0 - c.a - c.b;
@@ -182,13 +186,14 @@ struct Counts {
     spacing: u64,
 }
 
-impl EngineVisitor for Counts {
-    type Output = Vec<u64>;
-    fn visit<E: Engine>(self, mut e: E) -> Vec<u64> {
+impl Counts {
+    /// The attached count every `spacing` steps of a run of `scene`.
+    fn of(self, scene: &Scene) -> Vec<u64> {
+        let mut e = Simulation::new(scene).unwrap();
         let dt = e.time_step().unwrap();
         (1..=self.samples as u64)
             .map(|k| {
-                e.advance((k * self.spacing) as f64 * dt, &mut Nothing).unwrap();
+                e.advance((k * self.spacing) as f64 * dt).unwrap();
                 e.sample().attached
             })
             .collect()
@@ -225,7 +230,7 @@ fn attached_count_is_binomial_with_the_rules_stationary_fraction() {
         "fixed.flip=exponential",
         "run.seed=2024",
     ]);
-    let counts = fixed::dispatch(&s, Counts { samples: 5000, spacing: 40 }).unwrap();
+    let counts = Counts { samples: 5000, spacing: 40 }.of(&s);
     let (stat, df) = chi_square(&counts, n, pi);
     let crit = ChiSquared::new(df).unwrap().inverse_cdf(1.0 - ALPHA);
     eprintln!("chi2 = {stat:.1}, df {df}, critical {crit:.1}");
@@ -248,14 +253,7 @@ fn stationary_initial_state_is_binomial() {
         "junctions.k0=0.3",
         "run.seed=77",
     ]);
-    struct Initial;
-    impl EngineVisitor for Initial {
-        type Output = u64;
-        fn visit<E: Engine>(self, e: E) -> u64 {
-            e.sample().attached
-        }
-    }
-    let count = fixed::dispatch(&s, Initial).unwrap() as f64;
+    let count = Simulation::new(&s).unwrap().sample().attached as f64;
     let sd = (n as f64 * 0.25 * 0.75).sqrt();
     let z = (count - 0.25 * n as f64) / sd;
     eprintln!("stationary start: {count} attached of {n}, z = {z:.2}");

@@ -10,6 +10,7 @@ use common::*;
 use stickslip::observe::EventKind;
 use stickslip::run_scene;
 use stickslip::runner::record;
+use stickslip_testkit::{events_of, scene};
 
 /// Weak linear bonds pulled from `x = 0` by a kinematic plate, no re-formation.
 const PULLED: &str = r#"

@@ -25,7 +25,7 @@ use stickslip::observe::{EventKind, Nothing, Recorder, Sample};
 use stickslip::physics::force::check_law;
 use stickslip::physics::{Bond, ForceLaw, LawParams, Linear, ParamError, Strong, Weak};
 use stickslip::rng::ParkMiller;
-use stickslip::testkit::fig1_with;
+use stickslip_testkit::fig1_with;
 
 /// The worked example of docs/engines.md: a junction that yields, `f^x = kappa l0 tanh(x/l0)`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

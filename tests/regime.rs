@@ -25,11 +25,10 @@ mod common;
 use common::mean_ci;
 use common::moments::MomentModel;
 use stickslip::Scene;
-use stickslip::engine::{Engine, EngineVisitor, with_engine};
 use stickslip::observe::Observer;
 use stickslip::observe::regime::{Regime, RegimeDetector, Verdict};
-use stickslip::runner::{OutputGrid, drive};
 use stickslip::studies::seeds::{Role, pcg_seed};
+use stickslip_testkit::verdict_of as verdict;
 
 /// Velocities of the test and whether the moment equations oscillate there.
 const CASES: [(f64, Regime); 4] =
@@ -65,22 +64,7 @@ trace = false
         e = 0.05 * n as f64,
         k = 0.1 * n as f64
     );
-    common::scene(&text, extra)
-}
-
-/// The detector's verdict on a run of `scene`.
-fn verdict(scene: &Scene) -> Verdict {
-    struct V<'a>(&'a Scene);
-    impl EngineVisitor for V<'_> {
-        type Output = Verdict;
-        fn visit<E: Engine>(self, mut e: E) -> Verdict {
-            let mut d = RegimeDetector::for_scene(self.0);
-            let grid = OutputGrid::new(self.0, e.time_step());
-            drive(&mut e, &grid, &mut d).expect("run");
-            d.verdict()
-        }
-    }
-    with_engine(scene, V(scene)).expect("engine")
+    stickslip_testkit::scene(&text, extra)
 }
 
 /// The detector's verdict on the moment equations' trajectory (`N -> infinity`).

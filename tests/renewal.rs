@@ -18,6 +18,7 @@ mod common;
 use common::renewal::{Bounded, Renewal, linear_closed_form};
 use common::*;
 use stickslip::run_scene;
+use stickslip_testkit::scene;
 
 const KAPPA: f64 = 0.1;
 const K0: f64 = 0.1;

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use stickslip::testkit::FIG1;
+use stickslip_testkit::FIG1;
 
 const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
 /// Checkpoint interval of the killed runs (seconds of wall time).

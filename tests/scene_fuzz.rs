@@ -6,7 +6,7 @@
 
 use proptest::prelude::*;
 use stickslip::Scene;
-use stickslip::testkit::FIG1;
+use stickslip_testkit::FIG1;
 
 /// Checks the properties for one input.
 fn check(text: &str, overrides: &[String]) -> Result<(), TestCaseError> {

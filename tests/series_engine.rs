@@ -2,32 +2,23 @@
 //! over many seeds (strong and weak bonds, dynamic and kinematic plate), stiff plates at a
 //! bounded cost, and agreement with the direct (O(N), DOP853) engine.
 
-mod common;
-
-use common::*;
 use stickslip::Scene;
-use stickslip::engine::{Counters, Engine, EngineVisitor, with_engine};
-use stickslip::observe::{EventKind, Recorder};
-use stickslip::runner::{OutputGrid, drive};
+use stickslip::engine::Counters;
+use stickslip::observe::EventKind;
+use stickslip::runner::Recording;
+use stickslip_testkit::{BONDS, scene};
 
-fn record(scene: &Scene) -> (Recorder, Counters) {
-    struct V<'a>(&'a Scene);
-    impl EngineVisitor for V<'_> {
-        type Output = (Recorder, Counters);
-        fn visit<E: Engine>(self, mut e: E) -> Self::Output {
-            let mut r = Recorder::default();
-            let grid = OutputGrid::new(self.0, e.time_step());
-            drive(&mut e, &grid, &mut r).unwrap();
-            (r, e.counters())
-        }
-    }
-    with_engine(scene, V(scene)).unwrap()
+fn record(scene: &Scene) -> (Recording, Counters) {
+    let r = stickslip::runner::record(scene);
+    assert!(r.completed(), "{:?}", r.error);
+    let c = r.counters.clone();
+    (r, c)
 }
 
 /// The event log replays to the sampled attached counts, each junction alternates,
 /// times strictly increase, segments tile `[0, t_end]`; friction is `K (V t - X)` for a
 /// dynamic plate and the bond force with `X = V t` for a kinematic one.
-fn check(s: &Scene, r: &Recorder, c: &Counters) {
+fn check(s: &Scene, r: &Recording, c: &Counters) {
     let n = s.junctions.n;
     let ruptures = r.events.iter().filter(|e| e.kind == EventKind::Rupture).count() as u64;
     assert_eq!(ruptures, c.ruptures);
@@ -79,12 +70,12 @@ fn check(s: &Scene, r: &Recorder, c: &Counters) {
 #[test]
 fn event_log_and_samples_are_consistent() {
     let mut runs = 0;
-    for bond in ["strong", "weak"] {
+    for bond in BONDS.iter().map(|b| b.name()) {
         for kinematic in [false, true] {
             for reattach in ["residual", "unstretched"] {
                 for seed in 1..=5u64 {
                     let s = scene(
-                        stickslip::testkit::FIG1,
+                        stickslip_testkit::FIG1,
                         &[
                             "run.engine=exact",
                             "junctions.force_law=tilted",
@@ -126,7 +117,7 @@ fn stiff_plates_cost_what_their_events_cost() {
         &["plate.mass=1e-6", "plate.eta=100", "plate.k=1e9"],
     ];
     for (i, case) in cases.iter().enumerate() {
-        for bond in ["strong", "weak"] {
+        for bond in BONDS.iter().map(|b| b.name()) {
             let mut o = vec![
                 "run.engine=exact",
                 "junctions.force_law=tilted",
@@ -138,7 +129,7 @@ fn stiff_plates_cost_what_their_events_cost() {
             let b = format!("junctions.bond={bond}");
             o.push(&b);
             o.extend_from_slice(case);
-            let s = scene(stickslip::testkit::FIG1, &o);
+            let s = scene(stickslip_testkit::FIG1, &o);
             let (r, c) = record(&s);
             check(&s, &r, &c);
             let events = c.events.unwrap() as f64;
@@ -179,7 +170,7 @@ fn strong_bonds_follow_the_direct_engine_path_by_path() {
                 let mut o: Vec<&str> = base.iter().map(String::as_str).collect();
                 let m = format!("exact.tilted={method}");
                 o.push(&m);
-                let s = scene(stickslip::testkit::FIG1, &o);
+                let s = scene(stickslip_testkit::FIG1, &o);
                 record(&s).0
             };
             let (a, b) = (run("series"), run("direct"));

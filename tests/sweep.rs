@@ -18,9 +18,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use stickslip::Scene;
-use stickslip::engine::{Engine, EngineVisitor, with_engine};
-use stickslip::observe::regime::{MIN_COHERENCE, Regime, RegimeDetector, Verdict};
-use stickslip::runner::{OutputGrid, drive};
+use stickslip::observe::regime::{MIN_COHERENCE, Regime};
+use stickslip_testkit::verdict_of as verdict;
 
 const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
 
@@ -304,21 +303,6 @@ fn summaries_run_elsewhere_give_the_same_tables_as_the_command() {
     swapped.swap(0, 1);
     assert!(matches!(sweep.outcome(swapped), Err(OutcomeError::Order { position: 0, point: 0, replica: 0, .. })));
     assert!(matches!(sweep.outcome(summaries[1..].to_vec()), Err(OutcomeError::Count { expected: 12, got: 11 })));
-}
-
-/// The regime detector's verdict on a run of `scene`.
-fn verdict(scene: &Scene) -> Verdict {
-    struct V<'a>(&'a Scene);
-    impl EngineVisitor for V<'_> {
-        type Output = Verdict;
-        fn visit<E: Engine>(self, mut e: E) -> Verdict {
-            let mut d = RegimeDetector::for_scene(self.0);
-            let grid = OutputGrid::new(self.0, e.time_step());
-            drive(&mut e, &grid, &mut d).expect("run");
-            d.verdict()
-        }
-    }
-    with_engine(scene, V(scene)).expect("engine")
 }
 
 fn fig2_at(v: &str) -> Scene {

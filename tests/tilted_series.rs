@@ -16,7 +16,8 @@ mod common;
 use common::{ALPHA, Welch, welch};
 use stickslip::output::Summary;
 use stickslip::runner::record;
-use stickslip::{Scene, run_scene, testkit};
+use stickslip::{Scene, run_scene};
+use stickslip_testkit::{self as testkit, BONDS};
 
 /// Fig. 1 (tilted law, strong bonds, `N = 300`) with the exact engine, a stationary start,
 /// no trace, and `overrides`.
@@ -238,7 +239,7 @@ fn stiffness_costs(what: &str, soft: &[Summary], stiff: &[Summary], decades: f64
 #[test]
 fn a_stiff_plate_agrees_with_the_kinematic_plate() {
     let r = 6;
-    for bond in ["strong", "weak"] {
+    for bond in BONDS.iter().map(|b| b.name()) {
         let base = fig1_exact(&["run.t_end=200", "run.t_warmup=50", "plate.v=0.4", &format!("junctions.bond={bond}")]);
         let stiff_plate = ["plate.mass=1e-6", "plate.eta=100"];
         let stiff = runs(&with(&base, &[&stiff_plate[..], &["plate.k=1e9"]].concat()), 1..=r);

@@ -7,7 +7,7 @@ use std::process::Command;
 
 use stickslip::Scene;
 use stickslip::scene::{EngineKind, ForceLawKind};
-use stickslip::testkit;
+use stickslip_testkit as testkit;
 
 const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
 

@@ -260,7 +260,7 @@ mod tests {
     use super::*;
     use crate::observe::Recorder;
     use crate::runner::{OutputGrid, drive_walk};
-    use crate::testkit::fig1_with;
+    use crate::test_scenes::fig1_with;
 
     /// Everything a recorder saw, with every bit of every number.
     fn seen(r: &Recorder) -> String {

@@ -140,7 +140,7 @@ pub fn drive<E: Engine, O: Observer>(engine: &mut E, grid: &OutputGrid, obs: &mu
 mod tests {
     use crate::observe::Recorder;
     use crate::runner::{Observed, Simulation, StopFlag, Termination};
-    use crate::testkit::fig1_with;
+    use crate::test_scenes::fig1_with;
 
     /// Everything a recorder saw, with every bit of every number.
     fn seen(r: &Recorder) -> String {

@@ -66,7 +66,7 @@ mod tests {
     use crate::output::csv::{EventWriter, TraceWriter};
     use crate::runner::run_scene;
     use crate::scene::BondKind;
-    use crate::testkit::fig1_with;
+    use crate::test_scenes::fig1_with;
 
     /// `trace.csv` and `events.csv` as the writers write them for a recording.
     fn csv_of(r: &Recording) -> (Vec<u8>, Vec<u8>) {

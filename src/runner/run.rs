@@ -243,7 +243,7 @@ pub fn summarize<E: Engine>(
 mod tests {
     use super::*;
     use crate::runner::{Resumed, resume};
-    use crate::testkit::fig1_with;
+    use crate::test_scenes::fig1_with;
 
     fn summary_without_wall_time(s: &Summary) -> serde_json::Value {
         let mut v = serde_json::to_value(s).unwrap();

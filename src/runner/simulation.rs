@@ -226,7 +226,7 @@ mod tests {
     use super::*;
     use crate::observe::Segment;
     use crate::runner::core_observers;
-    use crate::testkit::fig1_with;
+    use crate::test_scenes::fig1_with;
 
     /// Everything a recorder saw, with every bit of every number.
     fn seen(r: &Recorder) -> String {

@@ -1,15 +1,12 @@
 //! Statistics shared by the statistical tests: every tolerance comes from here, derived
-//! from a distribution (KS, chi-square, Student t), never hand-tuned.
+//! from a distribution (KS, chi-square, Student t), never hand-tuned. Scenes and run
+//! helpers are the test kit's (`stickslip_testkit`).
 #![allow(dead_code)]
 
 pub mod moments;
 pub mod renewal;
 
 use statrs::distribution::{ChiSquared, ContinuousCDF, StudentsT};
-use stickslip::Scene;
-use stickslip::engine::{Engine, EngineVisitor, with_engine};
-use stickslip::observe::{EventKind, JunctionEvent, Observer};
-use stickslip::runner::{OutputGrid, drive};
 
 /// Significance level of every statistical test in the suite.
 pub const ALPHA: f64 = 1e-3;
@@ -109,40 +106,4 @@ pub fn welch(x: &[f64], y: &[f64], alpha: f64) -> Welch {
     let df = (a + b) * (a + b) / (a * a / (nx - 1.0) + b * b / (ny - 1.0));
     let critical = t_critical(df, alpha);
     Welch { diff: mx - my, se: (a + b).sqrt(), df, critical }
-}
-
-/// Records junction events.
-#[derive(Default)]
-pub struct Events(pub Vec<JunctionEvent>);
-impl Observer for Events {
-    const EVENTS: bool = true;
-    fn event(&mut self, e: &JunctionEvent) {
-        self.0.push(*e);
-    }
-}
-
-/// Runs `scene` (its own engine) to `t_end` and returns its events.
-pub fn events_of(scene: &Scene) -> Vec<JunctionEvent> {
-    struct V<'a>(&'a Scene);
-    impl EngineVisitor for V<'_> {
-        type Output = Vec<JunctionEvent>;
-        fn visit<E: Engine>(self, mut e: E) -> Vec<JunctionEvent> {
-            let mut obs = Events::default();
-            let grid = OutputGrid { sample_dt: self.0.run.t_end, t_warmup: 0.0, t_end: self.0.run.t_end };
-            drive(&mut e, &grid, &mut obs).expect("run");
-            obs.0
-        }
-    }
-    with_engine(scene, V(scene)).expect("engine")
-}
-
-/// The time of the first rupture, if any.
-pub fn first_rupture(events: &[JunctionEvent]) -> Option<f64> {
-    events.iter().find(|e| e.kind == EventKind::Rupture).map(|e| e.t)
-}
-
-/// A scene from TOML text with overrides.
-pub fn scene(text: &str, overrides: &[&str]) -> Scene {
-    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-    Scene::from_toml_str(text, "test", "test", &o).unwrap_or_else(|e| panic!("{e}"))
 }

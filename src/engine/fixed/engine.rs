@@ -354,7 +354,7 @@ mod tests {
     use crate::observe::Recorder;
     use crate::physics::{Linear, Strong};
     use crate::rng::ParkMiller;
-    use crate::testkit;
+    use crate::test_scenes as testkit;
 
     #[test]
     fn masks_select_bit_exactly() {

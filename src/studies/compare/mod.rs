@@ -524,7 +524,7 @@ mod tests {
         assert_eq!(exact_counts(64), vec![1, 2, 4, 8, 16, 32, 64]);
         assert_eq!(exact_counts(5), vec![1, 2, 4, 5]);
         assert_eq!(exact_counts(2), vec![1, 2]);
-        let s = crate::testkit::fig1();
+        let s = crate::test_scenes::fig1();
         let d = default_dts(&s);
         assert_eq!(d.len(), 9);
         assert_eq!(d[0], 1.0);
@@ -533,7 +533,7 @@ mod tests {
 
     #[test]
     fn bad_plans_name_their_argument() {
-        let s = crate::testkit::fig1();
+        let s = crate::test_scenes::fig1();
         for dts in [vec![], vec![-1.0], vec![0.0], vec![f64::NAN], vec![f64::INFINITY]] {
             let e = Plan::new(&s, dts, 4, 4).unwrap_err();
             assert!(e.0.starts_with("--dts"), "{e}");
@@ -549,7 +549,7 @@ mod tests {
         // Fig. 1, every junction attached: w2 = (150 + 30)/75 = 2.4, c = 1; at dt = 1 the
         // semi-implicit Euler matrix is [[-1.4, 0], [-2.4, 0]], radius 1.4; at dt = 0.5,
         // a complex pair of modulus sqrt(det) = sqrt(1 - 0.5).
-        let p = Plan::new(&crate::testkit::fig1(), vec![1.0, 0.5], 2, 2).unwrap();
+        let p = Plan::new(&crate::test_scenes::fig1(), vec![1.0, 0.5], 2, 2).unwrap();
         assert!((p.plate_growth[0] - 1.4).abs() < 1e-12);
         assert!((p.plate_growth[1] - 0.5f64.sqrt()).abs() < 1e-12);
     }
