@@ -206,7 +206,7 @@ mod tests {
     /// The two laws' descriptions: both bounded by `kappa`, the methods of docs/engines.md.
     #[test]
     fn law_info_of_the_bundled_laws() {
-        let mut j = crate::testkit::fig1().junctions;
+        let mut j = crate::test_scenes::fig1().junctions;
         j.kappa = 0.3;
         let tilted = law_info(&j).unwrap();
         assert_eq!(

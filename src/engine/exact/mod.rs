@@ -144,7 +144,7 @@ impl<L: ForceLaw, V: EngineVisitor> BondVisitor for Direct<'_, L, V> {
 mod tests {
     use super::*;
     use crate::physics::{Linear, Tilted};
-    use crate::testkit::fig1_with;
+    use crate::test_scenes::fig1_with;
 
     /// The law's method, except `exact.tilted = "direct"` on a dynamic plate.
     #[test]
