@@ -1,5 +1,6 @@
 //! Small dense LU factorisation with partial pivoting, for the linearly implicit stages of
-//! [`super::Rosenbrock`] (dimension at most [`MAX_DIM`]; fixed arrays, no allocation).
+//! [`super::Rosenbrock`] (dimension at most its capacity `N`, [`MAX_DIM`] for the general
+//! integrator; fixed arrays, no allocation).
 //!
 //! `P A = L U` (Doolittle, `L` unit lower triangular), stored in place row-major with stride
 //! `n`; `solve` does the permutation, forward and back substitution (Golub & Van Loan,
@@ -8,30 +9,31 @@
 /// Largest system dimension of the Rosenbrock integrator.
 pub const MAX_DIM: usize = 8;
 
-/// An `n x n` matrix factorised in place, `n <= MAX_DIM`.
+/// An `n x n` matrix factorised in place, `n <= N`.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Lu {
+pub(super) struct Lu<const N: usize> {
     n: usize,
-    /// `L` (strictly lower, unit diagonal implied) and `U`, row-major, stride `n`.
-    a: [f64; MAX_DIM * MAX_DIM],
+    /// `L` (strictly lower, unit diagonal implied) and `U`, row-major, stride `n`, in the
+    /// first `n * n` entries of the flattened array.
+    a: [[f64; N]; N],
     /// Row `i` of `P A` is row `piv[i]` of `A`.
-    piv: [usize; MAX_DIM],
+    piv: [usize; N],
 }
 
-impl Default for Lu {
+impl<const N: usize> Default for Lu<N> {
     fn default() -> Self {
-        Self { n: 0, a: [0.0; MAX_DIM * MAX_DIM], piv: [0; MAX_DIM] }
+        Self { n: 0, a: [[0.0; N]; N], piv: [0; N] }
     }
 }
 
-impl Lu {
+impl<const N: usize> Lu<N> {
     /// Factorises `fac I - J` (`jac` row-major `n x n`) in place. Returns `false` if a pivot
     /// is zero or any entry non-finite (the matrix is then unusable).
     #[inline]
     pub(super) fn factor_shifted(&mut self, n: usize, fac: f64, jac: &[f64]) -> bool {
-        debug_assert!(n <= MAX_DIM && jac.len() >= n * n);
+        debug_assert!(n <= N && jac.len() >= n * n);
         self.n = n;
-        let a = &mut self.a;
+        let a = self.a.as_flattened_mut();
         for i in 0..n {
             for j in 0..n {
                 a[i * n + j] = -jac[i * n + j];
@@ -77,8 +79,8 @@ impl Lu {
     #[inline]
     pub(super) fn solve(&self, b: &mut [f64]) {
         let n = self.n;
-        let a = &self.a;
-        let mut x = [0.0; MAX_DIM];
+        let a = self.a.as_flattened();
+        let mut x = [0.0; N];
         for i in 0..n {
             let mut s = b[self.piv[i]];
             for j in 0..i {
@@ -112,7 +114,7 @@ mod tests {
                 jac[i * 3 + j] = if i == j { 1.0 } else { 0.0 } - m[i][j];
             }
         }
-        let mut lu = Lu::default();
+        let mut lu = Lu::<MAX_DIM>::default();
         assert!(lu.factor_shifted(3, 1.0, &jac));
         let x = [1.5, -2.0, 0.25];
         let mut b = [0.0; 3];
@@ -127,7 +129,7 @@ mod tests {
 
     #[test]
     fn singular_and_non_finite_matrices_are_refused() {
-        let mut lu = Lu::default();
+        let mut lu = Lu::<MAX_DIM>::default();
         // fac I - J = 0.
         assert!(!lu.factor_shifted(2, 1.0, &[1.0, 0.0, 0.0, 1.0]));
         assert!(!lu.factor_shifted(1, 1.0, &[f64::NAN]));

@@ -50,6 +50,14 @@ pub struct ExactSeries<K: Kinetics, P: Motion> {
     rng: Pcg64,
     counters: Counters,
     events_since_rebase: u64,
+    /// The series changed (attach, rupture, shift) since its error bound was last recorded.
+    /// Not serialised: a resumed run records it again at its first plate step.
+    #[serde(skip, default = "yes")]
+    error_stale: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
@@ -86,6 +94,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
                 ..Default::default()
             },
             events_since_rebase: 0,
+            error_stale: true,
         };
         if !P::KINEMATIC {
             e.counters.ode_steps = Some(0);
@@ -109,9 +118,12 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
     }
 
     /// Records the largest relative bound of the series' error, `error_bound / (kappa l0
-    /// max(N_att, 1))`.
+    /// max(N_att, 1))`. The bound is a function of the series' state only, so it is
+    /// recomputed only when that changed (`error_stale`, or a re-basing of the series inside
+    /// the step): the same maximum as recording it after every step, at O(1) per step.
     #[inline]
     fn track_error(&mut self) {
+        self.error_stale = false;
         let scale = self.law.kappa * self.law.l0 * self.bags.n_attached().max(1) as f64;
         let rel = self.series.error_bound() / scale;
         let e = self.counters.series_error.get_or_insert(0.0);
@@ -151,6 +163,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
         let a = self.bags.take_attached(slot);
         let h = self.handles.swap_remove(slot);
         self.series.remove(a.c, h);
+        self.error_stale = true;
         self.kinetics.detached(slot, last);
         let x = self.y() - a.c;
         self.bags.detached.push(Detached { x, t: self.tau, id: a.id });
@@ -172,6 +185,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
         let c = y - x;
         self.bags.attach(c, d.id);
         self.handles.push(self.series.add(c));
+        self.error_stale = true;
         self.counters.formations += 1;
         self.emit(obs, EventKind::Formation, d.id, x);
         let slot = self.bags.n_attached() - 1;
@@ -197,6 +211,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
         self.bags.rebase(dtau, dy);
         self.channels.shift(dtau);
         self.series.shift(dy);
+        self.error_stale = true;
         self.motion.rebase(dtau, dy);
         self.tau = 0.0;
         self.events_since_rebase = 0;
@@ -228,6 +243,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
     /// Returns the slot that ruptured inside the step, if one did (the state is then at
     /// the rupture time).
     fn plate_step(&mut self, target: f64) -> Result<Option<usize>, EngineError> {
+        let rebases = self.counters.series_rebases;
         let mut ctx = StepCtx {
             series: &mut self.series,
             frame: &self.frame,
@@ -254,7 +270,9 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
         self.motion.finish(&step, end, &self.series)?;
         self.tau = end;
         self.motion.sync_counters(&mut self.counters);
-        self.track_error();
+        if self.error_stale || self.counters.series_rebases != rebases {
+            self.track_error();
+        }
         Ok(hit.map(|(_, slot)| slot))
     }
 }
