@@ -53,6 +53,14 @@ pub trait StiffSystem {
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]);
     /// `dfdy` row-major `dim x dim` (`dfdy[i * dim + j] = d f_i / d y_j`) and `dfdt[i] = d f_i / d t` at `(t, y)`.
     fn jacobian(&mut self, t: f64, y: &[f64], dfdy: &mut [f64], dfdt: &mut [f64]);
+    /// `f(t, y)` and the Jacobian at the same point (every step's start needs both). The
+    /// default calls [`StiffSystem::rhs`] then [`StiffSystem::jacobian`]; override it when
+    /// the two share work (the series engine's plate evaluates `S` and `S'` in one pass).
+    #[inline]
+    fn rhs_and_jacobian(&mut self, t: f64, y: &[f64], dydt: &mut [f64], dfdy: &mut [f64], dfdt: &mut [f64]) {
+        self.rhs(t, y, dydt);
+        self.jacobian(t, y, dfdy, dfdt);
+    }
 }
 
 /// Settings of [`Rosenbrock`]; the defaults are `rodas.f`'s with the scene's tolerances.
@@ -289,6 +297,12 @@ impl<const N: usize> TryFrom<RosenbrockData> for RosenbrockN<N> {
     }
 }
 
+/// `x^(1/4)` as two square roots (correctly rounded each; a fraction of `powf`'s cost).
+#[inline]
+fn fourth_root(x: f64) -> f64 {
+    x.sqrt().sqrt()
+}
+
 #[inline]
 fn all_finite(v: &[f64]) -> bool {
     v.iter().all(|x| x.is_finite())
@@ -393,10 +407,9 @@ impl<const N: usize> RosenbrockN<N> {
     fn prepare_start<S: StiffSystem + ?Sized>(&mut self, sys: &mut S, t: f64, y: &[f64]) -> Result<(), OdeError> {
         let n = self.dim;
         let w = &mut self.work;
-        sys.rhs(t, y, &mut w.f0[..n]);
-        self.stats.rhs_evals += 1;
         let jac = &mut w.jac.as_flattened_mut()[..n * n];
-        sys.jacobian(t, y, jac, &mut w.dfdt[..n]);
+        sys.rhs_and_jacobian(t, y, &mut w.f0[..n], jac, &mut w.dfdt[..n]);
+        self.stats.rhs_evals += 1;
         self.jac_evals += 1;
         if !(all_finite(&w.f0[..n]) && all_finite(jac) && all_finite(&w.dfdt[..n])) {
             return Err(OdeError::NonFiniteRhs { t });
@@ -564,13 +577,13 @@ impl<const N: usize> RosenbrockN<N> {
             match self.trial(sys, t0, y, h) {
                 Trial::Error(err) if err <= 1.0 => {
                     // Accepted: h / clamp(err^(1/4) / safety, 1/fac_max, 1/fac_min).
-                    let q = err.powf(0.25);
+                    let q = fourth_root(err);
                     let mut fac = (q / safety).clamp(1.0 / fac_max, 1.0 / fac_min);
                     let cut_short = clamped && h < h_prop;
                     if !cut_short {
                         if predictive && self.hacc > 0.0 {
                             // Gustafsson: (h_acc / h) (err^2 / err_acc)^(1/4) / safety.
-                            let facgus = (self.hacc / h * (err * err / self.erracc).powf(0.25) / safety)
+                            let facgus = (self.hacc / h * fourth_root(err * err / self.erracc) / safety)
                                 .clamp(1.0 / fac_max, 1.0 / fac_min);
                             fac = fac.max(facgus);
                         }
@@ -592,7 +605,7 @@ impl<const N: usize> RosenbrockN<N> {
                     return Ok(());
                 }
                 Trial::Error(err) => {
-                    h_prop = h / (err.powf(0.25) / safety).min(1.0 / fac_min);
+                    h_prop = h / (fourth_root(err) / safety).min(1.0 / fac_min);
                     last_non_finite = false;
                     self.stats.rejected += 1;
                     rejections += 1;

@@ -120,8 +120,32 @@ impl StiffSystem for System<'_> {
     /// `u' = -(S + K u)/eta - V`.
     #[inline]
     fn rhs(&mut self, t: f64, s: &[f64], d: &mut [f64]) {
+        let fb = self.series.force(self.y(s[0], t));
+        self.fill_rhs(fb, s, d);
+    }
+
+    /// `d/du` of the plate rows is `-(S' + K) / M` (or `/ eta`), `d/dw = -eta/M`; the time
+    /// enters only through `S(u + V t - lag_ref)`: `d/dt = -S' V / M` (or `/ eta`).
+    #[inline]
+    fn jacobian(&mut self, t: f64, s: &[f64], j: &mut [f64], dt: &mut [f64]) {
+        let (_, ds) = self.series.force_and_stiffness(self.y(s[0], t));
+        self.fill_jacobian(ds, j, dt);
+    }
+
+    /// Both at once from one pass over the series (`S` and `S'` by one Horner loop).
+    #[inline]
+    fn rhs_and_jacobian(&mut self, t: f64, s: &[f64], d: &mut [f64], j: &mut [f64], dt: &mut [f64]) {
+        let (fb, ds) = self.series.force_and_stiffness(self.y(s[0], t));
+        self.fill_rhs(fb, s, d);
+        self.fill_jacobian(ds, j, dt);
+    }
+}
+
+impl System<'_> {
+    /// The right-hand side at state `s` with bond force `fb`.
+    #[inline]
+    fn fill_rhs(&self, fb: f64, s: &[f64], d: &mut [f64]) {
         let u = s[0];
-        let fb = self.series.force(self.y(u, t));
         let p = &self.plate;
         if self.dynamic {
             let w = s[1] / self.tau_w;
@@ -132,12 +156,9 @@ impl StiffSystem for System<'_> {
         }
     }
 
-    /// `d/du` of the plate rows is `-(S' + K) / M` (or `/ eta`), `d/dw = -eta/M`; the time
-    /// enters only through `S(u + V t - lag_ref)`: `d/dt = -S' V / M` (or `/ eta`).
+    /// The Jacobian and `df/dt` with the series' stiffness `ds = S'`.
     #[inline]
-    fn jacobian(&mut self, t: f64, s: &[f64], j: &mut [f64], dt: &mut [f64]) {
-        let u = s[0];
-        let (_, ds) = self.series.force_and_stiffness(self.y(u, t));
+    fn fill_jacobian(&self, ds: f64, j: &mut [f64], dt: &mut [f64]) {
         let p = &self.plate;
         if self.dynamic {
             let tw = self.tau_w;
