@@ -356,3 +356,56 @@ impl<K: Kinetics, P: Motion> Engine for ExactSeries<K, P> {
         self.counters.clone()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::runner::run_scene;
+    use crate::testkit::fig1_with;
+
+    /// The run's main outputs, the friction mean and standard deviation and the mean bond
+    /// and viscous forces, from the series engine's piece statistics (dense-output integrals
+    /// and the force balance) against the direct engine's quadratures, on realisations that
+    /// coincide path-wise (strong bonds, a few junctions: the same events, see
+    /// `tests/series_engine.rs`). They differ by the two integrators' and the series'
+    /// errors: relative `rtol` per step at most, added over the steps of the longer run.
+    #[test]
+    fn statistics_match_the_direct_engine_path_by_path() {
+        for n in [3usize, 30] {
+            for seed in 1..=2u64 {
+                let run = |method: &str| {
+                    let o = [
+                        "run.engine=exact".to_string(),
+                        "junctions.force_law=tilted".into(),
+                        format!("junctions.n={n}"),
+                        format!("plate.k={}", 0.5 * n as f64),
+                        format!("plate.mass={}", 0.25 * n as f64),
+                        format!("plate.eta={}", 0.25 * n as f64),
+                        format!("run.seed={seed}"),
+                        "run.t_end=100".into(),
+                        "output.trace=false".into(),
+                        format!("exact.tilted={method}"),
+                    ];
+                    let o: Vec<&str> = o.iter().map(String::as_str).collect();
+                    let s = fig1_with(&o);
+                    (run_scene(&s, None).unwrap(), s.exact.rtol)
+                };
+                let ((a, rtol), (b, _)) = (run("series"), run("direct"));
+                assert_eq!((a.counters.ruptures, a.counters.formations), (b.counters.ruptures, b.counters.formations));
+                let steps = a.counters.ode_steps.unwrap().max(b.counters.ode_steps.unwrap()) as f64;
+                let tol = steps * rtol;
+                let scale = a.friction_mean.abs().max(a.bond_force_mean.abs());
+                for (name, x, y) in [
+                    ("friction_mean", a.friction_mean, b.friction_mean),
+                    ("friction_std", a.friction_std, b.friction_std),
+                    ("bond_force_mean", a.bond_force_mean, b.bond_force_mean),
+                    ("viscous_force_mean", a.viscous_force_mean, b.viscous_force_mean),
+                ] {
+                    assert!(
+                        (x - y).abs() <= tol * scale,
+                        "n = {n} seed {seed}: {name} {x} vs {y}, tolerance {tol:.1e} x {scale}"
+                    );
+                }
+            }
+        }
+    }
+}
