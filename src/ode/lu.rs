@@ -18,11 +18,13 @@ pub(super) struct Lu<const N: usize> {
     a: [[f64; N]; N],
     /// Row `i` of `P A` is row `piv[i]` of `A`.
     piv: [usize; N],
+    /// `1 / U_kk` (the solve multiplies: no division per solve).
+    inv: [f64; N],
 }
 
 impl<const N: usize> Default for Lu<N> {
     fn default() -> Self {
-        Self { n: 0, a: [[0.0; N]; N], piv: [0; N] }
+        Self { n: 0, a: [[0.0; N]; N], piv: [0; N], inv: [0.0; N] }
     }
 }
 
@@ -62,6 +64,7 @@ impl<const N: usize> Lu<N> {
                 self.piv.swap(k, p);
             }
             let inv = 1.0 / a[k * n + k];
+            self.inv[k] = inv;
             for i in k + 1..n {
                 let l = a[i * n + k] * inv;
                 a[i * n + k] = l;
@@ -93,7 +96,7 @@ impl<const N: usize> Lu<N> {
             for j in i + 1..n {
                 s -= a[i * n + j] * x[j];
             }
-            x[i] = s / a[i * n + i];
+            x[i] = s * self.inv[i];
         }
         b[..n].copy_from_slice(&x[..n]);
     }

@@ -104,8 +104,10 @@ struct System<'a> {
     plate: Plate,
     lag_ref: f64,
     dynamic: bool,
-    /// Velocity scale `tau_w`: the state holds `W = tau_w w`.
-    tau_w: f64,
+    /// `1 / tau_w` (the state holds `W = tau_w w`), and `tau_w / M` (`M > 0`) or `1 / eta`
+    /// (`M = 0`): the right-hand side multiplies, no division.
+    inv_tau_w: f64,
+    scale: f64,
 }
 
 impl System<'_> {
@@ -145,32 +147,33 @@ impl System<'_> {
     /// The right-hand side at state `s` with bond force `fb`.
     #[inline]
     fn fill_rhs(&self, fb: f64, s: &[f64], d: &mut [f64]) {
+        // tau_w Plate::acceleration and Plate::overdamped_velocity, with the division by `M`
+        // (or `eta`) as a multiplication by the precomputed `scale`.
         let u = s[0];
         let p = &self.plate;
         if self.dynamic {
-            let w = s[1] / self.tau_w;
+            let w = s[1] * self.inv_tau_w;
             d[0] = w;
-            d[1] = self.tau_w * p.acceleration(u, w + p.v, fb);
+            d[1] = -(p.eta * (w + p.v) + fb + p.k * u) * self.scale;
         } else {
-            d[0] = p.overdamped_velocity(u, fb) - p.v;
+            d[0] = -(fb + p.k * u) * self.scale - p.v;
         }
     }
 
     /// The Jacobian and `df/dt` with the series' stiffness `ds = S'`.
     #[inline]
     fn fill_jacobian(&self, ds: f64, j: &mut [f64], dt: &mut [f64]) {
-        let p = &self.plate;
+        let (p, c) = (&self.plate, self.scale);
         if self.dynamic {
-            let tw = self.tau_w;
             j[0] = 0.0;
-            j[1] = 1.0 / tw;
-            j[2] = -tw * (ds + p.k) / p.mass;
-            j[3] = -p.eta / p.mass;
+            j[1] = self.inv_tau_w;
+            j[2] = -(ds + p.k) * c;
+            j[3] = -p.eta * c * self.inv_tau_w;
             dt[0] = 0.0;
-            dt[1] = -tw * ds * p.v / p.mass;
+            dt[1] = -ds * p.v * c;
         } else {
-            j[0] = -(ds + p.k) / p.eta;
-            dt[0] = -ds * p.v / p.eta;
+            j[0] = -(ds + p.k) * c;
+            dt[0] = -ds * p.v * c;
         }
     }
 }
@@ -294,12 +297,14 @@ impl Motion for Dynamic {
         let mut retakes = 0;
         loop {
             let mut t = tau;
+            let p = &self.plate;
             let mut sys = System {
                 series: ctx.series,
-                plate: self.plate,
+                plate: *p,
                 lag_ref: self.lag_ref,
                 dynamic: self.dynamic,
-                tau_w: self.tau_w,
+                inv_tau_w: 1.0 / self.tau_w,
+                scale: if self.dynamic { self.tau_w / p.mass } else { 1.0 / p.eta },
             };
             self.ode
                 .step(&mut sys, &mut t, &mut self.state[..self.dim], target)
