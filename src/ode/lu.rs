@@ -35,6 +35,9 @@ impl<const N: usize> Lu<N> {
     pub(super) fn factor_shifted(&mut self, n: usize, fac: f64, jac: &[f64]) -> bool {
         debug_assert!(n <= N && jac.len() >= n * n);
         self.n = n;
+        if n == 2 {
+            return self.factor_2x2(fac, jac);
+        }
         let a = self.a.as_flattened_mut();
         for i in 0..n {
             for j in 0..n {
@@ -78,10 +81,44 @@ impl<const N: usize> Lu<N> {
         a[..n * n].iter().all(|v| v.is_finite())
     }
 
+    /// `factor_shifted` for `n = 2`, unrolled: the same operations in the same order (the
+    /// same factors, bit for bit), without the loops.
+    #[inline]
+    fn factor_2x2(&mut self, fac: f64, jac: &[f64]) -> bool {
+        let (mut r0, mut r1) = ([fac - jac[0], -jac[1]], [-jac[2], fac - jac[3]]);
+        self.piv[..2].copy_from_slice(&[0, 1]);
+        let best = r0[0].abs().max(r1[0].abs());
+        if !(best > 0.0 && best.is_finite()) {
+            return false;
+        }
+        if r1[0].abs() > r0[0].abs() {
+            std::mem::swap(&mut r0, &mut r1);
+            self.piv[..2].copy_from_slice(&[1, 0]);
+        }
+        let inv0 = 1.0 / r0[0];
+        let l = r1[0] * inv0;
+        let u11 = if l != 0.0 { r1[1] - l * r0[1] } else { r1[1] };
+        if !(u11.abs() > 0.0 && u11.is_finite()) {
+            return false;
+        }
+        self.inv[0] = inv0;
+        self.inv[1] = 1.0 / u11;
+        self.a.as_flattened_mut()[..4].copy_from_slice(&[r0[0], r0[1], l, u11]);
+        r0[1].is_finite() && l.is_finite()
+    }
+
     /// Solves `(fac I - J) x = b` with the stored factors; `b` is overwritten by `x`.
     #[inline]
     pub(super) fn solve(&self, b: &mut [f64]) {
         let n = self.n;
+        if n == 2 {
+            let a = self.a.as_flattened();
+            let x0 = b[self.piv[0]];
+            let x1 = (b[self.piv[1]] - a[2] * x0) * self.inv[1];
+            b[0] = (x0 - a[1] * x1) * self.inv[0];
+            b[1] = x1;
+            return;
+        }
         let a = self.a.as_flattened();
         let mut x = [0.0; N];
         for i in 0..n {
@@ -128,6 +165,32 @@ mod tests {
         for i in 0..3 {
             assert!((b[i] - x[i]).abs() < 1e-14, "{b:?}");
         }
+    }
+
+    /// The unrolled 2x2 factorisation gives the general algorithm's factors and solutions
+    /// bit for bit (with and without a row swap), checked against the same matrix embedded
+    /// in a 3x3 block-diagonal system, which takes the general path.
+    #[test]
+    fn the_2x2_path_is_the_general_algorithm() {
+        for jac in [[0.3, -1.7, 2.5, 0.9], [2.0, 1.0, -3.0, 0.5], [1.0, 0.0, 0.0, -2.0]] {
+            let fac = 1.25;
+            let mut lu2 = Lu::<2>::default();
+            assert!(lu2.factor_shifted(2, fac, &jac));
+            let j3 = [jac[0], jac[1], 0.0, jac[2], jac[3], 0.0, 0.0, 0.0, 0.0];
+            let mut lu3 = Lu::<MAX_DIM>::default();
+            assert!(lu3.factor_shifted(3, fac, &j3));
+            let (mut b2, mut b3) = ([0.7, -1.3], [0.7, -1.3, 1.0]);
+            lu2.solve(&mut b2);
+            lu3.solve(&mut b3);
+            assert_eq!(b2, [b3[0], b3[1]], "jac {jac:?}");
+            // (fac I - J) x = b.
+            let r0 = (fac - jac[0]) * b2[0] - jac[1] * b2[1];
+            let r1 = -jac[2] * b2[0] + (fac - jac[3]) * b2[1];
+            assert!((r0 - 0.7).abs() < 1e-14 && (r1 + 1.3).abs() < 1e-14, "{r0} {r1}");
+        }
+        let mut lu2 = Lu::<2>::default();
+        assert!(!lu2.factor_shifted(2, 1.0, &[1.0, 0.0, 0.0, 1.0]));
+        assert!(!lu2.factor_shifted(2, 1.0, &[0.0, 1.0, 1.0, 0.0 + f64::NAN]));
     }
 
     #[test]
