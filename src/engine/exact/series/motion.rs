@@ -198,7 +198,6 @@ pub struct Dynamic {
     plate: Plate,
     /// `M > 0`: the state is `[u, W]`; else `[u]`.
     dynamic: bool,
-    dim: usize,
     tau_w: f64,
     ode: RosenbrockN<DIM>,
     state: [f64; DIM],
@@ -240,7 +239,6 @@ impl Dynamic {
         Ok(Dynamic {
             plate,
             dynamic,
-            dim,
             tau_w,
             ode,
             state,
@@ -253,6 +251,12 @@ impl Dynamic {
             l1: 0.0,
             l2: 0.0,
         })
+    }
+    /// The ODE's dimension: 2 (`[u, W]`), or 1 (`[u]`) for the overdamped plate. Derived,
+    /// not stored: a checkpoint cannot make it disagree with the state's length.
+    #[inline]
+    fn dim(&self) -> usize {
+        if self.dynamic { 2 } else { 1 }
     }
     #[inline]
     fn y_of(&self, u: f64, tau: f64) -> f64 {
@@ -294,6 +298,7 @@ impl Motion for Dynamic {
         }
         let rtol = self.ode.config().rtol;
         self.saved = self.state;
+        let n = self.dim();
         let mut retakes = 0;
         loop {
             let mut t = tau;
@@ -307,7 +312,7 @@ impl Motion for Dynamic {
                 scale: if self.dynamic { self.tau_w / p.mass } else { 1.0 / p.eta },
             };
             self.ode
-                .step(&mut sys, &mut t, &mut self.state[..self.dim], target)
+                .step(&mut sys, &mut t, &mut self.state[..n], target)
                 .map_err(|e| ode_error(e, ctx.frame.time(tau), rtol))?;
             let (ulo, uhi) = self.ode.component_bounds(0).map_err(|e| ode_error(e, ctx.frame.time(tau), rtol))?;
             // y = u + V s - lag_ref with V >= 0: bounded by the u bounds at the two ends.
@@ -348,7 +353,8 @@ impl Motion for Dynamic {
     }
     fn finish(&mut self, step: &Step, s: f64, _series: &SeriesSum) -> Result<(), EngineError> {
         if s < step.s1 {
-            self.ode.dense(s, &mut self.state[..self.dim]).map_err(|e| ode_error(e, s, 0.0))?;
+            let n = self.dim();
+            self.ode.dense(s, &mut self.state[..n]).map_err(|e| ode_error(e, s, 0.0))?;
         }
         let (i1, i2) = self.ode.dense_integrals(0, s, self.u0).map_err(|e| ode_error(e, s, 0.0))?;
         self.l1 += i1;
