@@ -35,6 +35,7 @@
 //! (c2 + s c3))`, a cubic per component; ends returned exactly. [`Rosenbrock::component_bounds`]
 //! gives the cubic's range over the step (ends and real critical points) widened by a
 //! round-off margin.
+//! [`RosenbrockN::dense_integrals`] integrates the cubic (and its square) exactly.
 //!
 //! See `docs/ode.md` ("The Rosenbrock integrator").
 
