@@ -1,5 +1,6 @@
 //! Small dense LU factorisation with partial pivoting, for the linearly implicit stages of
-//! [`super::Rosenbrock`] (dimension at most [`MAX_DIM`]; fixed arrays, no allocation).
+//! [`super::Rosenbrock`] (dimension at most its capacity `N`, [`MAX_DIM`] for the general
+//! integrator; fixed arrays, no allocation).
 //!
 //! `P A = L U` (Doolittle, `L` unit lower triangular), stored in place row-major with stride
 //! `n`; `solve` does the permutation, forward and back substitution (Golub & Van Loan,
@@ -8,30 +9,36 @@
 /// Largest system dimension of the Rosenbrock integrator.
 pub const MAX_DIM: usize = 8;
 
-/// An `n x n` matrix factorised in place, `n <= MAX_DIM`.
+/// An `n x n` matrix factorised in place, `n <= N`.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Lu {
+pub(super) struct Lu<const N: usize> {
     n: usize,
-    /// `L` (strictly lower, unit diagonal implied) and `U`, row-major, stride `n`.
-    a: [f64; MAX_DIM * MAX_DIM],
+    /// `L` (strictly lower, unit diagonal implied) and `U`, row-major, stride `n`, in the
+    /// first `n * n` entries of the flattened array.
+    a: [[f64; N]; N],
     /// Row `i` of `P A` is row `piv[i]` of `A`.
-    piv: [usize; MAX_DIM],
+    piv: [usize; N],
+    /// `1 / U_kk` (the solve multiplies: no division per solve).
+    inv: [f64; N],
 }
 
-impl Default for Lu {
+impl<const N: usize> Default for Lu<N> {
     fn default() -> Self {
-        Self { n: 0, a: [0.0; MAX_DIM * MAX_DIM], piv: [0; MAX_DIM] }
+        Self { n: 0, a: [[0.0; N]; N], piv: [0; N], inv: [0.0; N] }
     }
 }
 
-impl Lu {
+impl<const N: usize> Lu<N> {
     /// Factorises `fac I - J` (`jac` row-major `n x n`) in place. Returns `false` if a pivot
     /// is zero or any entry non-finite (the matrix is then unusable).
     #[inline]
     pub(super) fn factor_shifted(&mut self, n: usize, fac: f64, jac: &[f64]) -> bool {
-        debug_assert!(n <= MAX_DIM && jac.len() >= n * n);
+        debug_assert!(n <= N && jac.len() >= n * n);
         self.n = n;
-        let a = &mut self.a;
+        if n == 2 {
+            return self.factor_2x2(fac, jac);
+        }
+        let a = self.a.as_flattened_mut();
         for i in 0..n {
             for j in 0..n {
                 a[i * n + j] = -jac[i * n + j];
@@ -60,6 +67,7 @@ impl Lu {
                 self.piv.swap(k, p);
             }
             let inv = 1.0 / a[k * n + k];
+            self.inv[k] = inv;
             for i in k + 1..n {
                 let l = a[i * n + k] * inv;
                 a[i * n + k] = l;
@@ -73,12 +81,46 @@ impl Lu {
         a[..n * n].iter().all(|v| v.is_finite())
     }
 
+    /// `factor_shifted` for `n = 2`, unrolled: the same operations in the same order (the
+    /// same factors, bit for bit), without the loops.
+    #[inline]
+    fn factor_2x2(&mut self, fac: f64, jac: &[f64]) -> bool {
+        let (mut r0, mut r1) = ([fac - jac[0], -jac[1]], [-jac[2], fac - jac[3]]);
+        self.piv[..2].copy_from_slice(&[0, 1]);
+        let best = r0[0].abs().max(r1[0].abs());
+        if !(best > 0.0 && best.is_finite()) {
+            return false;
+        }
+        if r1[0].abs() > r0[0].abs() {
+            std::mem::swap(&mut r0, &mut r1);
+            self.piv[..2].copy_from_slice(&[1, 0]);
+        }
+        let inv0 = 1.0 / r0[0];
+        let l = r1[0] * inv0;
+        let u11 = if l != 0.0 { r1[1] - l * r0[1] } else { r1[1] };
+        if !(u11.abs() > 0.0 && u11.is_finite()) {
+            return false;
+        }
+        self.inv[0] = inv0;
+        self.inv[1] = 1.0 / u11;
+        self.a.as_flattened_mut()[..4].copy_from_slice(&[r0[0], r0[1], l, u11]);
+        r0[1].is_finite() && l.is_finite()
+    }
+
     /// Solves `(fac I - J) x = b` with the stored factors; `b` is overwritten by `x`.
     #[inline]
     pub(super) fn solve(&self, b: &mut [f64]) {
         let n = self.n;
-        let a = &self.a;
-        let mut x = [0.0; MAX_DIM];
+        if n == 2 {
+            let a = self.a.as_flattened();
+            let x0 = b[self.piv[0]];
+            let x1 = (b[self.piv[1]] - a[2] * x0) * self.inv[1];
+            b[0] = (x0 - a[1] * x1) * self.inv[0];
+            b[1] = x1;
+            return;
+        }
+        let a = self.a.as_flattened();
+        let mut x = [0.0; N];
         for i in 0..n {
             let mut s = b[self.piv[i]];
             for j in 0..i {
@@ -91,7 +133,7 @@ impl Lu {
             for j in i + 1..n {
                 s -= a[i * n + j] * x[j];
             }
-            x[i] = s / a[i * n + i];
+            x[i] = s * self.inv[i];
         }
         b[..n].copy_from_slice(&x[..n]);
     }
@@ -112,7 +154,7 @@ mod tests {
                 jac[i * 3 + j] = if i == j { 1.0 } else { 0.0 } - m[i][j];
             }
         }
-        let mut lu = Lu::default();
+        let mut lu = Lu::<MAX_DIM>::default();
         assert!(lu.factor_shifted(3, 1.0, &jac));
         let x = [1.5, -2.0, 0.25];
         let mut b = [0.0; 3];
@@ -125,9 +167,35 @@ mod tests {
         }
     }
 
+    /// The unrolled 2x2 factorisation gives the general algorithm's factors and solutions
+    /// bit for bit (with and without a row swap), checked against the same matrix embedded
+    /// in a 3x3 block-diagonal system, which takes the general path.
+    #[test]
+    fn the_2x2_path_is_the_general_algorithm() {
+        for jac in [[0.3, -1.7, 2.5, 0.9], [2.0, 1.0, -3.0, 0.5], [1.0, 0.0, 0.0, -2.0]] {
+            let fac = 1.25;
+            let mut lu2 = Lu::<2>::default();
+            assert!(lu2.factor_shifted(2, fac, &jac));
+            let j3 = [jac[0], jac[1], 0.0, jac[2], jac[3], 0.0, 0.0, 0.0, 0.0];
+            let mut lu3 = Lu::<MAX_DIM>::default();
+            assert!(lu3.factor_shifted(3, fac, &j3));
+            let (mut b2, mut b3) = ([0.7, -1.3], [0.7, -1.3, 1.0]);
+            lu2.solve(&mut b2);
+            lu3.solve(&mut b3);
+            assert_eq!(b2, [b3[0], b3[1]], "jac {jac:?}");
+            // (fac I - J) x = b.
+            let r0 = (fac - jac[0]) * b2[0] - jac[1] * b2[1];
+            let r1 = -jac[2] * b2[0] + (fac - jac[3]) * b2[1];
+            assert!((r0 - 0.7).abs() < 1e-14 && (r1 + 1.3).abs() < 1e-14, "{r0} {r1}");
+        }
+        let mut lu2 = Lu::<2>::default();
+        assert!(!lu2.factor_shifted(2, 1.0, &[1.0, 0.0, 0.0, 1.0]));
+        assert!(!lu2.factor_shifted(2, 1.0, &[0.0, 1.0, 1.0, 0.0 + f64::NAN]));
+    }
+
     #[test]
     fn singular_and_non_finite_matrices_are_refused() {
-        let mut lu = Lu::default();
+        let mut lu = Lu::<MAX_DIM>::default();
         // fac I - J = 0.
         assert!(!lu.factor_shifted(2, 1.0, &[1.0, 0.0, 0.0, 1.0]));
         assert!(!lu.factor_shifted(1, 1.0, &[f64::NAN]));

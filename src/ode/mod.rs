@@ -48,7 +48,7 @@ mod stepper;
 
 pub use lu::MAX_DIM as ROSENBROCK_MAX_DIM;
 pub use root::brent;
-pub use rosenbrock::{Rosenbrock, RosenbrockConfig, StiffSystem};
+pub use rosenbrock::{Rosenbrock, RosenbrockConfig, RosenbrockN, StiffSystem};
 pub use stepper::{Dop853, Dop853Config, MIN_RTOL};
 
 use serde::{Deserialize, Serialize};

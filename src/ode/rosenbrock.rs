@@ -35,6 +35,7 @@
 //! (c2 + s c3))`, a cubic per component; ends returned exactly. [`Rosenbrock::component_bounds`]
 //! gives the cubic's range over the step (ends and real critical points) widened by a
 //! round-off margin.
+//! [`RosenbrockN::dense_integrals`] integrates the cubic (and its square) exactly.
 //!
 //! See `docs/ode.md` ("The Rosenbrock integrator").
 
@@ -53,6 +54,14 @@ pub trait StiffSystem {
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]);
     /// `dfdy` row-major `dim x dim` (`dfdy[i * dim + j] = d f_i / d y_j`) and `dfdt[i] = d f_i / d t` at `(t, y)`.
     fn jacobian(&mut self, t: f64, y: &[f64], dfdy: &mut [f64], dfdt: &mut [f64]);
+    /// `f(t, y)` and the Jacobian at the same point (every step's start needs both). The
+    /// default calls [`StiffSystem::rhs`] then [`StiffSystem::jacobian`]; override it when
+    /// the two share work (the series engine's plate evaluates `S` and `S'` in one pass).
+    #[inline]
+    fn rhs_and_jacobian(&mut self, t: f64, y: &[f64], dydt: &mut [f64], dfdy: &mut [f64], dfdt: &mut [f64]) {
+        self.rhs(t, y, dydt);
+        self.jacobian(t, y, dfdy, dfdt);
+    }
 }
 
 /// Settings of [`Rosenbrock`]; the defaults are `rodas.f`'s with the scene's tolerances.
@@ -129,31 +138,30 @@ impl RosenbrockConfig {
     }
 }
 
-type Vector = [f64; MAX_DIM];
-
-/// Scratch space of one step (fixed arrays; never serialised).
+/// Scratch space of one step (fixed arrays of the capacity `N`; never serialised). `jac`
+/// is row-major with stride `dim` in the first `dim * dim` entries of its flattening.
 #[derive(Clone, Debug)]
-struct Work {
-    jac: [f64; MAX_DIM * MAX_DIM],
-    dfdt: Vector,
-    f0: Vector,
-    k: [Vector; STAGES],
-    ys: Vector,
-    dy: Vector,
-    y_new: Vector,
-    lu: Lu,
+struct Work<const N: usize> {
+    jac: [[f64; N]; N],
+    dfdt: [f64; N],
+    f0: [f64; N],
+    k: [[f64; N]; STAGES],
+    ys: [f64; N],
+    dy: [f64; N],
+    y_new: [f64; N],
+    lu: Lu<N>,
 }
 
-impl Default for Work {
+impl<const N: usize> Default for Work<N> {
     fn default() -> Self {
         Self {
-            jac: [0.0; MAX_DIM * MAX_DIM],
-            dfdt: [0.0; MAX_DIM],
-            f0: [0.0; MAX_DIM],
-            k: [[0.0; MAX_DIM]; STAGES],
-            ys: [0.0; MAX_DIM],
-            dy: [0.0; MAX_DIM],
-            y_new: [0.0; MAX_DIM],
+            jac: [[0.0; N]; N],
+            dfdt: [0.0; N],
+            f0: [0.0; N],
+            k: [[0.0; N]; STAGES],
+            ys: [0.0; N],
+            dy: [0.0; N],
+            y_new: [0.0; N],
             lu: Lu::default(),
         }
     }
@@ -167,12 +175,18 @@ enum Trial {
     NonFinite,
 }
 
+/// The general integrator: any dimension `1..=MAX_DIM` (8).
+pub type Rosenbrock = RosenbrockN<MAX_DIM>;
+
 /// RODAS4 with step-size control, dense output over the last accepted step and bounds of it
 /// (see the module documentation). `Serialize + Deserialize` for checkpoints (validated on
-/// load); no allocation per step; dimension `1..=MAX_DIM` (8).
+/// load); no allocation per step; dimension `1..=N`. The capacity `N` is chosen at compile
+/// time: every array (state, stages, Jacobian, LU) has `N` entries per row, so a small
+/// system (`N = 2`, the series engine's plate) steps on small fixed arrays; [`Rosenbrock`]
+/// (`N = MAX_DIM`) is the general integrator. The serialised form does not depend on `N`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(try_from = "RosenbrockData", into = "RosenbrockData")]
-pub struct Rosenbrock {
+pub struct RosenbrockN<const N: usize> {
     dim: usize,
     cfg: RosenbrockConfig,
     stats: OdeStats,
@@ -190,8 +204,8 @@ pub struct Rosenbrock {
     t_new: f64,
     h_step: f64,
     /// Dense coefficients per component: `y0`, `y1`, `c2`, `c3`.
-    cont: [Vector; 4],
-    work: Work,
+    cont: [[f64; N]; 4],
+    work: Work<N>,
 }
 
 /// The serialised form of [`Rosenbrock`] (checked on deserialisation).
@@ -212,8 +226,8 @@ struct RosenbrockData {
     cont: Vec<Vec<f64>>,
 }
 
-impl From<Rosenbrock> for RosenbrockData {
-    fn from(r: Rosenbrock) -> Self {
+impl<const N: usize> From<RosenbrockN<N>> for RosenbrockData {
+    fn from(r: RosenbrockN<N>) -> Self {
         let n = r.dim;
         Self {
             dim: n,
@@ -233,14 +247,14 @@ impl From<Rosenbrock> for RosenbrockData {
     }
 }
 
-impl TryFrom<RosenbrockData> for Rosenbrock {
+impl<const N: usize> TryFrom<RosenbrockData> for RosenbrockN<N> {
     type Error = OdeError;
 
     fn try_from(d: RosenbrockData) -> Result<Self, OdeError> {
         d.cfg.validate()?;
         let n = d.dim;
         let bad = |what: &'static str| Err(OdeError::InvalidState { what });
-        if n == 0 || n > MAX_DIM || d.cont.len() != 4 || d.cont.iter().any(|c| c.len() != n) {
+        if n == 0 || n > N || d.cont.len() != 4 || d.cont.iter().any(|c| c.len() != n) {
             return bad("vector lengths do not match the dimension");
         }
         if let Some(h) = d.h_prop {
@@ -261,7 +275,7 @@ impl TryFrom<RosenbrockData> for Rosenbrock {
         {
             return bad("invalid last step");
         }
-        let mut cont = [[0.0; MAX_DIM]; 4];
+        let mut cont = [[0.0; N]; 4];
         for (c, v) in cont.iter_mut().zip(&d.cont) {
             c[..n].copy_from_slice(v);
         }
@@ -284,13 +298,19 @@ impl TryFrom<RosenbrockData> for Rosenbrock {
     }
 }
 
+/// `x^(1/4)` as two square roots (correctly rounded each; a fraction of `powf`'s cost).
+#[inline]
+fn fourth_root(x: f64) -> f64 {
+    x.sqrt().sqrt()
+}
+
 #[inline]
 fn all_finite(v: &[f64]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
-impl Rosenbrock {
-    /// An integrator for systems of dimension `1..=8` with tolerances `rtol >= MIN_RTOL`,
+impl<const N: usize> RosenbrockN<N> {
+    /// An integrator for systems of dimension `1..=N` with tolerances `rtol >= MIN_RTOL`,
     /// `atol > 0` and the other defaults.
     pub fn new(dim: usize, rtol: f64, atol: f64) -> Result<Self, OdeError> {
         Self::with_config(dim, RosenbrockConfig { rtol, atol, ..RosenbrockConfig::default() })
@@ -302,8 +322,8 @@ impl Rosenbrock {
         if dim == 0 {
             return Err(OdeError::DimensionMismatch { expected: 1, got: 0 });
         }
-        if dim > MAX_DIM {
-            return Err(OdeError::DimensionMismatch { expected: MAX_DIM, got: dim });
+        if dim > N {
+            return Err(OdeError::DimensionMismatch { expected: N, got: dim });
         }
         Ok(Self {
             dim,
@@ -318,7 +338,7 @@ impl Rosenbrock {
             t_old: 0.0,
             t_new: 0.0,
             h_step: 0.0,
-            cont: [[0.0; MAX_DIM]; 4],
+            cont: [[0.0; N]; 4],
             work: Work::default(),
         })
     }
@@ -388,11 +408,11 @@ impl Rosenbrock {
     fn prepare_start<S: StiffSystem + ?Sized>(&mut self, sys: &mut S, t: f64, y: &[f64]) -> Result<(), OdeError> {
         let n = self.dim;
         let w = &mut self.work;
-        sys.rhs(t, y, &mut w.f0[..n]);
+        let jac = &mut w.jac.as_flattened_mut()[..n * n];
+        sys.rhs_and_jacobian(t, y, &mut w.f0[..n], jac, &mut w.dfdt[..n]);
         self.stats.rhs_evals += 1;
-        sys.jacobian(t, y, &mut w.jac[..n * n], &mut w.dfdt[..n]);
         self.jac_evals += 1;
-        if !(all_finite(&w.f0[..n]) && all_finite(&w.jac[..n * n]) && all_finite(&w.dfdt[..n])) {
+        if !(all_finite(&w.f0[..n]) && all_finite(jac) && all_finite(&w.dfdt[..n])) {
             return Err(OdeError::NonFiniteRhs { t });
         }
         Ok(())
@@ -411,7 +431,8 @@ impl Rosenbrock {
         let (mut dnf, mut dny, mut der2) = (0.0, 0.0, 0.0);
         for i in 0..n {
             let sk = atol + rtol * y[i].abs();
-            let ypp: f64 = (0..n).map(|j| w.jac[i * n + j] * w.f0[j]).sum::<f64>() + w.dfdt[i];
+            let jac = w.jac.as_flattened();
+            let ypp: f64 = (0..n).map(|j| jac[i * n + j] * w.f0[j]).sum::<f64>() + w.dfdt[i];
             dnf += (w.f0[i] / sk).powi(2);
             dny += (y[i] / sk).powi(2);
             der2 += (ypp / sk).powi(2);
@@ -428,7 +449,7 @@ impl Rosenbrock {
     fn trial<S: StiffSystem + ?Sized>(&mut self, sys: &mut S, t: f64, y: &[f64], h: f64) -> Trial {
         let n = self.dim;
         let w = &mut self.work;
-        if !w.lu.factor_shifted(n, 1.0 / (h * GAMMA), &w.jac[..n * n]) {
+        if !w.lu.factor_shifted(n, 1.0 / (h * GAMMA), &w.jac.as_flattened()[..n * n]) {
             return Trial::NonFinite;
         }
         let inv_h = 1.0 / h;
@@ -451,7 +472,7 @@ impl Rosenbrock {
                 w.dy[..n].copy_from_slice(&w.f0[..n]);
             }
             let hd = h * D[s];
-            let mut rhs = [0.0; MAX_DIM];
+            let mut rhs = [0.0; N];
             for i in 0..n {
                 let mut acc = w.dy[i] + hd * w.dfdt[i];
                 for j in 0..s {
@@ -557,13 +578,13 @@ impl Rosenbrock {
             match self.trial(sys, t0, y, h) {
                 Trial::Error(err) if err <= 1.0 => {
                     // Accepted: h / clamp(err^(1/4) / safety, 1/fac_max, 1/fac_min).
-                    let q = err.powf(0.25);
+                    let q = fourth_root(err);
                     let mut fac = (q / safety).clamp(1.0 / fac_max, 1.0 / fac_min);
                     let cut_short = clamped && h < h_prop;
                     if !cut_short {
                         if predictive && self.hacc > 0.0 {
                             // Gustafsson: (h_acc / h) (err^2 / err_acc)^(1/4) / safety.
-                            let facgus = (self.hacc / h * (err * err / self.erracc).powf(0.25) / safety)
+                            let facgus = (self.hacc / h * fourth_root(err * err / self.erracc) / safety)
                                 .clamp(1.0 / fac_max, 1.0 / fac_min);
                             fac = fac.max(facgus);
                         }
@@ -585,7 +606,7 @@ impl Rosenbrock {
                     return Ok(());
                 }
                 Trial::Error(err) => {
-                    h_prop = h / (err.powf(0.25) / safety).min(1.0 / fac_min);
+                    h_prop = h / (fourth_root(err) / safety).min(1.0 / fac_min);
                     last_non_finite = false;
                     self.stats.rejected += 1;
                     rejections += 1;
@@ -682,6 +703,43 @@ impl Rosenbrock {
         }
         let p = self.dense_s(t)?;
         Ok(self.dense_at(i, p))
+    }
+
+    /// Exact integrals of the dense-output interpolant of component `i` minus `shift` from
+    /// the start of the last step to `t` (inside it): `(int (y_i - shift) dt, int (y_i -
+    /// shift)^2 dt)` over `[t_old, t]`.
+    ///
+    /// With `q(s) = p(s) - shift = a0 + b1 s + b2 s^2 + b3 s^3` (`a0 = y0 - shift`, `b1 = y1 -
+    /// y0 + c2`, `b2 = c3 - c2`, `b3 = -c3`, see [`Rosenbrock::component_bounds`]) and `sigma
+    /// = (t - t_old) / h`: `int q = h sigma sum_k b_k sigma^k / (k + 1)` and `int q^2 = h
+    /// sigma sum_k e_k sigma^k / (k + 1)`, `e` the coefficients of `q^2` (degree 6).
+    /// `shift` near the values keeps the square free of cancellation.
+    pub fn dense_integrals(&self, i: usize, t: f64, shift: f64) -> Result<(f64, f64), OdeError> {
+        if i >= self.dim {
+            return Err(OdeError::DimensionMismatch { expected: self.dim, got: i });
+        }
+        let (sigma, width) = match self.dense_s(t)? {
+            DensePoint::Start => return Ok((0.0, 0.0)),
+            DensePoint::End => (1.0, self.t_new - self.t_old),
+            DensePoint::Inside(s) => (s, t - self.t_old),
+        };
+        let (y0, y1, c2, c3) = (self.cont[0][i], self.cont[1][i], self.cont[2][i], self.cont[3][i]);
+        let b = [y0 - shift, y1 - y0 + c2, c3 - c2, -c3];
+        let e = [
+            b[0] * b[0],
+            2.0 * b[0] * b[1],
+            b[1] * b[1] + 2.0 * b[0] * b[2],
+            2.0 * (b[0] * b[3] + b[1] * b[2]),
+            b[2] * b[2] + 2.0 * b[1] * b[3],
+            2.0 * b[2] * b[3],
+            b[3] * b[3],
+        ];
+        let i1 = b[0] + sigma * (b[1] / 2.0 + sigma * (b[2] / 3.0 + sigma * (b[3] / 4.0)));
+        let mut i2 = 0.0;
+        for k in (0..7).rev() {
+            i2 = i2 * sigma + e[k] / (k as f64 + 1.0);
+        }
+        Ok((width * i1, width * i2))
     }
 
     /// Rigorous bounds `(lo, hi)` of the dense-output interpolant of component `i` over the
@@ -802,6 +860,57 @@ mod tests {
         let (lo, hi) = ode.component_bounds(1).unwrap();
         assert!(lo <= 1.0 && lo >= 1.0 - m1, "{lo}");
         assert!(hi >= 13.0 / 9.0 && hi - 13.0 / 9.0 <= m1, "{hi}");
+    }
+
+    /// `dense_integrals` equals a fine Simpson rule on `dense_component` (the interpolant is
+    /// a cubic, its square degree 6: Simpson with 2000 intervals is exact to ~1e-13), at the
+    /// step's end and inside it, for a shift away from the values.
+    #[test]
+    fn dense_integrals_match_quadrature_of_the_interpolant() {
+        let mut ode = Rosenbrock::new(2, 1e-8, 1e-10).unwrap();
+        let (mut t, mut y) = (0.3, [1.0, -0.5]);
+        let mut osc = |_t: f64, y: &[f64], d: &mut [f64]| {
+            d[0] = y[1];
+            d[1] = -4.0 * y[0] - 0.3 * y[1];
+        };
+        struct Osc<'a, F>(&'a mut F);
+        impl<F: FnMut(f64, &[f64], &mut [f64])> StiffSystem for Osc<'_, F> {
+            fn rhs(&mut self, t: f64, y: &[f64], d: &mut [f64]) {
+                (self.0)(t, y, d)
+            }
+            fn jacobian(&mut self, _t: f64, _y: &[f64], j: &mut [f64], ft: &mut [f64]) {
+                j.copy_from_slice(&[0.0, 1.0, -4.0, -0.3]);
+                ft.fill(0.0);
+            }
+        }
+        ode.step_fixed(&mut Osc(&mut osc), &mut t, &mut y, 0.7).unwrap();
+        let (t0, t1) = ode.last_step().unwrap();
+        for i in 0..2 {
+            for (end, shift) in [(t1, 0.0), (t0 + 0.41, 0.8), (t1, -0.3)] {
+                let n = 2000;
+                let h = (end - t0) / n as f64;
+                let (mut q1, mut q2) = (0.0, 0.0);
+                for k in 0..=n {
+                    let w = if k == 0 || k == n {
+                        1.0
+                    } else if k % 2 == 1 {
+                        4.0
+                    } else {
+                        2.0
+                    };
+                    let v = ode.dense_component(i, t0 + k as f64 * h).unwrap() - shift;
+                    q1 += w * v;
+                    q2 += w * v * v;
+                }
+                let (q1, q2) = (q1 * h / 3.0, q2 * h / 3.0);
+                let (i1, i2) = ode.dense_integrals(i, end, shift).unwrap();
+                assert!((i1 - q1).abs() < 1e-13, "component {i} to {end}: {i1} vs {q1}");
+                assert!((i2 - q2).abs() < 1e-13, "component {i} to {end}: {i2} vs {q2}");
+            }
+            assert_eq!(ode.dense_integrals(i, t0, 0.0).unwrap(), (0.0, 0.0));
+        }
+        assert!(ode.dense_integrals(2, t1, 0.0).is_err());
+        assert!(ode.dense_integrals(0, t1 + 1.0, 0.0).is_err());
     }
 
     #[test]

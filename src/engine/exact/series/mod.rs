@@ -4,7 +4,7 @@
 //! The junctions act on the plate only through `S(y) = sum_att f^x(y - c_i)`, kept as a
 //! truncated Taylor series about a base point ([`SeriesSum`]: O(p) per attach/rupture, a
 //! rigorous remainder bound). Between events the plate moves by the L-stable
-//! [`Rosenbrock`] method ([`Dynamic`]) or exactly as `y = V tau` ([`Kinematic`]); strong
+//! [`Rosenbrock`](crate::ode::Rosenbrock) method ([`Dynamic`]) or exactly as `y = V tau` ([`Kinematic`]); strong
 //! bonds rupture on a channel clock, weak bonds by thinning over each plate step against
 //! the linear law's envelope ([`WeakKinetics`]). The series remainder and the integrator's
 //! tolerance are the engine's approximations; both are reported in `summary.json`
@@ -16,7 +16,7 @@ mod engine;
 pub mod kinetics;
 pub mod motion;
 
-pub(crate) use crate::ode::{Rosenbrock, RosenbrockConfig, StiffSystem};
+pub(crate) use crate::ode::{RosenbrockConfig, RosenbrockN, StiffSystem};
 pub(crate) use crate::physics::SeriesSum;
 pub use engine::ExactSeries;
 pub use kinetics::{Kinetics, StrongKinetics, WeakKinetics};

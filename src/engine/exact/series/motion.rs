@@ -2,10 +2,12 @@
 //!
 //! - [`Dynamic`]: the plate equation `M y'' + eta y' + S(y) + K lag = 0` (or `eta y' = ...`
 //!   when `M = 0`) with `S` the junction force from the [`SeriesSum`], integrated by the
-//!   L-stable [`Rosenbrock`] method with the analytic Jacobian, together with the
-//!   quadratures of the segment statistics: `L = int (lag - lag0)`, `L2 = int (lag - lag0)^2`,
-//!   `B = int S`. Stable at any stiffness: the step follows the accuracy, not `M/eta` or
-//!   `sqrt(M/K)`.
+//!   L-stable Rosenbrock method ([`RosenbrockN`] on 2 variables, or 1 when `M = 0`) with the
+//!   analytic Jacobian. Stable at any stiffness: the step follows the accuracy, not `M/eta`
+//!   or `sqrt(M/K)`. The segment statistics are not integrated: `L = int (lag - lag0)` and
+//!   `L2 = int (lag - lag0)^2` are exact integrals of each step's dense-output cubic
+//!   ([`RosenbrockN::dense_integrals`]), and `B = int S` follows from the plate equation's
+//!   force balance ([`Dynamic::segment`]).
 //! - [`Kinematic`]: `y = V tau` exactly, no ODE and no integrator; the statistics come from
 //!   [`SeriesSum::integral`] (`int S dy`) and an 8-point Gauss–Legendre rule for
 //!   `int (S - S0)^2`.
@@ -16,7 +18,7 @@
 
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
-use super::{Rosenbrock, RosenbrockConfig, SeriesSum, StiffSystem};
+use super::{RosenbrockConfig, RosenbrockN, SeriesSum, StiffSystem};
 use crate::engine::exact::direct::ode_error;
 use crate::engine::exact::frame::Frame;
 use crate::engine::{Counters, EngineError};
@@ -89,36 +91,23 @@ pub trait Motion: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send 
     fn sync_counters(&self, counters: &mut Counters);
 }
 
-/// Where each quantity sits in the integrated state.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-struct Layout {
-    /// Index of `w = Xd - V` (`None` for the overdamped plate).
-    vel: Option<usize>,
-    /// `L`; `L2 = l + 1`, `B = l + 2`.
-    l: usize,
-    dim: usize,
-}
-
-impl Layout {
-    fn new(overdamped: bool) -> Layout {
-        let (vel, l) = if overdamped { (None, 1) } else { (Some(1), 2) };
-        Layout { vel, l, dim: l + 3 }
-    }
-}
+/// Largest dimension of the plate's ODE: `[u, W]`.
+const DIM: usize = 2;
 
 /// The plate equation in the lag `u = X - V t` and `w = Xd - V`, with the series force at
-/// `y = u + V t - lag_ref`, and the quadratures `L = int (u - u0)`, `L2 = int (u - u0)^2`,
-/// `B = int S`. In these variables the drive's force `K u` has no cancellation (in `y`,
-/// `K (y - V t)` loses `K eps |y|`, which at `K = 1e9` exceeds any velocity tolerance), and
-/// the tolerance on `u` is one on the friction `-K u`.
+/// `y = u + V t - lag_ref`: state `[u, W]` (`W = tau_w w`), or `[u]` when `M = 0`
+/// (`dynamic = false`). In these variables the drive's force `K u` has no cancellation (in
+/// `y`, `K (y - V t)` loses `K eps |y|`, which at `K = 1e9` exceeds any velocity tolerance),
+/// and the tolerance on `u` is one on the friction `-K u`.
 struct System<'a> {
     series: &'a SeriesSum,
     plate: Plate,
     lag_ref: f64,
-    u0: f64,
-    layout: Layout,
-    /// Velocity scale `tau_w`: the state holds `W = tau_w w`.
-    tau_w: f64,
+    dynamic: bool,
+    /// `1 / tau_w` (the state holds `W = tau_w w`), and `tau_w / M` (`M > 0`) or `1 / eta`
+    /// (`M = 0`): the right-hand side multiplies, no division.
+    inv_tau_w: f64,
+    scale: f64,
 }
 
 impl System<'_> {
@@ -131,53 +120,61 @@ impl System<'_> {
 impl StiffSystem for System<'_> {
     /// `u' = w`, `M w' = -(eta (w + V) + S + K u)` (in `W = tau_w w`); overdamped:
     /// `u' = -(S + K u)/eta - V`.
+    #[inline]
     fn rhs(&mut self, t: f64, s: &[f64], d: &mut [f64]) {
-        let u = s[0];
-        let fb = self.series.force(self.y(u, t));
-        let p = &self.plate;
-        match self.layout.vel {
-            Some(iv) => {
-                let w = s[iv] / self.tau_w;
-                d[0] = w;
-                d[iv] = self.tau_w * p.acceleration(u, w + p.v, fb);
-            }
-            None => d[0] = p.overdamped_velocity(u, fb) - p.v,
-        }
-        let du = u - self.u0;
-        let l = self.layout.l;
-        d[l] = du;
-        d[l + 1] = du * du;
-        d[l + 2] = fb;
+        let fb = self.series.force(self.y(s[0], t));
+        self.fill_rhs(fb, s, d);
     }
 
     /// `d/du` of the plate rows is `-(S' + K) / M` (or `/ eta`), `d/dw = -eta/M`; the time
     /// enters only through `S(u + V t - lag_ref)`: `d/dt = -S' V / M` (or `/ eta`).
+    #[inline]
     fn jacobian(&mut self, t: f64, s: &[f64], j: &mut [f64], dt: &mut [f64]) {
-        let (u, n) = (s[0], self.layout.dim);
-        let (_, ds) = self.series.force_and_stiffness(self.y(u, t));
+        let (_, ds) = self.series.force_and_stiffness(self.y(s[0], t));
+        self.fill_jacobian(ds, j, dt);
+    }
+
+    /// Both at once from one pass over the series (`S` and `S'` by one Horner loop).
+    #[inline]
+    fn rhs_and_jacobian(&mut self, t: f64, s: &[f64], d: &mut [f64], j: &mut [f64], dt: &mut [f64]) {
+        let (fb, ds) = self.series.force_and_stiffness(self.y(s[0], t));
+        self.fill_rhs(fb, s, d);
+        self.fill_jacobian(ds, j, dt);
+    }
+}
+
+impl System<'_> {
+    /// The right-hand side at state `s` with bond force `fb`.
+    #[inline]
+    fn fill_rhs(&self, fb: f64, s: &[f64], d: &mut [f64]) {
+        // tau_w Plate::acceleration and Plate::overdamped_velocity, with the division by `M`
+        // (or `eta`) as a multiplication by the precomputed `scale`.
+        let u = s[0];
         let p = &self.plate;
-        j.iter_mut().for_each(|v| *v = 0.0);
-        match self.layout.vel {
-            Some(iv) => {
-                let tw = self.tau_w;
-                j[iv] = 1.0 / tw;
-                j[iv * n] = -tw * (ds + p.k) / p.mass;
-                j[iv * n + iv] = -p.eta / p.mass;
-                dt[0] = 0.0;
-                dt[iv] = -tw * ds * p.v / p.mass;
-            }
-            None => {
-                j[0] = -(ds + p.k) / p.eta;
-                dt[0] = -ds * p.v / p.eta;
-            }
+        if self.dynamic {
+            let w = s[1] * self.inv_tau_w;
+            d[0] = w;
+            d[1] = -(p.eta * (w + p.v) + fb + p.k * u) * self.scale;
+        } else {
+            d[0] = -(fb + p.k * u) * self.scale - p.v;
         }
-        let l = self.layout.l;
-        j[l * n] = 1.0;
-        j[(l + 1) * n] = 2.0 * (u - self.u0);
-        j[(l + 2) * n] = ds;
-        dt[l] = 0.0;
-        dt[l + 1] = 0.0;
-        dt[l + 2] = ds * p.v;
+    }
+
+    /// The Jacobian and `df/dt` with the series' stiffness `ds = S'`.
+    #[inline]
+    fn fill_jacobian(&self, ds: f64, j: &mut [f64], dt: &mut [f64]) {
+        let (p, c) = (&self.plate, self.scale);
+        if self.dynamic {
+            j[0] = 0.0;
+            j[1] = self.inv_tau_w;
+            j[2] = -(ds + p.k) * c;
+            j[3] = -p.eta * c * self.inv_tau_w;
+            dt[0] = 0.0;
+            dt[1] = -ds * p.v * c;
+        } else {
+            j[0] = -(ds + p.k) * c;
+            dt[0] = -ds * p.v * c;
+        }
     }
 }
 
@@ -186,8 +183,9 @@ const MAX_RETAKES: u32 = 200;
 /// Retakes for the spread (weak bonds) before a wider step is accepted.
 const LOOSE_AFTER: u32 = 20;
 
-/// The dynamic plate: Rosenbrock on `[u, W, L, L2, B]` (`[u, L, L2, B]` when `M = 0`),
-/// `u = X - V t` the lag, `W = tau_w (Xd - V)`.
+/// The dynamic plate: Rosenbrock on `[u, W]` (`[u]` when `M = 0`), `u = X - V t` the lag,
+/// `W = tau_w (Xd - V)`; the piece's statistics from the dense output and the force balance
+/// ([`Dynamic::segment`]).
 ///
 /// The velocity is held in length units, scaled by its own time scale
 /// `tau_w = min(M / eta, sqrt(M / (K + kappa N)))`: an error `dw` in the velocity moves the
@@ -198,24 +196,31 @@ const LOOSE_AFTER: u32 = 20;
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Dynamic {
     plate: Plate,
-    layout: Layout,
+    /// `M > 0`: the state is `[u, W]`; else `[u]`.
+    dynamic: bool,
     tau_w: f64,
-    ode: Rosenbrock,
-    state: Vec<f64>,
+    ode: RosenbrockN<DIM>,
+    state: [f64; DIM],
     /// State before the last step (restored when a step is retaken).
-    saved: Vec<f64>,
+    saved: [f64; DIM],
     /// `lag_ref` of the frame: `y = u + V tau - lag_ref`.
     lag_ref: f64,
     /// Local time of the state (the last step's end, or the event inside it).
     tau: f64,
+    /// Start of the piece: time, lag `u0` and scaled velocity `W0`.
     tau0: f64,
     u0: f64,
+    w0: f64,
+    /// `int (u - u0)` and `int (u - u0)^2` over the piece so far.
+    l1: f64,
+    l2: f64,
 }
 
 impl Dynamic {
     /// `kappa_n = kappa N`, the junctions' largest stiffness (`d f^x / dx <= kappa`).
     pub fn new(plate: Plate, kappa_n: f64, rtol: f64, atol: f64) -> Result<Dynamic, EngineError> {
-        let layout = Layout::new(plate.mass == 0.0);
+        let dynamic = plate.mass != 0.0;
+        let dim = if dynamic { 2 } else { 1 };
         let k = plate.k + kappa_n;
         let mut tau_w = if plate.eta > 0.0 { plate.mass / plate.eta } else { f64::INFINITY };
         if k > 0.0 {
@@ -225,24 +230,33 @@ impl Dynamic {
             tau_w = 1.0;
         }
         let cfg = RosenbrockConfig { rtol, atol, ..RosenbrockConfig::default() };
-        let ode = Rosenbrock::with_config(layout.dim, cfg).map_err(|e| ode_error(e, 0.0, rtol))?;
+        let ode = RosenbrockN::with_config(dim, cfg).map_err(|e| ode_error(e, 0.0, rtol))?;
         // At rest at X = 0: u = 0, W = tau_w (0 - V).
-        let mut state = vec![0.0; layout.dim];
-        if let Some(iv) = layout.vel {
-            state[iv] = -tau_w * plate.v;
+        let mut state = [0.0; DIM];
+        if dynamic {
+            state[1] = -tau_w * plate.v;
         }
         Ok(Dynamic {
             plate,
-            layout,
+            dynamic,
             tau_w,
             ode,
             state,
-            saved: vec![0.0; layout.dim],
+            saved: state,
             lag_ref: 0.0,
             tau: 0.0,
             tau0: 0.0,
             u0: 0.0,
+            w0: state[1],
+            l1: 0.0,
+            l2: 0.0,
         })
+    }
+    /// The ODE's dimension: 2 (`[u, W]`), or 1 (`[u]`) for the overdamped plate. Derived,
+    /// not stored: a checkpoint cannot make it disagree with the state's length.
+    #[inline]
+    fn dim(&self) -> usize {
+        if self.dynamic { 2 } else { 1 }
     }
     #[inline]
     fn y_of(&self, u: f64, tau: f64) -> f64 {
@@ -262,20 +276,20 @@ impl Motion for Dynamic {
     }
     fn velocity(&self, series: &SeriesSum, _frame: &Frame, tau: f64) -> f64 {
         let p = &self.plate;
-        match self.layout.vel {
-            Some(iv) => self.state[iv] / self.tau_w + p.v,
-            None => {
-                let u = self.state[0];
-                p.overdamped_velocity(u, series.force(self.y_of(u, tau)))
-            }
+        if self.dynamic {
+            self.state[1] / self.tau_w + p.v
+        } else {
+            let u = self.state[0];
+            p.overdamped_velocity(u, series.force(self.y_of(u, tau)))
         }
     }
     fn open_piece(&mut self, tau: f64, _series: &SeriesSum, _frame: &Frame) {
-        let l = self.layout.l;
-        self.state[l..l + 3].iter_mut().for_each(|v| *v = 0.0);
         self.tau0 = tau;
         self.tau = tau;
         self.u0 = self.state[0];
+        self.w0 = self.state[1];
+        self.l1 = 0.0;
+        self.l2 = 0.0;
         self.ode.reset();
     }
     fn step(&mut self, ctx: &mut StepCtx<'_>, tau: f64, target: f64) -> Result<Step, EngineError> {
@@ -283,20 +297,22 @@ impl Motion for Dynamic {
             self.ode.reset();
         }
         let rtol = self.ode.config().rtol;
-        self.saved.copy_from_slice(&self.state);
+        self.saved = self.state;
+        let n = self.dim();
         let mut retakes = 0;
         loop {
             let mut t = tau;
+            let p = &self.plate;
             let mut sys = System {
                 series: ctx.series,
-                plate: self.plate,
+                plate: *p,
                 lag_ref: self.lag_ref,
-                u0: self.u0,
-                layout: self.layout,
-                tau_w: self.tau_w,
+                dynamic: self.dynamic,
+                inv_tau_w: 1.0 / self.tau_w,
+                scale: if self.dynamic { self.tau_w / p.mass } else { 1.0 / p.eta },
             };
             self.ode
-                .step(&mut sys, &mut t, &mut self.state, target)
+                .step(&mut sys, &mut t, &mut self.state[..n], target)
                 .map_err(|e| ode_error(e, ctx.frame.time(tau), rtol))?;
             let (ulo, uhi) = self.ode.component_bounds(0).map_err(|e| ode_error(e, ctx.frame.time(tau), rtol))?;
             // y = u + V s - lag_ref with V >= 0: bounded by the u bounds at the two ends.
@@ -317,7 +333,7 @@ impl Motion for Dynamic {
                 return Err(EngineError::StepSizeUnderflow { t: ctx.frame.time(tau), h: t - tau, rtol });
             }
             // Restore the state before the step and retake it, shorter.
-            self.state.copy_from_slice(&self.saved);
+            self.state = self.saved;
             let y0 = self.y_of(self.saved[0], tau);
             let mut factor: f64 = 0.5;
             if !valid && y0 != base {
@@ -337,28 +353,47 @@ impl Motion for Dynamic {
     }
     fn finish(&mut self, step: &Step, s: f64, _series: &SeriesSum) -> Result<(), EngineError> {
         if s < step.s1 {
-            self.ode.dense(s, &mut self.state).map_err(|e| ode_error(e, s, 0.0))?;
+            let n = self.dim();
+            self.ode.dense(s, &mut self.state[..n]).map_err(|e| ode_error(e, s, 0.0))?;
         }
+        let (i1, i2) = self.ode.dense_integrals(0, s, self.u0).map_err(|e| ode_error(e, s, 0.0))?;
+        self.l1 += i1;
+        self.l2 += i2;
         self.tau = s;
         Ok(())
     }
+    /// The piece's statistics: friction `-K u` from `L = int (u - u0)`, `L2 = int (u -
+    /// u0)^2` (exact integrals of the dense output); the bond force from the plate
+    /// equation integrated over the piece (an identity of the ODE, no quadrature of `S`):
+    /// `int S = -(M (w1 - w0) + eta (u1 - u0) + eta V h + K (u0 h + L))`, or without the
+    /// `M` term for the overdamped plate. Accuracy (docs/engines.md, "Plate between events
+    /// (tilted law)"): each term carries the integrator's error of `u1`, `w1`, `L`, so the
+    /// piece's mean has an error of about `(M / tau_w + eta) tol / h + K tol`, `tol` the
+    /// tolerance on `u` and `W`; it is large only for pieces much shorter than the plate's
+    /// time scales, and it telescopes: over consecutive pieces the `M w` and `eta u` terms
+    /// sum to their values at the ends, so a window's mean is as accurate as the friction's.
+    /// Round-off: `eps (M |w| / h + eta |Xd| + K |u|)` per piece, negligible beside that.
     fn segment(&self, tau: f64, frame: &Frame, plate: &Plate, _series: &SeriesSum) -> Option<Segment> {
         let h = tau - self.tau0;
         if h <= 0.0 {
             return None;
         }
-        let l = self.layout.l;
-        let s = &self.state;
-        let (li, l2) = (s[l], s[l + 1]);
+        let (l1, l2) = (self.l1, self.l2);
         let k = plate.k;
+        let du = self.state[0] - self.u0;
+        let mut momentum = plate.eta * (du + plate.v * h);
+        if self.dynamic {
+            momentum += plate.mass * ((self.state[1] - self.w0) / self.tau_w);
+        }
+        let int_s = -(momentum + k * (self.u0 * h + l1));
         Some(Segment {
             t0: frame.time(self.tau0),
             t1: frame.time(tau),
-            friction: -k * (self.u0 + li / h),
-            friction_m2: k * k * (l2 - li * li / h).max(0.0),
-            bond_force: s[l + 2] / h,
+            friction: -k * (self.u0 + l1 / h),
+            friction_m2: k * k * (l2 - l1 * l1 / h).max(0.0),
+            bond_force: int_s / h,
             // eta (X1 - X0) / h = eta (V + (u1 - u0) / h).
-            viscous: plate.eta * (plate.v + (s[0] - self.u0) / h),
+            viscous: plate.eta * (plate.v + du / h),
             attached: 0,
         })
     }
@@ -519,7 +554,62 @@ mod tests {
         let int_u = -(plate.v / r) * (target - (1.0 - (-r * target).exp()) / r);
         let seg = m.segment(tau, &frame, &plate, &series).unwrap();
         assert!((seg.friction - (-plate.k * int_u / target)).abs() < 1e-8, "{}", seg.friction);
-        assert_eq!(seg.bond_force, 0.0);
+        // No junctions: the force balance's bond force is `-(eta du_T + K int du) / T` in
+        // the errors `du` of the numerical plate, at most what the two checks above allow.
+        let allowed = plate.eta * 1e-9 / target + 1e-8;
+        assert!(seg.bond_force.abs() < allowed, "{} vs {allowed}", seg.bond_force);
+    }
+
+    /// The bond force of a piece from the force balance equals an independent quadrature
+    /// of `S` along the same numerical plate (8-point Gauss–Legendre on the series over each
+    /// step's dense output), where the balance's terms are large beside `int S`: an
+    /// undamped heavy plate whose drive force `K u` is ~1e3 times the bond force, and an
+    /// overdamped plate with the same junctions. The two differ only by the integrator's
+    /// global errors `E_u`, `E_W` of `u` and `W`: `|dB| <= M |dW| / tau_w + eta |du| + (K +
+    /// S'_max) T E_u`; the allowance takes `E <= steps (atol + rtol max|state|)` (local
+    /// errors added up, no amplification over less than a period).
+    #[test]
+    fn force_balance_bond_force_matches_a_quadrature() {
+        let law = Tilted { kappa: 0.1, l0: 1.0 };
+        let anchors = [-0.3, -0.1, 0.0, 0.05, 0.2];
+        for plate in
+            [Plate { mass: 1e4, eta: 0.0, k: 100.0, v: 0.5 }, Plate { mass: 0.0, eta: 300.0, k: 100.0, v: 0.5 }]
+        {
+            let (rtol, atol) = (1e-10, 1e-12);
+            let mut series = SeriesSum::new(law, rtol);
+            for c in anchors {
+                series.add(c);
+            }
+            let frame = Frame::new(plate.v);
+            let mut counters = Counters::default();
+            let kappa_n = law.kappa * anchors.len() as f64;
+            let mut m = Dynamic::new(plate, kappa_n, rtol, atol).unwrap();
+            m.open_piece(0.0, &series, &frame);
+            let (mut tau, target) = (0.0, 3.0);
+            let (mut quad, mut big, mut state_max) = (0.0, 0.0f64, 0.0f64);
+            while tau < target {
+                let step = m.step(&mut ctx(&mut series, &frame, &mut counters), tau, target).unwrap();
+                m.finish(&step, step.s1, &series).unwrap();
+                let (mid, half) = (0.5 * (step.s0 + step.s1), 0.5 * (step.s1 - step.s0));
+                for &(x, w) in &GL8 {
+                    let y = m.y_at(mid + half * x).unwrap();
+                    quad += half * w * series.force(y);
+                }
+                tau = step.s1;
+                big = big.max((plate.k * m.lag(tau, &frame)).abs());
+                state_max = state_max.max(m.state[0].abs()).max(m.state[1].abs());
+            }
+            let seg = m.segment(tau, &frame, &plate, &series).unwrap();
+            let mean = quad / target;
+            assert!(big > 500.0 * mean.abs(), "the test needs K u >> S: {big} vs {mean}");
+            let steps = m.ode.stats().accepted as f64;
+            let e = steps * (atol + rtol * state_max);
+            let tau_w = if m.dynamic { m.tau_w } else { f64::INFINITY };
+            let allowed = (plate.mass / tau_w + plate.eta) * e / target + (plate.k + kappa_n) * e;
+            let diff = (seg.bond_force - mean).abs();
+            assert!(diff <= allowed, "M = {}: {} vs {mean}, allowed {allowed}", plate.mass, seg.bond_force);
+            assert!(allowed < 1e-5 * big, "the allowance is too loose to test anything: {allowed}");
+        }
     }
 
     /// Kinematic drive past one junction: the segment's mean is `int S dt / h` (compared
