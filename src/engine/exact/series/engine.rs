@@ -360,7 +360,7 @@ impl<K: Kinetics, P: Motion> Engine for ExactSeries<K, P> {
 #[cfg(test)]
 mod tests {
     use crate::runner::run_scene;
-    use crate::testkit::fig1_with;
+    use crate::test_scenes::fig1_with;
 
     /// The run's main outputs, the friction mean and standard deviation and the mean bond
     /// and viscous forces, from the series engine's piece statistics (dense-output integrals
