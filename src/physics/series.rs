@@ -14,13 +14,16 @@
 //! (generating function of the Legendre polynomials), so `h_k = R^-(k+1) P_k(t)` by the
 //! three-term recurrence `k P_k = (2k-1) t P_(k-1) - (k-1) P_(k-2)`, O(1) per coefficient.
 //! (This is the power recurrence from `(x^2 + l0^2) h' = -x h`,
-//! `k u0 h_k = -(2k-1) x0 h_(k-1) - (k-1) h_(k-2)`, after the scaling `h_k = R^-(k+1) P_k`:
-//! the scaled solution stays in `[-1, 1]` for every `x0`, and the recurrence's other
-//! solution, `Q_k`, is of the same size on `(-1, 1)`, so forward rounding grows only
-//! linearly in `k`.) Then `(x h)_k = x0 h_k + h_(k-1) = R^-k (P_(k-1)(t) - t P_k(t))`. This
+//! `k u0 h_k = -(2k-1) x0 h_(k-1) - (k-1) h_(k-2)`, after the scaling `h_k = R^-(k+1) P_k`,
+//! which keeps every term in `[-1, 1]` whatever `x0/l0`: the unscaled form over- or
+//! underflows like `R^-k`, the scaled one is the classical forward Legendre recurrence.) It is
+//! run two steps at a time in `s = t^2` (`LEGENDRE2`), the even `P_k` and the odd `P_k/t` as
+//! two independent chains, which halves the latency of the O(p) update. Then
+//! `(x h)_k = x0 h_k + h_(k-1) = R^-k (P_(k-1)(t) - t P_k(t))`. This
 //! difference cancels near `|t| = 1` (`|x0| >> l0`), so its error is absolute,
-//! `<= 4 (k+1) eps kappa l0 R^-k` (measured `1.09 (k+1)`; unit test `direct_coefficients_roundoff` against a
-//! double-double evaluation of the power recurrence over `|x0|/l0` in `[0, 1e6]`); in the
+//! `<= 4 (k+1) eps kappa l0 R^-k` (measured `1.7 (k+1)` at worst: unit test
+//! `direct_coefficients_roundoff` against a double-double evaluation of the unscaled power
+//! recurrence, `|x0|/l0` in `[0, 1e6]`, all `k <= 31`); in the
 //! norm `sum_k |.| rho^k` this is `O(eps kappa l0)` whatever `x0`.
 //!
 //! **Coefficient bound.** For every real `x0` and `k >= 0`:
@@ -77,7 +80,7 @@
 //! `A` and the bins' moments are double-double accumulators (`TwoSum`), so adding or
 //! removing a term is exact to `O(eps^2)` and an attach/detach pair with the same anchor
 //! cancels exactly; what remains is the rounding of each increment, charged as `OP_ROUNDOFF
-//! = 4 eps kappa l0/(1-q)` per add/remove (5 times the worst measured, 0.81; unit test
+//! = 5 eps kappa l0/(1-q)` per add/remove (4.5 times the worst measured, 1.12; unit test
 //! `direct_coefficients_roundoff`) and, at a re-base, `(10 p + 19) eps kappa l0/(1-q)` per
 //! present junction for `B_i` (powers, `G_b`, products, sums), which resets the
 //! per-operation part. At evaluation we add `eps (2p + 4) n kappa l0/(1-q)` (Horner) and
@@ -86,8 +89,8 @@
 //! anchors `fl(c - dy)` and ours, `origin + e`, differ by rounding in the absolute
 //! coordinates). For `dS/dy` the coefficient allowance is multiplied by `p/rho` (a
 //! perturbation with `|dA|_rho <= D` changes the derivative by at most `p D / rho`). The
-//! per-operation part grows by `4 eps / (3/4) = 1.2e-15 kappa l0` per operation, so it reaches
-//! `(rtol/2) kappa l0 n` only after `~ 4e4 n` operations without a re-base at
+//! per-operation part grows by `5 eps / (3/4) = 1.5e-15 kappa l0` per operation, so it reaches
+//! `(rtol/2) kappa l0 n` only after `~ 3e4 n` operations without a re-base at
 //! `rtol = 1e-10`; `rebase(base())` (O(bins p^2)) resets it and the residues. (Also not in
 //! the bound: a computed offset `e` may exceed `w/2` by its rounding, `eps |c - origin|`, and
 //! an anchor given to `remove` after a `shift` may round to a different `e` than at `add`,
@@ -118,17 +121,27 @@ const Q_DIRECT: f64 = 0.125;
 const EPS: f64 = f64::EPSILON;
 /// Round-off of one junction's direct coefficients `phi_taylor` plus their double-double
 /// accumulation, in the norm `sum_k |dA_k| rho^k` and units of `eps kappa l0 / (1 - q)`:
-/// measured at most 0.81 over `|x|/l0` in `[0, 1e6]` and `k <= 31` (unit test
-/// `direct_coefficients_roundoff`), charged with a factor of about 5.
-const OP_ROUNDOFF: f64 = 4.0;
+/// measured at most 1.12 over `|x|/l0` in `[0, 1e6]` and `k <= 31` (unit test
+/// `direct_coefficients_roundoff`), charged with a factor of about 4.5.
+const OP_ROUNDOFF: f64 = 5.0;
 
-/// `(2k - 1)/k` and `(k - 1)/k`, the Legendre recurrence's factors (no division per step).
-const LEGENDRE: [[f64; 2]; PMAX] = {
-    let mut t = [[0.0; 2]; PMAX];
-    let mut k = 1;
+/// The Legendre recurrence `k P_k = (2k-1) t P_(k-1) - (k-1) P_(k-2)` taken two steps at a
+/// time in `s = t^2`: `P_(k+2) = (al_k s - be_k) P_k - ga_k P_(k-2)` (`k >= 2`), with
+/// `a_k = (2k-1)/k`, `b_k = (k-1)/k`: `al_k = a_(k+2) a_(k+1)`,
+/// `be_k = a_(k+2) b_(k+1) / a_k + b_(k+2)`, `ga_k = a_(k+2) b_(k+1) b_k / a_k` (eliminate
+/// `t P_(k+1)` and `t P_(k-1)` with the one-step rule). It holds for the even `P_k` and for
+/// the odd `Q_k = P_k / t` alike: two independent chains of half the length.
+const LEGENDRE2: [[f64; 3]; PMAX] = {
+    const fn a(k: usize) -> f64 {
+        (2.0 * k as f64 - 1.0) / k as f64
+    }
+    const fn b(k: usize) -> f64 {
+        (k as f64 - 1.0) / k as f64
+    }
+    let mut t = [[0.0; 3]; PMAX];
+    let mut k = 2;
     while k < PMAX {
-        let kf = k as f64;
-        t[k] = [(2.0 * kf - 1.0) / kf, (kf - 1.0) / kf];
+        t[k] = [a(k + 2) * a(k + 1), a(k + 2) * b(k + 1) / a(k) + b(k + 2), a(k + 2) * b(k + 1) * b(k) / a(k)];
         k += 1;
     }
     t
@@ -136,33 +149,62 @@ const LEGENDRE: [[f64; 2]; PMAX] = {
 
 /// Taylor coefficients of the nonlinear part `phi(x) = f^x(x) - kappa x = -kappa l0 x h(x)`
 /// about `x`, `out[k] = phi_k(x)` (computed directly, without the cancellation of
-/// subtracting `kappa x` from `tilted_taylor`): `phi_0 = kappa l0 t`,
+/// subtracting `kappa x` from `tilted_taylor`): `phi_0 = kappa l0 x/R`,
 /// `phi_k = -kappa l0 R^-k (P_(k-1)(t) - t P_k(t))`, `R = sqrt(x^2 + l0^2)`, `t = -x/R`,
-/// `P_k` by `k P_k = (2k-1) t P_(k-1) - (k-1) P_(k-2)`. O(1) per coefficient.
+/// `P_k` by the Legendre recurrence (`LEGENDRE2`: even `P_k` and odd `P_k / t` as two
+/// independent chains in `s = t^2 = x^2/R^2`, half the latency of one). O(1) per coefficient.
 #[inline]
 pub fn phi_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
+    let n = out.len();
+    if n == 0 {
+        return;
+    }
     let l0 = law.l0;
-    // `sqrt(x^2 + l0^2)` without the libm call where neither square over- or underflows.
+    // `1/R^2`, `1/R`, `s = x^2/R^2`, `t`; without the libm call where no square over- or
+    // underflows, and `s` without waiting for the square root.
     let big = x.abs().max(l0);
-    let r = if (1e-150..=1e150).contains(&big) { (x * x + l0 * l0).sqrt() } else { x.hypot(l0) };
-    let inv_r = 1.0 / r;
-    let t = -x * inv_r;
+    let (inv_u, inv_r, s, t) = if (1e-150..=1e150).contains(&big) {
+        let u = x * x + l0 * l0;
+        let inv_u = 1.0 / u;
+        let inv_r = u.sqrt() * inv_u;
+        (inv_u, inv_r, x * x * inv_u, -x * inv_r)
+    } else {
+        let inv_r = 1.0 / x.hypot(l0);
+        let t = -x * inv_r;
+        (inv_r * inv_r, inv_r, t * t, t)
+    };
     let a = -law.kappa * l0;
-    let Some((o0, rest)) = out.split_first_mut() else { return };
-    // (x h)_0 = x/R = -t.
-    *o0 = -a * t;
-    let (mut p_prev, mut p) = (1.0, t); // P_(k-1), P_k
-    let mut scale = a * inv_r; // -kappa l0 R^-k
-    for (i, o) in rest.iter_mut().enumerate() {
-        let k = i + 1;
-        if k >= 2 {
-            let [a1, a2] = LEGENDRE[k];
-            let next = (a1 * t) * p - a2 * p_prev;
-            p_prev = p;
-            p = next;
-            scale *= inv_r;
-        }
-        *o = scale * (p_prev - t * p);
+    out[0] = -a * t;
+    // pk[k] = P_k (even k), P_k / t (odd k), k <= n.
+    let mut pk = [0.0; PMAX + 3];
+    pk[0] = 1.0;
+    pk[1] = 1.0;
+    pk[2] = 1.5 * s - 0.5;
+    pk[3] = 2.5 * s - 1.5;
+    let (mut e0, mut e1, mut o0, mut o1) = (pk[0], pk[2], pk[1], pk[3]);
+    let mut k = 2;
+    while k + 2 < n {
+        let [al, be, ga] = LEGENDRE2[k];
+        let ne = (al * s - be) * e1 - ga * e0;
+        let [al, be, ga] = LEGENDRE2[k + 1];
+        let no = (al * s - be) * o1 - ga * o0;
+        (e0, e1, o0, o1) = (e1, ne, o1, no);
+        pk[k + 2] = ne;
+        pk[k + 3] = no;
+        k += 2;
+    }
+    // phi_k = a R^-k (P_(k-1) - t P_k): odd k: P_(k-1) - s Q_k; even k: t (Q_(k-1) - P_k).
+    let (mut so, mut se) = (a * inv_r, a * inv_u);
+    let mut k = 1;
+    while k + 1 < n {
+        out[k] = so * (pk[k - 1] - s * pk[k]);
+        out[k + 1] = se * (t * (pk[k] - pk[k + 1]));
+        so *= inv_u;
+        se *= inv_u;
+        k += 2;
+    }
+    if k < n {
+        out[k] = so * (pk[k - 1] - s * pk[k]);
     }
 }
 
@@ -230,6 +272,66 @@ struct Bin {
     ml: [f64; PMAX],
 }
 
+/// No bin in a `Dense` entry.
+const NONE: u32 = u32::MAX;
+/// Largest span of grid indices `Dense` covers (4 MB); beyond, lookups fall back to the
+/// binary search of `index`.
+const DENSE_MAX: usize = 1 << 20;
+
+/// Grid index `j` -> slot for `j` in `[j_lo, j_lo + slots.len())` (`NONE`: no bin there), a
+/// cache of `index` for an O(1) lookup on `add`. Every live bin in that range is recorded,
+/// so `NONE` in range means absent. Not part of the state: rebuilt on reading, ignored by `==`.
+#[derive(Clone, Debug, Default)]
+struct Dense {
+    j_lo: i64,
+    slots: Vec<u32>,
+}
+
+impl PartialEq for Dense {
+    fn eq(&self, _: &Dense) -> bool {
+        true
+    }
+}
+
+impl Dense {
+    /// `Some(slot or NONE)` when `j` is in range.
+    #[inline]
+    fn get(&self, j: i64) -> Option<u32> {
+        self.slots.get(j.wrapping_sub(self.j_lo) as u64 as usize).copied()
+    }
+
+    /// Records `slot` (or `NONE`) at `j`; out of range, grows to cover `j` (rebuilding from
+    /// `index`) unless the span would exceed `DENSE_MAX`.
+    fn set(&mut self, j: i64, slot: u32, index: &[(i64, u32)]) {
+        let d = j.wrapping_sub(self.j_lo) as u64 as usize;
+        if let Some(s) = self.slots.get_mut(d) {
+            *s = slot;
+            return;
+        }
+        if slot == NONE {
+            return;
+        }
+        let (lo, hi) = match (index.first(), index.last()) {
+            (Some(&(a, _)), Some(&(b, _))) => (a.min(j), b.max(j)),
+            _ => (j, j),
+        };
+        let span = hi.saturating_sub(lo).saturating_add(1);
+        let margin = (span / 2).clamp(16, 1024);
+        let (lo, len) = (lo.saturating_sub(margin), span.saturating_add(2 * margin));
+        if len as u64 > DENSE_MAX as u64 {
+            // Too sparse: keep the old range (still exact for its own bins).
+            return;
+        }
+        self.j_lo = lo;
+        self.slots.clear();
+        self.slots.resize(len as usize, NONE);
+        for &(jj, ss) in index {
+            self.slots[(jj - lo) as usize] = ss;
+        }
+        self.slots[(j - lo) as usize] = slot;
+    }
+}
+
 /// Serialized form of `SeriesSum`. `n_rb` and `resid` are absent from checkpoints written
 /// before the O(p) update: such a state is read as re-based with every present junction
 /// counted through the bins (`n_rb = n`, `resid = 0`), which is what it was.
@@ -291,11 +393,13 @@ pub struct SeriesSum {
     n_rb: u64,
     /// Removals since the last re-base charged with a residue, `<= n_rb` (module doc).
     resid: u64,
+    /// O(1) grid index -> slot cache of `index`.
+    dense: Dense,
 }
 
 impl From<Wire> for SeriesSum {
     fn from(w: Wire) -> SeriesSum {
-        SeriesSum {
+        let mut s = SeriesSum {
             law: w.law,
             p: w.p.min(PMAX - 1),
             base: w.base,
@@ -312,7 +416,14 @@ impl From<Wire> for SeriesSum {
             spread: w.spread,
             n_rb: w.n_rb.unwrap_or(w.n),
             resid: w.resid,
+            dense: Dense::default(),
+        };
+        if let Some(&(j, slot)) = s.index.last() {
+            let index = std::mem::take(&mut s.index);
+            s.dense.set(j, slot, &index);
+            s.index = index;
         }
+        s
     }
 }
 
@@ -407,6 +518,7 @@ impl SeriesSum {
             spread: 0.0,
             n_rb: 0,
             resid: 0,
+            dense: Dense::default(),
         }
     }
 
@@ -454,6 +566,15 @@ impl SeriesSum {
     /// Slot of the bin with grid index `j`, created if absent.
     #[inline]
     fn slot_of(&mut self, j: i64) -> usize {
+        match self.dense.get(j) {
+            Some(s) if s != NONE => s as usize,
+            _ => self.slot_of_slow(j),
+        }
+    }
+
+    /// `slot_of` by the binary search of `index` (a new bin, or `j` outside `dense`).
+    #[cold]
+    fn slot_of_slow(&mut self, j: i64) -> usize {
         match self.index.binary_search_by_key(&j, |&(jj, _)| jj) {
             Ok(i) => self.index[i].1 as usize,
             Err(i) => self.open_bin(i, j),
@@ -475,6 +596,7 @@ impl SeriesSum {
             }
         };
         self.index.insert(i, (j, slot as u32));
+        self.dense.set(j, slot as u32, &self.index);
         slot
     }
 
@@ -486,13 +608,15 @@ impl SeriesSum {
         let x = self.x_of(self.bins[slot].j) - e;
         let mut c = [0.0; PMAX];
         phi_taylor(&self.law, x, &mut c[..=p]);
-        // Powers `sign e^m` by two interleaved chains (half the latency of one).
-        let mut pw = [0.0; PMAX];
-        pw[0] = sign;
-        pw[1] = sign * e;
+        // Powers `sign e^m` by four chains in registers (a chain through the array would
+        // add a store-to-load delay to every step).
+        let mut pw = [0.0; PMAX + 4];
         let e2 = e * e;
-        for m in 2..=p {
-            pw[m] = pw[m - 2] * e2;
+        let e4 = e2 * e2;
+        let mut quad = [sign, sign * e, sign * e2, sign * (e * e2)];
+        for chunk in pw.chunks_exact_mut(4).take(p / 4 + 1) {
+            chunk.copy_from_slice(&quad);
+            quad = quad.map(|v| v * e4);
         }
         let bin = &mut self.bins[slot];
         dd_add_all(&mut bin.m[..=p], &mut bin.ml[..=p], &pw[..=p]);
@@ -505,7 +629,9 @@ impl SeriesSum {
     pub fn add(&mut self, c: f64) -> u32 {
         let w = self.width();
         let t = c - self.origin;
-        let j = (t / w).floor() as i64;
+        // floor(t / w) without the libm call (baseline x86-64 has no rounding instruction).
+        let v = t / w;
+        let j = (v as i64).saturating_sub(i64::from((v as i64 as f64) > v));
         let slot = self.slot_of(j);
         let e = t - (j as f64 + 0.5) * w;
         self.n += 1;
@@ -557,6 +683,7 @@ impl SeriesSum {
         if let Ok(i) = self.index.binary_search_by_key(&j, |&(jj, _)| jj) {
             self.index.remove(i);
         }
+        self.dense.set(j, NONE, &self.index);
         self.free.push(slot as u32);
     }
 
@@ -854,5 +981,40 @@ mod tests {
         assert_eq!((s.n_rb, s.resid, s.len()), (10, 10, 5));
         s.rebase(0.0);
         assert_eq!((s.n_rb, s.resid), (5, 0));
+    }
+
+    /// The O(1) grid-index cache agrees with the sorted index, also when the anchors span
+    /// more than `DENSE_MAX` bins (lookups outside its range fall back to the binary search),
+    /// and `add` puts each anchor in bin `floor((c - origin) / w)`.
+    #[test]
+    fn dense_cache_matches_index() {
+        let law = Tilted { kappa: 1.0, l0: 1.0 };
+        let mut s = SeriesSum::new(law, 1e-6);
+        let mut live: Vec<(f64, u32)> = Vec::new();
+        let mut state = 12345u64;
+        for step in 0..4000 {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+            let scale = if step % 500 < 10 { 1e7 } else { 30.0 };
+            if live.is_empty() || u < 0.55 {
+                let c = scale * (2.0 * u - 1.0) - 0.125;
+                let h = s.add(c);
+                assert_eq!(s.bins[h as usize].j, ((c - s.origin) / s.width()).floor() as i64, "c = {c}");
+                live.push((c, h));
+            } else {
+                let (c, h) = live.swap_remove(((state >> 20) as usize) % live.len());
+                s.remove(c, h);
+            }
+            for &(j, slot) in &s.index {
+                if let Some(d) = s.dense.get(j) {
+                    assert_eq!(d, slot, "j = {j}");
+                }
+            }
+            let recorded = s.dense.slots.iter().filter(|&&d| d != NONE).count();
+            let in_range = s.index.iter().filter(|&&(j, _)| s.dense.get(j).is_some()).count();
+            assert_eq!(recorded, in_range);
+            assert!(s.dense.slots.len() <= DENSE_MAX);
+        }
+        assert!(s.dense.slots.len() > 100);
     }
 }
