@@ -45,6 +45,7 @@
 //!   degree `j <= p`: `B_i(d) = sum_k d^k sum_(m<=p-k) G_b[m][k] e_i^m`,
 //!   `G_b[m][k] = (-1)^m C(m+k, k) phi_(m+k)(x_b)`. Per junction `|d - e_i| <= rho + w/2 =
 //!   q l0`, so its error is `<= kappa l0 T_b`, `T_b = q^(p+1)/(1-q)`, `q = 1/4`.
+//!
 //! The bins hold the count and the raw moments `M_(b,m) = sum_(i in b) e_i^m` (`m <= p`),
 //! so `sum_(i in b) B_i = sum_k d^k sum_m G_b[m][k] M_(b,m)` costs O(p^2) per bin, not per
 //! junction.
@@ -61,7 +62,8 @@
 //! `resid = min(removals since the re-base, n_rb)` (a removal cannot tell whether its
 //! junction was present then, so each is charged until the cap). A bin whose count reaches 0
 //! is reset to exactly zero and its slab slot freed; the handle of a junction is its bin's
-//! slot. `shift` moves `origin` and `y0` only (bins, `x_b`, `A`, `X0` are relative
+//! slot, and `add` finds its bin in O(1) through a grid-index table (`Dense`, a cache of the
+//! sorted bin index at most `2^20` bins wide; outside it, a binary search). `shift` moves `origin` and `y0` only (bins, `x_b`, `A`, `X0` are relative
 //! quantities): O(1).
 //!
 //! **Truncation bound.** `|S - S_true| <= kappa l0 (n T_b + resid (T_b + T_d))` (`T_d <=
