@@ -471,6 +471,31 @@ fn serde_round_trip_is_exact() {
     assert_eq!(s.force_and_stiffness(5.45).0.to_bits(), t.force_and_stiffness(5.45).0.to_bits());
 }
 
+/// A checkpoint written before the O(p) update has no `n_rb` / `resid`: it is read as
+/// re-based with every present junction counted through the bins (`n_rb = n`), so removing
+/// them is charged with the residue, and it continues like a state re-based there.
+#[test]
+fn old_checkpoint_without_residue_fields() {
+    let law = Tilted { kappa: 0.2, l0: 1.3 };
+    let mut s = SeriesSum::new(law, 1e-10);
+    let hs: Vec<(f64, u32)> = (0..300).map(|i| ((i as f64 * 0.31).sin() * 5.0, 0)).collect();
+    let hs: Vec<(f64, u32)> = hs.into_iter().map(|(c, _)| (c, s.add(c))).collect();
+    s.rebase(0.2);
+    let mut v: serde_json::Value = serde_json::to_value(&s).unwrap();
+    let obj = v.as_object_mut().unwrap();
+    assert!(obj.remove("n_rb").is_some() && obj.remove("resid").is_some());
+    let mut old: SeriesSum = serde_json::from_value(v).unwrap();
+    assert_eq!(old, s);
+    let before = old.error_bound();
+    for &(c, h) in &hs[..100] {
+        old.remove(c, h);
+        s.remove(c, h);
+    }
+    assert_eq!(old, s);
+    // Charged: the truncation part stays at 300 T_b (uncharged it would drop to 2/3).
+    assert!(old.error_bound() > 0.9 * before, "the removals are charged");
+}
+
 /// `shift` is a change of frame: the force at the same physical point is unchanged.
 #[test]
 fn shift_is_a_change_of_frame() {
