@@ -250,8 +250,8 @@ fn taylor_matches_power_recurrence() {
 /// of one bin centred on the base (`x_b = 0`, where `|phi_j| = kappa l0^(1-j) |C(-1/2, i)|`
 /// for odd `j = 2i + 1` and 0 for even `j`), the plate at the far end of the radius
 /// (`|d - e| = q l0`). The error is then about the first dropped odd term,
-/// `|C(-1/2, i)| q^j` against the bound's `q^(p+1)/(1-q)`: ratios 0.27, 0.056, 0.046 for
-/// `p = 4, 5, 9`. Asserted: below the bound and above 1/100 of it (the bound is not vacuous).
+/// `|C(-1/2, i)| q^j` against the bound's `q^(p+1)/(1-q)`: ratios 0.27, 0.22, 0.044 for
+/// `p = 4, 6, 9`. Asserted: below the bound and above 1/100 of it (the bound is not vacuous).
 #[test]
 fn bound_is_nearly_attained() {
     let law = Tilted { kappa: 1.0, l0: 1.0 };
