@@ -40,7 +40,7 @@ fn series(c: &mut Criterion) {
             s.remove(c, h);
         })
     });
-    // Anchors in random bins (each add searches the 100 bins unpredictably).
+    // Anchors in random bins (each add looks its bin up in the grid-index table).
     g.bench_function("add+remove/random-bin", |bn| {
         let mut i = 0usize;
         bn.iter(|| {

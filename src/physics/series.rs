@@ -1,6 +1,6 @@
 //! The tilted law's total bond force `S(y) = sum_i f^x(y - c_i)` (plate at `y`, junction `i`
 //! anchored at `c_i`, extension `x_i = y - c_i`) as a truncated series about a base point
-//! `y0`, updated in O(p^2) flops per attached or detached junction and re-based in
+//! `y0`, updated in O(p) flops per attached or detached junction and re-based in
 //! O(bins p^2), independent of the number `N` of junctions (issue 10). Measured costs:
 //! docs/performance.md, "Tilted law: the bond-force series".
 //!
@@ -9,13 +9,22 @@
 //! `kappa (X0 + n d)`, `d = y - y0`, `X0 = sum (y0 - c_i)` (a double-double running sum).
 //! Only `phi` (bounded, analytic, singular at `x = +-i l0`) goes into the series.
 //!
-//! **Taylor coefficients** (`tilted_taylor`). With `R = sqrt(x0^2 + l0^2)`, `t = -x0/R`,
+//! **Taylor coefficients** (`phi_taylor`). With `R = sqrt(x0^2 + l0^2)`, `t = -x0/R`,
 //! `h(x0 + d) = R^-1 (1 - 2 t (d/R) + (d/R)^2)^(-1/2) = sum_k R^-(k+1) P_k(t) d^k`
 //! (generating function of the Legendre polynomials), so `h_k = R^-(k+1) P_k(t)` by the
-//! stable three-term recurrence `k P_k = (2k-1) t P_(k-1) - (k-1) P_(k-2)`, O(1) per
-//! coefficient. (This is the brief's power recurrence for `u^(-1/2)`,
-//! `k u0 w_k = (alpha-k+1) u1 w_(k-1) + (2 alpha-k+2) u2 w_(k-2)`, after the scaling
-//! `w_k = R^-(k+1) P_k`.) Then `(x h)_k = x0 h_k + h_(k-1) = R^-k (P_(k-1)(t) - t P_k(t))`.
+//! three-term recurrence `k P_k = (2k-1) t P_(k-1) - (k-1) P_(k-2)`, O(1) per coefficient.
+//! (This is the power recurrence from `(x^2 + l0^2) h' = -x h`,
+//! `k u0 h_k = -(2k-1) x0 h_(k-1) - (k-1) h_(k-2)`, after the scaling `h_k = R^-(k+1) P_k`,
+//! which keeps every term in `[-1, 1]` whatever `x0/l0`: the unscaled form over- or
+//! underflows like `R^-k`, the scaled one is the classical forward Legendre recurrence.) It is
+//! run two steps at a time in `s = t^2` (`LEGENDRE2`), the even `P_k` and the odd `P_k/t` as
+//! two independent chains, which halves the latency of the O(p) update. Then
+//! `(x h)_k = x0 h_k + h_(k-1) = R^-k (P_(k-1)(t) - t P_k(t))`. This
+//! difference cancels near `|t| = 1` (`|x0| >> l0`), so its error is absolute,
+//! `<= 4 (k+1) eps kappa l0 R^-k` (measured `1.7 (k+1)` at worst: unit test
+//! `direct_coefficients_roundoff` against a double-double evaluation of the unscaled power
+//! recurrence, `|x0|/l0` in `[0, 1e6]`, all `k <= 31`); in the
+//! norm `sum_k |.| rho^k` this is `O(eps kappa l0)` whatever `x0`.
 //!
 //! **Coefficient bound.** For every real `x0` and `k >= 0`:
 //! `|phi_k(x0)| <= kappa l0 (l0/R)^(k+1) l0^-k <= kappa l0^(1-k)`.
@@ -27,59 +36,79 @@
 //! The bound is uniform in `x0`: every junction's expansion converges with ratio `r/l0`
 //! wherever it is centred.
 //!
-//! **Bins.** Anchors are grouped on a fixed grid of width `w` in the anchor coordinate
-//! (bin `j` centred at `c_b = origin + (j + 1/2) w`); bin `b` keeps the count and the raw
-//! moments `M_(b,m) = sum_(i in b) e_i^m`, `e_i = c_i - c_b`, `|e_i| <= w/2`, `m = 0..=p`.
-//! With `x_b = y0 - c_b` and `y = y0 + d`, `|d| <= rho`:
-//! `phi(y - c_i) = sum_j phi_j(x_b) (d - e_i)^j`, and truncating at total degree `j <= p`,
-//! `A_k = sum_b sum_(m <= p-k) G_b[m][k] M_(b,m)`, `G_b[m][k] = (-1)^m C(m+k, k) phi_(m+k)(x_b)`,
-//! `Phi(y) ~ sum_(k<=p) A_k d^k`. A re-base recomputes `G_b` and `A` in O(bins p^2); an add or
-//! remove changes `M_b` by `+-e^m` and `A_k` by `+-sum_m G_b[m][k] e^m` (O(p^2) flops, no
-//! allocation), i.e. exactly the junction's own term of the re-base formula, so the series
-//! always equals the sum of the present junctions' truncated expansions (no drift from
-//! mixing expansions) and a detach cancels its attach up to round-off. A bin whose count
-//! reaches 0 is reset to exactly zero and its slab slot freed; the handle of a junction is
-//! its bin's slot. `shift` moves `origin` and `y0` only (bins, `x_b`, `G_b`, `A`, `X0` are
-//! relative quantities): O(1).
+//! **Two expansions of one junction.** With `|d| <= rho`:
+//! - its own (direct) expansion `D_i(d) = sum_(k<=p) phi_k(y0 - c_i) d^k`, truncation error
+//!   `<= kappa l0 T_d`, `T_d = sum_(k>p) (rho/l0)^k = q_d^(p+1)/(1-q_d)`, `q_d = 1/8`;
+//! - the bins' double expansion `B_i(d)`: anchors are grouped on a fixed grid of width `w`
+//!   (bin `j` centred at `c_b = origin + (j + 1/2) w`, `e_i = c_i - c_b`, `|e_i| <= w/2`,
+//!   `x_b = y0 - c_b`), `phi(y - c_i) = sum_j phi_j(x_b) (d - e_i)^j` truncated at total
+//!   degree `j <= p`: `B_i(d) = sum_k d^k sum_(m<=p-k) G_b[m][k] e_i^m`,
+//!   `G_b[m][k] = (-1)^m C(m+k, k) phi_(m+k)(x_b)`. Per junction `|d - e_i| <= rho + w/2 =
+//!   q l0`, so its error is `<= kappa l0 T_b`, `T_b = q^(p+1)/(1-q)`, `q = 1/4`.
 //!
-//! **Truncation bound.** Per junction `|d - e_i| <= rho + w/2 = q l0`, so with the coefficient
-//! bound the dropped terms `j > p` are at most `kappa l0 sum_(j>p) q^j = kappa l0 q^(p+1)/(1-q)`
-//! for `S` and `kappa sum_(j>p) j q^(j-1) = kappa ((p+1) q^p/(1-q) + q^(p+1)/(1-q)^2)` for
-//! `dS/dy`; `error_bound` is `n` times these plus the round-off allowance. No near field is
-//! needed because `q < 1` for every bin, near or far.
+//! The bins hold the count and the raw moments `M_(b,m) = sum_(i in b) e_i^m` (`m <= p`),
+//! so `sum_(i in b) B_i = sum_k d^k sum_m G_b[m][k] M_(b,m)` costs O(p^2) per bin, not per
+//! junction.
+//!
+//! **Updates.** `add` puts `+e^m` into its bin's moments and `+D_i` into the series `A`;
+//! `remove` puts `-e^m` and `-D_i` (both O(p): the recurrence above, the powers, two
+//! double-double accumulations). `rebase(y0)` recomputes `A = sum_b sum_i B_i` from the
+//! moments (O(bins p^2)) and records `n_rb = n`. So `A` is the sum over present junctions of
+//! `B_i` (present at the last re-base) or `D_i` (added since), minus, for every junction
+//! present at the last re-base and removed since, its `D_i`, leaving the residue
+//! `B_i - D_i`, of size `<= kappa l0 (T_b + T_d)` on the disc. (This residue is why the
+//! earlier version added each junction's `B_i` in O(p^2); with `D_i` an attach/detach pair
+//! between re-bases still cancels exactly.) The removals carrying a residue number at most
+//! `resid = min(removals since the re-base, n_rb)` (a removal cannot tell whether its
+//! junction was present then, so each is charged until the cap). A bin whose count reaches 0
+//! is reset to exactly zero and its slab slot freed; the handle of a junction is its bin's
+//! slot, and `add` finds its bin in O(1) through a grid-index table (`Dense`, a cache of the
+//! sorted bin index at most `2^20` bins wide; outside it, a binary search). `shift` moves `origin` and `y0` only (bins, `x_b`, `A`, `X0` are relative
+//! quantities): O(1).
+//!
+//! **Truncation bound.** `|S - S_true| <= kappa l0 (n T_b + resid (T_b + T_d))` (`T_d <=
+//! T_b`), and for `dS/dy` the same with `T'_q = kappa sum_(j>p) j q^(j-1) = kappa ((p+1)
+//! q^p/(1-q) + q^(p+1)/(1-q)^2)`; `error_bound` is this plus the round-off allowance. No near
+//! field is needed because `q < 1` for every bin, near or far.
 //!
 //! **Choice of `w`, `rho`, `p`.** `w/2 = rho = l0/8`, so `q = 1/4`; `p` is the smallest order
-//! with `q^(p+1)/(1-q) <= rtol/2` (capped at `PMAX - 1 = 31`, i.e. `rtol >= ~2e-19`): the
-//! truncation part of `error_bound()` is then `<= (rtol/2) kappa l0 len`, leaving the other
-//! half for round-off. `rtol = 1e-10` gives `p = 17`.
+//! with `T_b + T_d <= rtol/4` (capped at `PMAX - 1 = 31`, i.e. `rtol >= ~5e-19`): the
+//! truncation part of `error_bound()` is then `<= (rtol/4) kappa l0 (n + resid)`, at most
+//! `(rtol/2) kappa l0 n` while `resid <= n`, leaving the other half for round-off.
+//! `rtol = 1e-10` gives `p = 17`, as the O(p^2) version (criterion `T_b <= rtol/2`) did.
 //!
 //! **Round-off allowance** (first order in `eps`, not a proof). Norm: `|A|_rho =
 //! sum_k |A_k| rho^k`; every junction's term contributes at most `kappa l0 /(1-q)` to it.
 //! `A` and the bins' moments are double-double accumulators (`TwoSum`), so adding or
 //! removing a term is exact to `O(eps^2)` and an attach/detach pair with the same anchor
-//! cancels exactly; what remains is the rounding of each increment (powers `e^m`, `G_b`,
-//! products, sums), charged as `9 (p+2) eps kappa l0/(1-q)` per add/remove and, at a
-//! re-base, `(10 p + 19) eps kappa l0/(1-q)` per present junction (which resets the
-//! per-operation part). At evaluation we add `eps (2p + 4) n kappa l0/(1-q)` (Horner) and
+//! cancels exactly; what remains is the rounding of each increment, charged as `OP_ROUNDOFF
+//! = 5 eps kappa l0/(1-q)` per add/remove (4.5 times the worst measured, 1.12; unit test
+//! `direct_coefficients_roundoff`) and, at a re-base, `(10 p + 19) eps kappa l0/(1-q)` per
+//! present junction for `B_i` (powers, `G_b`, products, sums), which resets the
+//! per-operation part. At evaluation we add `eps (2p + 4) n kappa l0/(1-q)` (Horner) and
 //! `4 eps kappa (|X0| + n rho + sum_b n_b (|x_b| + w/2) + n (|y0 - origin| + |y0| + |origin|))`
 //! (the linear part, and the anchors' rounding against the grid: the caller's shifted
 //! anchors `fl(c - dy)` and ours, `origin + e`, differ by rounding in the absolute
 //! coordinates). For `dS/dy` the coefficient allowance is multiplied by `p/rho` (a
 //! perturbation with `|dA|_rho <= D` changes the derivative by at most `p D / rho`). The
-//! per-operation part grows by `171 eps / (3/4) = 5e-14 kappa l0` per operation at `p = 17`,
-//! so it reaches `(rtol/2) kappa l0 n` only after `~ 1e3 n` operations without a re-base at
-//! `rtol = 1e-10`; `rebase(base())` (O(bins p^2)) resets it. (Also not in the truncation
-//! bound: a computed offset `e` may exceed `w/2` by its rounding, `eps |c - origin|`; the
-//! engine's periodic `shift` keeps `|c - origin|` small.)
+//! per-operation part grows by `5 eps / (3/4) = 1.5e-15 kappa l0` per operation, so it reaches
+//! `(rtol/2) kappa l0 n` only after `~ 3e4 n` operations without a re-base at
+//! `rtol = 1e-10`; `rebase(base())` (O(bins p^2)) resets it and the residues. (Also not in
+//! the bound: a computed offset `e` may exceed `w/2` by its rounding, `eps |c - origin|`, and
+//! an anchor given to `remove` after a `shift` may round to a different `e` than at `add`,
+//! leaving a residue of order `kappa eps |c - origin|` in the moments and in `A` until its
+//! bin empties; the engine's periodic `shift` keeps `|c - origin|` small.)
 //!
 //! **Use (engine).** Keep `|y - base()| <= radius()` (call `rebase(y)` when the plate leaves
 //! it); give `remove` the anchor exactly as given to `add` (or as moved by the caller's own
 //! `shift` arithmetic) with the handle `add` returned; `integral(y0, y1)` is within
 //! `|y1 - y0| error_bound()` plus its own evaluation rounding (a few `eps |result|`); compare
 //! `error_bound()` with `rtol kappa l0 max(len, 1)` now and then and call `rebase(base())`
-//! when the per-operation allowance has used up its half (the stick phase of a long run,
-//! where the plate stays within the radius for many events). The state serialises
-//! (checkpoints) without the per-bin matrices `G_b`, which are recomputed bit-identically.
+//! when it has used up its half (the stick phase of a long run, where the plate stays within
+//! the radius for many events: the residues then grow to at most `n_rb (T_b + T_d)`, and the
+//! per-operation round-off without limit). The state serialises (checkpoints) with the
+//! residue count; the per-bin matrices `G_b` are not stored at all (a re-base forms them
+//! bin by bin).
 
 use serde::{Deserialize, Serialize};
 
@@ -89,15 +118,32 @@ use super::force::Tilted;
 pub const PMAX: usize = 32;
 /// `q = (rho + w/2) / l0`, the convergence ratio of every bin's double expansion.
 const Q: f64 = 0.25;
+/// `rho / l0`, the convergence ratio of a junction's own expansion about the base.
+const Q_DIRECT: f64 = 0.125;
 const EPS: f64 = f64::EPSILON;
+/// Round-off of one junction's direct coefficients `phi_taylor` plus their double-double
+/// accumulation, in the norm `sum_k |dA_k| rho^k` and units of `eps kappa l0 / (1 - q)`:
+/// measured at most 1.12 over `|x|/l0` in `[0, 1e6]` and `k <= 31` (unit test
+/// `direct_coefficients_roundoff`), charged with a factor of about 4.5.
+const OP_ROUNDOFF: f64 = 5.0;
 
-/// `(2k - 1)/k` and `(k - 1)/k`, the Legendre recurrence's factors (no division per step).
-const LEGENDRE: [[f64; 2]; PMAX] = {
-    let mut t = [[0.0; 2]; PMAX];
-    let mut k = 1;
+/// The Legendre recurrence `k P_k = (2k-1) t P_(k-1) - (k-1) P_(k-2)` taken two steps at a
+/// time in `s = t^2`: `P_(k+2) = (al_k s - be_k) P_k - ga_k P_(k-2)` (`k >= 2`), with
+/// `a_k = (2k-1)/k`, `b_k = (k-1)/k`: `al_k = a_(k+2) a_(k+1)`,
+/// `be_k = a_(k+2) b_(k+1) / a_k + b_(k+2)`, `ga_k = a_(k+2) b_(k+1) b_k / a_k` (eliminate
+/// `t P_(k+1)` and `t P_(k-1)` with the one-step rule). It holds for the even `P_k` and for
+/// the odd `Q_k = P_k / t` alike: two independent chains of half the length.
+const LEGENDRE2: [[f64; 3]; PMAX] = {
+    const fn a(k: usize) -> f64 {
+        (2.0 * k as f64 - 1.0) / k as f64
+    }
+    const fn b(k: usize) -> f64 {
+        (k as f64 - 1.0) / k as f64
+    }
+    let mut t = [[0.0; 3]; PMAX];
+    let mut k = 2;
     while k < PMAX {
-        let kf = k as f64;
-        t[k] = [(2.0 * kf - 1.0) / kf, (kf - 1.0) / kf];
+        t[k] = [a(k + 2) * a(k + 1), a(k + 2) * b(k + 1) / a(k) + b(k + 2), a(k + 2) * b(k + 1) * b(k) / a(k)];
         k += 1;
     }
     t
@@ -105,29 +151,62 @@ const LEGENDRE: [[f64; 2]; PMAX] = {
 
 /// Taylor coefficients of the nonlinear part `phi(x) = f^x(x) - kappa x = -kappa l0 x h(x)`
 /// about `x`, `out[k] = phi_k(x)` (computed directly, without the cancellation of
-/// subtracting `kappa x` from `tilted_taylor`).
+/// subtracting `kappa x` from `tilted_taylor`): `phi_0 = kappa l0 x/R`,
+/// `phi_k = -kappa l0 R^-k (P_(k-1)(t) - t P_k(t))`, `R = sqrt(x^2 + l0^2)`, `t = -x/R`,
+/// `P_k` by the Legendre recurrence (`LEGENDRE2`: even `P_k` and odd `P_k / t` as two
+/// independent chains in `s = t^2 = x^2/R^2`, half the latency of one). O(1) per coefficient.
+#[inline]
 pub fn phi_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
-    let r = x.hypot(law.l0);
-    let t = -x / r;
-    let inv_r = 1.0 / r;
-    let a = -law.kappa * law.l0;
-    let (mut p_prev, mut p) = (1.0, t); // P_(k-1), P_k
-    let mut scale = 1.0; // R^-k
-    for (k, o) in out.iter_mut().enumerate() {
-        // (x h)_k = R^-k (P_(k-1) - t P_k); (x h)_0 = x/R = -t.
-        let xh = if k == 0 {
-            -t
-        } else {
-            if k >= 2 {
-                let [a1, a2] = LEGENDRE[k];
-                let next = a1 * t * p - a2 * p_prev;
-                p_prev = p;
-                p = next;
-            }
-            scale *= inv_r;
-            scale * (p_prev - t * p)
-        };
-        *o = a * xh;
+    let n = out.len();
+    if n == 0 {
+        return;
+    }
+    let l0 = law.l0;
+    // `1/R^2`, `1/R`, `s = x^2/R^2`, `t`; without the libm call where no square over- or
+    // underflows, and `s` without waiting for the square root.
+    let big = x.abs().max(l0);
+    let (inv_u, inv_r, s, t) = if (1e-150..=1e150).contains(&big) {
+        let u = x * x + l0 * l0;
+        let inv_u = 1.0 / u;
+        let inv_r = u.sqrt() * inv_u;
+        (inv_u, inv_r, x * x * inv_u, -x * inv_r)
+    } else {
+        let inv_r = 1.0 / x.hypot(l0);
+        let t = -x * inv_r;
+        (inv_r * inv_r, inv_r, t * t, t)
+    };
+    let a = -law.kappa * l0;
+    out[0] = -a * t;
+    // pk[k] = P_k (even k), P_k / t (odd k), k <= n.
+    let mut pk = [0.0; PMAX + 3];
+    pk[0] = 1.0;
+    pk[1] = 1.0;
+    pk[2] = 1.5 * s - 0.5;
+    pk[3] = 2.5 * s - 1.5;
+    let (mut e0, mut e1, mut o0, mut o1) = (pk[0], pk[2], pk[1], pk[3]);
+    let mut k = 2;
+    while k + 2 < n {
+        let [al, be, ga] = LEGENDRE2[k];
+        let ne = (al * s - be) * e1 - ga * e0;
+        let [al, be, ga] = LEGENDRE2[k + 1];
+        let no = (al * s - be) * o1 - ga * o0;
+        (e0, e1, o0, o1) = (e1, ne, o1, no);
+        pk[k + 2] = ne;
+        pk[k + 3] = no;
+        k += 2;
+    }
+    // phi_k = a R^-k (P_(k-1) - t P_k): odd k: P_(k-1) - s Q_k; even k: t (Q_(k-1) - P_k).
+    let (mut so, mut se) = (a * inv_r, a * inv_u);
+    let mut k = 1;
+    while k + 1 < n {
+        out[k] = so * (pk[k - 1] - s * pk[k]);
+        out[k + 1] = se * (t * (pk[k] - pk[k + 1]));
+        so *= inv_u;
+        se *= inv_u;
+        k += 2;
+    }
+    if k < n {
+        out[k] = so * (pk[k - 1] - s * pk[k]);
     }
 }
 
@@ -172,6 +251,16 @@ fn dd_add_all(hi: &mut [f64], lo: &mut [f64], x: &[f64]) {
     }
 }
 
+/// `(hi, lo) += sign x` elementwise, double-double (`sign = +-1`, exact).
+#[inline]
+fn dd_add_all_signed(hi: &mut [f64], lo: &mut [f64], x: &[f64], sign: f64) {
+    for ((h, l), &v) in hi.iter_mut().zip(lo.iter_mut()).zip(x) {
+        let (s, e) = two_sum(*h, sign * v);
+        *h = s;
+        *l += e;
+    }
+}
+
 /// One bin of anchors: grid index, count, raw moments about the centre.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 struct Bin {
@@ -185,8 +274,69 @@ struct Bin {
     ml: [f64; PMAX],
 }
 
-/// Serialized form of `SeriesSum`: everything but the per-bin matrices `G_b`, which are a
-/// deterministic function of `(law, p, w, base_off, j)` and are recomputed on reading.
+/// No bin in a `Dense` entry.
+const NONE: u32 = u32::MAX;
+/// Largest span of grid indices `Dense` covers (4 MB); beyond, lookups fall back to the
+/// binary search of `index`.
+const DENSE_MAX: usize = 1 << 20;
+
+/// Grid index `j` -> slot for `j` in `[j_lo, j_lo + slots.len())` (`NONE`: no bin there), a
+/// cache of `index` for an O(1) lookup on `add`. Every live bin in that range is recorded,
+/// so `NONE` in range means absent. Not part of the state: rebuilt on reading, ignored by `==`.
+#[derive(Clone, Debug, Default)]
+struct Dense {
+    j_lo: i64,
+    slots: Vec<u32>,
+}
+
+impl PartialEq for Dense {
+    fn eq(&self, _: &Dense) -> bool {
+        true
+    }
+}
+
+impl Dense {
+    /// `Some(slot or NONE)` when `j` is in range.
+    #[inline]
+    fn get(&self, j: i64) -> Option<u32> {
+        self.slots.get(j.wrapping_sub(self.j_lo) as u64 as usize).copied()
+    }
+
+    /// Records `slot` (or `NONE`) at `j`; out of range, grows to cover `j` (rebuilding from
+    /// `index`) unless the span would exceed `DENSE_MAX`.
+    fn set(&mut self, j: i64, slot: u32, index: &[(i64, u32)]) {
+        let d = j.wrapping_sub(self.j_lo) as u64 as usize;
+        if let Some(s) = self.slots.get_mut(d) {
+            *s = slot;
+            return;
+        }
+        if slot == NONE {
+            return;
+        }
+        let (lo, hi) = match (index.first(), index.last()) {
+            (Some(&(a, _)), Some(&(b, _))) => (a.min(j), b.max(j)),
+            _ => (j, j),
+        };
+        let span = hi.saturating_sub(lo).saturating_add(1);
+        let margin = (span / 2).clamp(16, 1024);
+        let (lo, len) = (lo.saturating_sub(margin), span.saturating_add(2 * margin));
+        if len as u64 > DENSE_MAX as u64 {
+            // Too sparse: keep the old range (still exact for its own bins).
+            return;
+        }
+        self.j_lo = lo;
+        self.slots.clear();
+        self.slots.resize(len as usize, NONE);
+        for &(jj, ss) in index {
+            self.slots[(jj - lo) as usize] = ss;
+        }
+        self.slots[(j - lo) as usize] = slot;
+    }
+}
+
+/// Serialized form of `SeriesSum`. `n_rb` and `resid` are absent from checkpoints written
+/// before the O(p) update: such a state is read as re-based with every present junction
+/// counted through the bins (`n_rb = n`, `resid = 0`), which is what it was.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct Wire {
     law: Tilted,
@@ -203,6 +353,10 @@ struct Wire {
     index: Vec<(i64, u32)>,
     roff: f64,
     spread: f64,
+    #[serde(default)]
+    n_rb: Option<u64>,
+    #[serde(default)]
+    resid: u64,
 }
 
 /// The bond force `S(y) = sum_i f^x(y - c_i)` of a set of junctions under the tilted law,
@@ -232,13 +386,17 @@ pub struct SeriesSum {
     free: Vec<u32>,
     /// `(j, slot)` of the live bins, sorted by `j`.
     index: Vec<(i64, u32)>,
-    /// Per slot, `G_b[m][k]` for `m + k <= p`, rows `m` of length `p + 1 - m`, concatenated.
-    g: Vec<f64>,
     /// Accumulated coefficient round-off allowance since the last re-base, in units of
     /// `eps kappa l0 / (1 - q)`.
     roff: f64,
     /// `sum_b n_b (|x_b| + w/2)`, an upper bound on `sum |y0 - c_i|` (round-off allowance).
     spread: f64,
+    /// Junctions present at the last re-base, i.e. counted in `A` through the bins.
+    n_rb: u64,
+    /// Removals since the last re-base charged with a residue, `<= n_rb` (module doc).
+    resid: u64,
+    /// O(1) grid index -> slot cache of `index`.
+    dense: Dense,
 }
 
 impl From<Wire> for SeriesSum {
@@ -256,15 +414,16 @@ impl From<Wire> for SeriesSum {
             bins: w.bins,
             free: w.free,
             index: w.index,
-            g: Vec::new(),
             roff: w.roff,
             spread: w.spread,
+            n_rb: w.n_rb.unwrap_or(w.n),
+            resid: w.resid,
+            dense: Dense::default(),
         };
-        s.g = vec![0.0; s.bins.len() * s.tri()];
-        for slot in 0..s.bins.len() {
-            if s.bins[slot].count > 0 {
-                s.fill_g(slot);
-            }
+        if let Some(&(j, slot)) = s.index.last() {
+            let index = std::mem::take(&mut s.index);
+            s.dense.set(j, slot, &index);
+            s.index = index;
         }
         s
     }
@@ -287,29 +446,62 @@ impl From<SeriesSum> for Wire {
             index: s.index,
             roff: s.roff,
             spread: s.spread,
+            n_rb: Some(s.n_rb),
+            resid: s.resid,
         }
     }
 }
 
-/// Smallest order `p` with `q^(p+1) / (1 - q) <= rtol / 2`, capped at `PMAX - 1`.
+/// Truncation bounds of a truncated expansion with convergence ratio `q` at order `p`:
+/// `(q^(p+1)/(1-q), (p+1) q^p/(1-q) + q^(p+1)/(1-q)^2)`, in units of `kappa l0` (`S`) and
+/// `kappa` (`dS/dy`).
+fn tails_at(q: f64, p: usize) -> (f64, f64) {
+    let qp = q.powi(p as i32);
+    let p1 = p as f64 + 1.0;
+    (qp * q / (1.0 - q), p1 * qp / (1.0 - q) + qp * q / ((1.0 - q) * (1.0 - q)))
+}
+
+/// Smallest order `p` whose residue bound (bin plus direct truncation) meets `rtol/4`,
+/// `q^(p+1)/(1-q) + (1/8)^(p+1)/(7/8) <= rtol/4`, capped at `PMAX - 1`.
 fn order_for(rtol: f64) -> usize {
-    let mut tail = Q / (1.0 - Q); // q^(p+1)/(1-q) at p = 0
-    for p in 0..PMAX - 1 {
-        if tail <= 0.5 * rtol {
-            return p.max(1);
+    for p in 1..PMAX - 1 {
+        if tails_at(Q, p).0 + tails_at(Q_DIRECT, p).0 <= 0.25 * rtol {
+            return p;
         }
-        tail *= Q;
     }
     PMAX - 1
 }
 
+/// `tb_k += sum_(m <= p-k) G[m][k] M_m`, `G[m][k] = (-1)^m C(m+k, k) phi_(m+k)`: one bin's
+/// double expansion about the base (`phi = phi_taylor` at the bin's `x_b`). O(p^2).
+#[inline]
+fn bin_terms(phi: &[f64], mom: &[f64], tb: &mut [f64]) {
+    let p = phi.len() - 1;
+    // Pascal's triangle by rows `m`: binom[k] = C(m+k, k).
+    let mut binom = [1.0; PMAX];
+    for (m, &mm) in mom.iter().enumerate().take(p + 1) {
+        if m > 0 {
+            // C(m+k, k) = C(m-1+k, k) + C(m+k-1, k-1).
+            for k in 1..=p - m {
+                binom[k] += binom[k - 1];
+            }
+        }
+        let sm = if m % 2 == 0 { mm } else { -mm };
+        for ((tk, b), ph) in tb[..=p - m].iter_mut().zip(&binom).zip(&phi[m..]) {
+            *tk += b * ph * sm;
+        }
+    }
+}
+
 impl SeriesSum {
     /// Empty set of anchors, base point 0, bins of width `w = l0/4`, radius `rho = l0/8`
-    /// (`q = 1/4`) and the smallest order `p` with `q^(p+1)/(1-q) <= rtol/2`: the truncation
-    /// part of `error_bound()` is then at most `(rtol/2) kappa l0 len()` (for `rtol >= ~2e-19`;
-    /// smaller, non-positive or NaN `rtol` give the cap `p = 31`). The round-off part is
-    /// separate (module doc); it stays below the other half for `N` and operations since the
-    /// last re-base well below `rtol / eps`. `law.l0 > 0` is assumed (validated by the scene).
+    /// (`q = 1/4`) and the smallest order `p` with `q^(p+1)/(1-q) + (1/8)^(p+1)/(7/8) <=
+    /// rtol/4`: the truncation part of `error_bound()` is then at most
+    /// `(rtol/4) kappa l0 (len() + removals since the last re-base, capped at the count then)`
+    /// (for `rtol >= ~5e-19`; smaller, non-positive or NaN `rtol` give the cap `p = 31`). The
+    /// round-off part is separate (module doc); it stays small for `N` and operations since
+    /// the last re-base well below `rtol / eps`. `law.l0 > 0` is assumed (validated by the
+    /// scene).
     pub fn new(law: Tilted, rtol: f64) -> SeriesSum {
         SeriesSum {
             law,
@@ -324,9 +516,11 @@ impl SeriesSum {
             bins: Vec::new(),
             free: Vec::new(),
             index: Vec::new(),
-            g: Vec::new(),
             roff: 0.0,
             spread: 0.0,
+            n_rb: 0,
+            resid: 0,
+            dense: Dense::default(),
         }
     }
 
@@ -365,128 +559,81 @@ impl SeriesSum {
         0.25 * self.law.l0
     }
 
-    /// Entries of one bin's triangular matrix `G_b`.
-    #[inline]
-    fn tri(&self) -> usize {
-        (self.p + 1) * (self.p + 2) / 2
-    }
-
     /// `x_b = y0 - c_b` of grid index `j`.
     #[inline]
     fn x_of(&self, j: i64) -> f64 {
         self.base_off - (j as f64 + 0.5) * self.width()
     }
 
-    /// `G_b[m][k] = (-1)^m C(m+k, k) phi_(m+k)(x_b)` for the bin in `slot`. O(p^2).
-    fn fill_g(&mut self, slot: usize) {
-        let p = self.p;
-        let mut phi = [0.0; PMAX];
-        phi_taylor(&self.law, self.x_of(self.bins[slot].j), &mut phi[..=p]);
-        // Pascal's triangle by rows `m`: binom[k] = C(m+k, k).
-        let mut binom = [1.0; PMAX];
-        let t = self.tri();
-        let g = &mut self.g[slot * t..(slot + 1) * t];
-        let mut off = 0;
-        for m in 0..=p {
-            if m > 0 {
-                // C(m+k, k) = C(m-1+k, k) + C(m+k-1, k-1).
-                for k in 1..=p - m {
-                    binom[k] += binom[k - 1];
-                }
-            }
-            let sign = if m % 2 == 0 { 1.0 } else { -1.0 };
-            for k in 0..=p - m {
-                g[off + k] = sign * binom[k] * phi[m + k];
-            }
-            off += p + 1 - m;
+    /// Slot of the bin with grid index `j`, created if absent.
+    #[inline]
+    fn slot_of(&mut self, j: i64) -> usize {
+        match self.dense.get(j) {
+            Some(s) if s != NONE => s as usize,
+            _ => self.slot_of_slow(j),
         }
     }
 
-    /// Slot of the bin with grid index `j`, created (with its `G_b`) if absent.
-    fn slot_of(&mut self, j: i64) -> usize {
+    /// `slot_of` by the binary search of `index` (a new bin, or `j` outside `dense`).
+    #[cold]
+    fn slot_of_slow(&mut self, j: i64) -> usize {
         match self.index.binary_search_by_key(&j, |&(jj, _)| jj) {
             Ok(i) => self.index[i].1 as usize,
-            Err(i) => {
-                let bin = Bin { j, count: 0, m: [0.0; PMAX], ml: [0.0; PMAX] };
-                let slot = match self.free.pop() {
-                    Some(s) => {
-                        self.bins[s as usize] = bin;
-                        s as usize
-                    }
-                    None => {
-                        self.bins.push(bin);
-                        self.g.resize(self.bins.len() * self.tri(), 0.0);
-                        self.bins.len() - 1
-                    }
-                };
-                self.index.insert(i, (j, slot as u32));
-                self.fill_g(slot);
-                slot
-            }
+            Err(i) => self.open_bin(i, j),
         }
     }
 
-    /// Adds `sign * (junction with offset e in slot)` to the moments and the series. O(p^2).
+    /// A new bin with grid index `j` at position `i` of the index.
+    #[cold]
+    fn open_bin(&mut self, i: usize, j: i64) -> usize {
+        let bin = Bin { j, count: 0, m: [0.0; PMAX], ml: [0.0; PMAX] };
+        let slot = match self.free.pop() {
+            Some(s) => {
+                self.bins[s as usize] = bin;
+                s as usize
+            }
+            None => {
+                self.bins.push(bin);
+                self.bins.len() - 1
+            }
+        };
+        self.index.insert(i, (j, slot as u32));
+        self.dense.set(j, slot as u32, &self.index);
+        slot
+    }
+
+    /// Adds `sign * (junction with offset e in slot)`: `+- e^m` to the bin's moments and
+    /// `+- phi_k(x_b - e)` (its own Taylor coefficients about the base) to the series. O(p).
     #[inline]
     fn apply(&mut self, slot: usize, e: f64, sign: f64) {
         let p = self.p;
-        // Powers `sign e^m` by two interleaved chains (half the latency of one).
-        let mut pw = [0.0; PMAX];
-        pw[0] = sign;
-        pw[1] = sign * e;
+        let x = self.x_of(self.bins[slot].j) - e;
+        let mut c = [0.0; PMAX];
+        phi_taylor(&self.law, x, &mut c[..=p]);
+        // Powers `sign e^m` by four chains in registers (a chain through the array would
+        // add a store-to-load delay to every step).
+        let mut pw = [0.0; PMAX + 4];
         let e2 = e * e;
-        for m in 2..=p {
-            pw[m] = pw[m - 2] * e2;
+        let e4 = e2 * e2;
+        let mut quad = [sign, sign * e, sign * e2, sign * (e * e2)];
+        for chunk in pw.chunks_exact_mut(4).take(p / 4 + 1) {
+            chunk.copy_from_slice(&quad);
+            quad = quad.map(|v| v * e4);
         }
         let bin = &mut self.bins[slot];
         dd_add_all(&mut bin.m[..=p], &mut bin.ml[..=p], &pw[..=p]);
-        let t = self.tri();
-        let g = &self.g[slot * t..(slot + 1) * t];
-        // dt_k = sum_m G[m][k] e^m, four rows per pass (a quarter of the stores and reloads
-        // of dt; rows m..m+3 have lengths len, len-1, len-2, len-3), then single rows.
-        let mut dt = [0.0; PMAX];
-        let mut off = 0;
-        let mut m = 0;
-        while m + 3 <= p {
-            let len = p + 1 - m;
-            let (o1, o2, o3) = (off + len, off + 2 * len - 1, off + 3 * len - 3);
-            let (r0, r1, r2, r3) = (&g[off..o1], &g[o1..o1 + len - 1], &g[o2..o2 + len - 2], &g[o3..o3 + len - 3]);
-            let (e0, e1, e2, e3) = (pw[m], pw[m + 1], pw[m + 2], pw[m + 3]);
-            for ((((d, a), b), c), f) in dt[..len - 3].iter_mut().zip(r0).zip(r1).zip(r2).zip(r3) {
-                *d += (a * e0 + b * e1) + (c * e2 + f * e3);
-            }
-            dt[len - 3] += (r0[len - 3] * e0 + r1[len - 3] * e1) + r2[len - 3] * e2;
-            dt[len - 2] += r0[len - 2] * e0 + r1[len - 2] * e1;
-            dt[len - 1] += r0[len - 1] * e0;
-            off = o3 + len - 3;
-            m += 4;
-        }
-        while m <= p {
-            let len = p + 1 - m;
-            for (d, gv) in dt[..len].iter_mut().zip(&g[off..off + len]) {
-                *d += gv * pw[m];
-            }
-            off += len;
-            m += 1;
-        }
-        dd_add_all(&mut self.a[..=p], &mut self.al[..=p], &dt[..=p]);
-        self.roff += self.op_roundoff();
+        dd_add_all_signed(&mut self.a[..=p], &mut self.al[..=p], &c[..=p], sign);
+        self.roff += OP_ROUNDOFF;
     }
 
-    /// Round-off of one junction's increment `sum_m G_b[m][k] e^m` (powers, `G_b`, products
-    /// and sums), in units of `eps kappa l0 / (1 - q)`; the double-double accumulation adds
-    /// only `O(eps^2)`.
-    #[inline]
-    fn op_roundoff(&self) -> f64 {
-        9.0 * (self.p as f64 + 2.0)
-    }
-
-    /// A junction with anchor `c` attached. O(p^2) flops (plus a binary search over the
-    /// bins, and O(p^2 + bins) when it opens a new bin). Returns a handle to pass to `remove`.
+    /// A junction with anchor `c` attached. O(p) flops (plus a binary search over the bins).
+    /// Returns a handle to pass to `remove`.
     pub fn add(&mut self, c: f64) -> u32 {
         let w = self.width();
         let t = c - self.origin;
-        let j = (t / w).floor() as i64;
+        // floor(t / w) without the libm call (baseline x86-64 has no rounding instruction).
+        let v = t / w;
+        let j = (v as i64).saturating_sub(i64::from((v as i64 as f64) > v));
         let slot = self.slot_of(j);
         let e = t - (j as f64 + 0.5) * w;
         self.n += 1;
@@ -498,7 +645,7 @@ impl SeriesSum {
     }
 
     /// The junction with anchor `c` (as given to `add`, or as moved by `shift`) and handle `h`
-    /// detached. O(p^2) flops (O(bins) when its bin empties and is freed).
+    /// detached. O(p) flops (O(bins) when its bin empties and is freed).
     pub fn remove(&mut self, c: f64, h: u32) {
         let slot = h as usize;
         let w = self.width();
@@ -507,28 +654,39 @@ impl SeriesSum {
         let e = (c - self.origin) - (j as f64 + 0.5) * w;
         self.n -= 1;
         self.bins[slot].count -= 1;
+        // It may have been counted through the bins at the last re-base (module doc).
+        if self.resid < self.n_rb {
+            self.resid += 1;
+        }
         dd_add(&mut self.x0, c - self.base);
         self.spread = (self.spread - (self.x_of(j).abs() + 0.5 * w)).max(0.0);
+        self.apply(slot, e, -1.0);
         if self.bins[slot].count == 0 {
-            // Its exact moments are zero: forget the rounded ones and free the slot.
-            self.apply(slot, e, -1.0);
-            let bin = &mut self.bins[slot];
-            bin.m = [0.0; PMAX];
-            bin.ml = [0.0; PMAX];
-            if let Ok(i) = self.index.binary_search_by_key(&j, |&(jj, _)| jj) {
-                self.index.remove(i);
-            }
-            self.free.push(h);
-        } else {
-            self.apply(slot, e, -1.0);
+            self.free_bin(slot, j);
         }
         if self.n == 0 {
+            // Exactly zero: forget the rounding and the residues.
             self.x0 = [0.0; 2];
             self.a = [0.0; PMAX];
             self.al = [0.0; PMAX];
             self.spread = 0.0;
             self.roff = 0.0;
+            self.n_rb = 0;
+            self.resid = 0;
         }
+    }
+
+    /// An emptied bin: its exact moments are zero, so forget the rounded ones and free the slot.
+    #[cold]
+    fn free_bin(&mut self, slot: usize, j: i64) {
+        let bin = &mut self.bins[slot];
+        bin.m = [0.0; PMAX];
+        bin.ml = [0.0; PMAX];
+        if let Ok(i) = self.index.binary_search_by_key(&j, |&(jj, _)| jj) {
+            self.index.remove(i);
+        }
+        self.dense.set(j, NONE, &self.index);
+        self.free.push(slot as u32);
     }
 
     /// New base point `y0`: the series is recomputed from the bins' moments,
@@ -544,39 +702,36 @@ impl SeriesSum {
         self.base = y0;
         self.base_off = y0 - self.origin;
         let p = self.p;
-        let t = self.tri();
         let w = self.width();
         let mut a = [0.0; PMAX];
         let mut al = [0.0; PMAX];
         let mut spread = 0.0;
-        for i in 0..self.index.len() {
-            let (j, slot) = self.index[i];
-            let slot = slot as usize;
-            self.fill_g(slot);
-            let g = &self.g[slot * t..(slot + 1) * t];
-            let bin = &self.bins[slot];
-            let mut tb = [0.0; PMAX];
-            let mut off = 0;
-            for m in 0..=p {
-                let len = p + 1 - m;
-                let mm = bin.m[m] + bin.ml[m];
-                for (tk, gv) in tb[..len].iter_mut().zip(&g[off..off + len]) {
-                    *tk += gv * mm;
-                }
-                off += len;
+        for &(j, slot) in &self.index {
+            let bin = &self.bins[slot as usize];
+            let x_b = self.x_of(j);
+            let mut phi = [0.0; PMAX];
+            phi_taylor(&self.law, x_b, &mut phi[..=p]);
+            let mut mom = [0.0; PMAX];
+            for (mm, (h, l)) in mom.iter_mut().zip(bin.m.iter().zip(&bin.ml)).take(p + 1) {
+                *mm = h + l;
             }
+            let mut tb = [0.0; PMAX];
+            bin_terms(&phi[..=p], &mom[..=p], &mut tb);
             dd_add_all(&mut a[..=p], &mut al[..=p], &tb[..=p]);
-            spread += bin.count as f64 * (self.x_of(j).abs() + 0.5 * w);
+            spread += bin.count as f64 * (x_b.abs() + 0.5 * w);
         }
         self.a = a;
         self.al = al;
         self.spread = spread;
-        // Each present junction's term, as in `apply`, plus the bin's sum over m.
-        self.roff = n * (self.op_roundoff() + p as f64 + 1.0);
+        // Each present junction's term (powers, `G_b`, products, sums), as charged by the
+        // O(p^2) update this replaced, plus the bin's sum over m.
+        self.roff = n * (9.0 * (p as f64 + 2.0) + p as f64 + 1.0);
+        self.n_rb = self.n;
+        self.resid = 0;
     }
 
     /// The coordinate frame moved: every anchor `c -> c - dy` and the base `-> base - dy`.
-    /// Handles stay valid. O(1): bins, `x_b`, `G_b` and the series are frame-independent.
+    /// Handles stay valid. O(1): bins, `x_b` and the series are frame-independent.
     pub fn shift(&mut self, dy: f64) {
         self.base -= dy;
         self.origin -= dy;
@@ -628,12 +783,14 @@ impl SeriesSum {
         (y1 - y0) * (self.linear(0.5 * (d0 + d1)) + acc)
     }
 
-    /// Bound on the truncation error of one junction's expansion, in units of `kappa l0`
-    /// (`S`) and `kappa` (`dS/dy`).
-    fn tails(&self) -> (f64, f64) {
-        let qp = Q.powi(self.p as i32);
-        let p1 = self.p as f64 + 1.0;
-        (qp * Q / (1.0 - Q), p1 * qp / (1.0 - Q) + qp * Q / ((1.0 - Q) * (1.0 - Q)))
+    /// Truncation bound of the whole series, in units of `kappa l0` (`S`) and `kappa`
+    /// (`dS/dy`): every present junction's expansion (the bins' double expansion, which
+    /// dominates its own) plus each charged residue (bin expansion minus own expansion).
+    fn truncation(&self) -> (f64, f64) {
+        let (bf, bs) = tails_at(Q, self.p);
+        let (df, ds) = tails_at(Q_DIRECT, self.p);
+        let (n, r) = (self.n as f64, self.resid as f64);
+        (n * bf + r * (bf + df), n * bs + r * (bs + ds))
     }
 
     /// Round-off allowance on the coefficients, in the norm `sum_k |dA_k| rho^k`.
@@ -654,19 +811,21 @@ impl SeriesSum {
     }
 
     /// Bound on `|S(y) - S_true(y)|` for `|y - base| <= radius()`: the truncation,
-    /// `len kappa l0 q^(p+1)/(1-q)` (rigorous), plus the first-order round-off allowance of
-    /// the module doc (which grows with the operations since the last re-base).
+    /// `kappa l0 (len T_b + resid (T_b + T_d))` with `T_b = q^(p+1)/(1-q)`,
+    /// `T_d = (1/8)^(p+1)/(7/8)` (rigorous), plus the first-order round-off allowance of the
+    /// module doc (which grows with the operations since the last re-base).
     pub fn error_bound(&self) -> f64 {
-        let (tf, _) = self.tails();
-        self.n as f64 * self.law.kappa * self.law.l0 * tf + self.coeff_roundoff() + self.linear_roundoff()
+        self.law.kappa * self.law.l0 * self.truncation().0 + self.coeff_roundoff() + self.linear_roundoff()
     }
 
-    /// Same for `dS/dy`: `len kappa ((p+1) q^p/(1-q) + q^(p+1)/(1-q)^2)` plus the round-off
-    /// allowance (coefficient part times `p / rho`).
+    /// Same for `dS/dy`: `kappa (len T'_b + resid (T'_b + T'_d))`,
+    /// `T'_q = (p+1) q^p/(1-q) + q^(p+1)/(1-q)^2`, plus the round-off allowance
+    /// (coefficient part times `p / rho`).
     pub fn stiffness_error_bound(&self) -> f64 {
-        let (_, ts) = self.tails();
         let n = self.n as f64;
-        n * self.law.kappa * ts + self.coeff_roundoff() * self.p as f64 / self.radius() + 4.0 * EPS * self.law.kappa * n
+        self.law.kappa * self.truncation().1
+            + self.coeff_roundoff() * self.p as f64 / self.radius()
+            + 4.0 * EPS * self.law.kappa * n
     }
 }
 
@@ -687,33 +846,95 @@ fn two_product_err(a: f64, b: f64, prod: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::physics::ForceLaw;
+    use twofloat::TwoFloat as D;
 
     /// Low coefficients against the closed forms `f^x`, `d f^x/dx` and a central difference
     /// of `d f^x/dx` for `f''/2`.
     #[test]
     fn taylor_low_orders_match_closed_forms() {
         let law = Tilted { kappa: 0.3, l0: 0.7 };
-        for &x in &[-40.0, -2.0, -0.3, 0.0, 1e-9, 0.5, 3.0, 1e4] {
+        for &x in &[-40.0, -2.0, -0.3, 0.0, 1e-9, 0.5, 3.0, 1e4, 1e200, -1e-200] {
             let mut c = [0.0; 4];
             tilted_taylor(&law, x, &mut c);
             assert!((c[0] - law.force_x(x)).abs() <= 1e-15 * (1.0 + law.force_x(x).abs()), "x = {x}");
             assert!((c[1] - law.stiffness_x(x)).abs() <= 1e-15, "x = {x}: {} vs {}", c[1], law.stiffness_x(x));
-            let h = 1e-5;
-            let fd = (law.stiffness_x(x + h) - law.stiffness_x(x - h)) / (2.0 * h) / 2.0;
-            assert!((c[2] - fd).abs() <= 1e-8, "x = {x}: {} vs {fd}", c[2]);
+            if x.abs() < 1e10 {
+                let h = 1e-5;
+                let fd = (law.stiffness_x(x + h) - law.stiffness_x(x - h)) / (2.0 * h) / 2.0;
+                assert!((c[2] - fd).abs() <= 1e-8, "x = {x}: {} vs {fd}", c[2]);
+            }
         }
     }
 
-    /// `p` is the smallest order whose truncation tail meets `rtol/2`; non-finite or
+    /// `phi_k(x)`, `k <= 31`, in double-double by the power recurrence for `h = u^(-1/2)`,
+    /// `u(d) = (x + d)^2 + l0^2`: `k u0 h_k = -(2k-1) x h_(k-1) - (k-1) h_(k-2)`, then
+    /// `phi_k = -kappa l0 (x h_k + h_(k-1))`. Independent of the Legendre form.
+    fn phi_oracle(law: &Tilted, x: f64) -> Vec<D> {
+        let (x0, l0) = (D::from(x), D::from(law.l0));
+        let u0 = x0 * x0 + l0 * l0;
+        let mut h = vec![D::from(1.0) / u0.sqrt()];
+        for k in 1..PMAX {
+            let mut v = D::from(-(2.0 * k as f64 - 1.0)) * x0 * h[k - 1];
+            if k >= 2 {
+                v -= D::from(k as f64 - 1.0) * h[k - 2];
+            }
+            h.push(v / (D::from(k as f64) * u0));
+        }
+        let a = D::from(-law.kappa) * l0;
+        (0..PMAX).map(|k| a * (x0 * h[k] + if k >= 1 { h[k - 1] } else { D::from(0.0) })).collect()
+    }
+
+    /// Stability of the Legendre recurrence in `phi_taylor`: over `|x|/l0` from 0 to 1e6
+    /// (both signs, several `l0`), every `k <= 31` is within `4 (k+1) eps kappa l0 R^-k` of the
+    /// double-double value (the absolute error of `P_(k-1) - t P_k`, `|P_k| <= 1`, near
+    /// `|t| = 1` where the difference cancels), and the error in the norm
+    /// `sum_k |d phi_k| rho^k` of one junction's increment is below `OP_ROUNDOFF / 4` in units
+    /// of `eps kappa l0 / (1 - q)` (the worst is printed).
+    #[test]
+    fn direct_coefficients_roundoff() {
+        let mut worst_norm: f64 = 0.0;
+        let mut worst_k: f64 = 0.0;
+        for &(kappa, l0) in &[(1.0, 1.0), (0.3, 0.07), (2.0, 9.0)] {
+            let law = Tilted { kappa, l0 };
+            let rho = 0.125 * l0;
+            let mut ratios = vec![0.0];
+            for i in 0..=240 {
+                let r = 10f64.powf(-6.0 + 12.0 * i as f64 / 240.0) * (1.0 + 0.013 * i as f64);
+                ratios.push(r);
+                ratios.push(-r);
+            }
+            for &ratio in &ratios {
+                let x = ratio * l0;
+                let mut c = [0.0; PMAX];
+                phi_taylor(&law, x, &mut c);
+                let want = phi_oracle(&law, x);
+                let r = x.hypot(l0);
+                let mut norm = 0.0;
+                for k in 0..PMAX {
+                    let err = (D::from(c[k]) - want[k]).hi().abs();
+                    let scale = kappa * l0 * r.powi(-(k as i32));
+                    let rel = err / (EPS * scale);
+                    assert!(rel <= 4.0 * (k as f64 + 1.0), "x/l0 = {ratio}, k = {k}: {rel} eps");
+                    worst_k = worst_k.max(rel / (k as f64 + 1.0));
+                    norm += err * rho.powi(k as i32);
+                }
+                worst_norm = worst_norm.max(norm / (EPS * kappa * l0 / (1.0 - Q)));
+            }
+        }
+        println!("worst error: {worst_k:.3} (k+1) eps kappa l0 R^-k; norm {worst_norm:.3} eps kappa l0/(1-q)");
+        assert!(worst_norm <= OP_ROUNDOFF / 4.0, "norm {worst_norm}");
+    }
+
+    /// `p` is the smallest order whose residue bound meets `rtol/4`; non-finite or
     /// non-positive `rtol` give the cap.
     #[test]
     fn order_is_minimal() {
         assert_eq!(order_for(1e-10), 17);
+        let tail = |p: usize| tails_at(Q, p).0 + tails_at(Q_DIRECT, p).0;
         for rtol in [1e-1, 1e-4, 1e-10, 1e-13, 1e-18] {
             let p = order_for(rtol);
-            let tail = |p: usize| Q.powi(p as i32 + 1) / (1.0 - Q);
-            assert!(tail(p) <= 0.5 * rtol, "rtol {rtol}: p = {p}");
-            assert!(p == 1 || tail(p - 1) > 0.5 * rtol, "rtol {rtol}: p = {p} not minimal");
+            assert!(tail(p) <= 0.25 * rtol, "rtol {rtol}: p = {p}");
+            assert!(p == 1 || tail(p - 1) > 0.25 * rtol, "rtol {rtol}: p = {p} not minimal");
         }
         for rtol in [0.0, -1.0, f64::NAN, 1e-300] {
             assert_eq!(order_for(rtol), PMAX - 1);
@@ -723,7 +944,8 @@ mod tests {
     }
 
     /// An attach/detach pair with the same anchor leaves the series exactly as it was
-    /// (double-double accumulation), and the count-0 bin is freed.
+    /// (double-double accumulation), and the count-0 bin is freed; without a re-base in
+    /// between no residue is charged.
     #[test]
     fn attach_detach_cancels() {
         let law = Tilted { kappa: 0.4, l0: 1.0 };
@@ -741,5 +963,60 @@ mod tests {
         s.remove(7.3, h);
         assert_eq!(s.bin_count(), bins);
         assert_eq!(s.force_and_stiffness(0.1), before);
+        // Two removals charged (they could have been present at the re-base), at most n_rb.
+        assert_eq!((s.n_rb, s.resid), (50, 2));
+    }
+
+    /// The residue count is capped by the junctions present at the last re-base and reset by
+    /// the next one.
+    #[test]
+    fn residue_count_is_capped_and_reset() {
+        let law = Tilted { kappa: 1.0, l0: 1.0 };
+        let mut s = SeriesSum::new(law, 1e-10);
+        let hs: Vec<(f64, u32)> = (0..10).map(|i| (0.01 * i as f64, s.add(0.01 * i as f64))).collect();
+        assert_eq!((s.n_rb, s.resid), (0, 0));
+        s.rebase(0.02);
+        let extra: Vec<(f64, u32)> = (0..30).map(|i| (-0.03 * i as f64, s.add(-0.03 * i as f64))).collect();
+        for &(c, h) in extra.iter().chain(&hs[..5]) {
+            s.remove(c, h);
+        }
+        assert_eq!((s.n_rb, s.resid, s.len()), (10, 10, 5));
+        s.rebase(0.0);
+        assert_eq!((s.n_rb, s.resid), (5, 0));
+    }
+
+    /// The O(1) grid-index cache agrees with the sorted index, also when the anchors span
+    /// more than `DENSE_MAX` bins (lookups outside its range fall back to the binary search),
+    /// and `add` puts each anchor in bin `floor((c - origin) / w)`.
+    #[test]
+    fn dense_cache_matches_index() {
+        let law = Tilted { kappa: 1.0, l0: 1.0 };
+        let mut s = SeriesSum::new(law, 1e-6);
+        let mut live: Vec<(f64, u32)> = Vec::new();
+        let mut state = 12345u64;
+        for step in 0..4000 {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+            let scale = if step % 500 < 10 { 1e7 } else { 30.0 };
+            if live.is_empty() || u < 0.55 {
+                let c = scale * (2.0 * u - 1.0) - 0.125;
+                let h = s.add(c);
+                assert_eq!(s.bins[h as usize].j, ((c - s.origin) / s.width()).floor() as i64, "c = {c}");
+                live.push((c, h));
+            } else {
+                let (c, h) = live.swap_remove(((state >> 20) as usize) % live.len());
+                s.remove(c, h);
+            }
+            for &(j, slot) in &s.index {
+                if let Some(d) = s.dense.get(j) {
+                    assert_eq!(d, slot, "j = {j}");
+                }
+            }
+            let recorded = s.dense.slots.iter().filter(|&&d| d != NONE).count();
+            let in_range = s.index.iter().filter(|&&(j, _)| s.dense.get(j).is_some()).count();
+            assert_eq!(recorded, in_range);
+            assert!(s.dense.slots.len() <= DENSE_MAX);
+        }
+        assert!(s.dense.slots.len() > 100);
     }
 }
