@@ -524,6 +524,14 @@ impl SeriesSum {
         }
     }
 
+    /// Removals charged as residue since the last re-base (junctions counted through the
+    /// bins then and removed since). While `residue() <= len()` the truncation part of
+    /// [`SeriesSum::error_bound`] is at most `(rtol/2) kappa l0 len()`, since
+    /// `T_b + T_d <= rtol/4`.
+    pub fn residue(&self) -> u64 {
+        self.resid
+    }
+
     /// The truncation order `p`.
     pub fn order(&self) -> usize {
         self.p

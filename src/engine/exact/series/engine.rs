@@ -50,6 +50,11 @@ pub struct ExactSeries<K: Kinetics, P: Motion> {
     rng: Pcg64,
     counters: Counters,
     events_since_rebase: u64,
+    /// `exact.rtol`: the series' stated tolerance, relative to `kappa l0 max(N_att, 1)`.
+    rtol: f64,
+    /// The relative error bound just after the engine last refreshed the series (see
+    /// [`ExactSeries::track_error`]); a refresh is taken only when the bound has doubled since.
+    error_floor: f64,
     /// The series changed (attach, rupture, shift) since its error bound was last recorded.
     /// Not serialised: a resumed run records it again at its first plate step.
     #[serde(skip, default = "yes")]
@@ -94,6 +99,8 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
                 ..Default::default()
             },
             events_since_rebase: 0,
+            rtol: scene.exact.rtol,
+            error_floor: 0.0,
             error_stale: true,
         };
         if !P::KINEMATIC {
@@ -121,15 +128,37 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
     /// max(N_att, 1))`. The bound is a function of the series' state only, so it is
     /// recomputed only when that changed (`error_stale`, or a re-basing of the series inside
     /// the step): the same maximum as recording it after every step, at O(1) per step.
+    ///
+    /// Between re-basings the series' bound grows: the residue of junctions counted through
+    /// the bins at the last re-base and removed since, and the round-off allowance
+    /// (`physics::series`, module doc), both relative to a count of attached junctions that
+    /// may have fallen. In a stick phase the plate may not move far enough to re-base for a
+    /// long time, so the series is refreshed in place (a re-base at its own base point,
+    /// [`ExactSeries::refresh_series`], which resets both): at a removal that takes the
+    /// residue count above the attached count (so the truncation part stays `<= rtol/2`;
+    /// amortised, once each time the count halves), and here, once the whole bound passes
+    /// `rtol / 2`, unless that did not halve it the last time.
     #[inline]
     fn track_error(&mut self) {
         self.error_stale = false;
         let scale = self.law.kappa * self.law.l0 * self.bags.n_attached().max(1) as f64;
         let rel = self.series.error_bound() / scale;
+        if rel > 0.5 * self.rtol && rel > 2.0 * self.error_floor {
+            self.refresh_series();
+            self.error_floor = self.series.error_bound() / scale;
+        }
         let e = self.counters.series_error.get_or_insert(0.0);
         if rel > *e {
             *e = rel;
         }
+    }
+
+    /// Re-bases the series at its own base point: the residue and the round-off allowance
+    /// start again from zero. O(bins p^2).
+    fn refresh_series(&mut self) {
+        let base = self.series.base();
+        self.series.rebase(base);
+        *self.counters.series_rebases.get_or_insert(0) += 1;
     }
 
     fn refresh_clocks(&mut self, fired: Option<usize>) {
@@ -163,6 +192,9 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
         let a = self.bags.take_attached(slot);
         let h = self.handles.swap_remove(slot);
         self.series.remove(a.c, h);
+        if self.series.residue() > self.series.len() as u64 {
+            self.refresh_series();
+        }
         self.error_stale = true;
         self.kinetics.detached(slot, last);
         let x = self.y() - a.c;
@@ -359,8 +391,50 @@ impl<K: Kinetics, P: Motion> Engine for ExactSeries<K, P> {
 
 #[cfg(test)]
 mod tests {
+    use super::ExactSeries;
+    use crate::engine::exact::series::{Kinematic, StrongKinetics};
+    use crate::observe::Nothing;
+    use crate::physics::ForceLaw;
     use crate::runner::run_scene;
     use crate::test_scenes::fig1_with;
+
+    /// A stick phase: every junction is counted through the bins at a re-base, then all but
+    /// one rupture with the plate at rest. Each removal leaves a residue in the bound; the
+    /// engine refreshes the series whenever the residue count passes the attached count, so
+    /// the bound stays within `rtol / 2` of `kappa l0 N_att` (plus round-off), the refreshes
+    /// are amortised (one per halving of the count), and the series still agrees with the
+    /// direct sum within its bound.
+    #[test]
+    fn series_refreshed_in_a_stick_phase() {
+        let s = fig1_with(&[
+            "run.engine=exact",
+            "junctions.force_law=tilted",
+            "junctions.n=4096",
+            "junctions.initial=attached",
+            "plate.kinematic=true",
+        ]);
+        let mut e = ExactSeries::new(&s, StrongKinetics { k0: s.junctions.k0 }, Kinematic::new(0.0)).unwrap();
+        let base = e.series.base();
+        e.series.rebase(base);
+        let rebases0 = e.counters.series_rebases.unwrap();
+        let (kl0, rtol) = (e.law.kappa * e.law.l0, e.rtol);
+        // Spread the anchors over several bins, as a moving plate would have.
+        let y = 0.05;
+        while e.bags.n_attached() > 1 {
+            e.rupture_slot(e.bags.n_attached() - 1, &mut Nothing);
+            let n = e.bags.n_attached();
+            assert!(e.series.residue() <= n as u64, "residue {} above {n} attached", e.series.residue());
+            let rel = e.series.error_bound() / (kl0 * n.max(1) as f64);
+            assert!(rel <= 0.5 * rtol * (1.0 + 1e-3), "relative bound {rel} at {n} attached, rtol {rtol}");
+            if n % 97 == 0 {
+                let direct: f64 = e.bags.attached[..n].iter().map(|a| e.law.force_x(y - a.c)).sum();
+                let err = (e.series.force(y) - direct).abs();
+                assert!(err <= e.series.error_bound() + 1e-12 * kl0, "series off by {err} at {n} attached");
+            }
+        }
+        let refreshes = e.counters.series_rebases.unwrap() - rebases0;
+        assert!((10..=14).contains(&refreshes), "{refreshes} refreshes for 4095 ruptures from 4096");
+    }
 
     /// The run's main outputs, the friction mean and standard deviation and the mean bond
     /// and viscous forces, from the series engine's piece statistics (dense-output integrals
