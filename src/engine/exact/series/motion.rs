@@ -366,8 +366,8 @@ impl Motion for Dynamic {
     /// u0)^2` (exact integrals of the dense output); the bond force from the plate
     /// equation integrated over the piece (an identity of the ODE, no quadrature of `S`):
     /// `int S = -(M (w1 - w0) + eta (u1 - u0) + eta V h + K (u0 h + L))`, or without the
-    /// `M` term for the overdamped plate. Accuracy (docs/engines.md, "Plate between events
-    /// (tilted law)"): each term carries the integrator's error of `u1`, `w1`, `L`, so the
+    /// `M` term for the overdamped plate. Accuracy (docs/engines.md, "Statistics of a piece
+    /// (tilted law, dynamic plate)"): each term carries the integrator's error of `u1`, `w1`, `L`, so the
     /// piece's mean has an error of about `(M / tau_w + eta) tol / h + K tol`, `tol` the
     /// tolerance on `u` and `W`; it is large only for pieces much shorter than the plate's
     /// time scales, and it telescopes: over consecutive pieces the `M w` and `eta u` terms
