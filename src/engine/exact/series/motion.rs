@@ -340,7 +340,7 @@ impl Dynamic {
         rtol: f64,
     ) -> Option<(LocalCubic, f64, f64)> {
         let room = series.radius() - (y0 - series.base()).abs();
-        if !(room > 0.0) {
+        if room.is_nan() || room <= 0.0 {
             return None;
         }
         let (c, r4) = series.taylor_at(y0, room);
