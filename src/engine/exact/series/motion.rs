@@ -825,4 +825,45 @@ mod tests {
             (u_c - u_s).abs()
         );
     }
+
+    /// A step that leaves the cubic's excursion is retaken on the series: a heavy plate at
+    /// rest (velocity 0, so the expected excursion is 0 and the cubic is tried) under a large
+    /// junction force, with a loose `atol` and a proposed first step of 0.05, accelerates
+    /// beyond the cubic's `d` (~1.3e-3 at `rtol = 1e-10`) in its first step. That step comes
+    /// back with `cubic_error == 0` after two accepted integrator steps (the cubic's, then
+    /// the series' at the same size) and no re-basing, and its excursion `e` has
+    /// `r4 e^4` above the cubic's share of the budget (so the cubic's attempt, along nearly
+    /// the same path, could not be accepted).
+    #[test]
+    fn step_leaving_the_cubic_is_retaken_on_the_series() {
+        let law = Tilted { kappa: 1.0, l0: 1.0 };
+        let plate = Plate { mass: 1.0, eta: 0.1, k: 1.0, v: 0.01 };
+        let (rtol, atol) = (1e-10, 1e-4);
+        let mut series = SeriesSum::new(law, rtol);
+        for _ in 0..1000 {
+            series.add(-0.5);
+        }
+        series.rebase(0.0);
+        let frame = Frame::new(plate.v);
+        let mut counters = Counters::default();
+        let mut m = Dynamic::new(plate, law.kappa * 1000.0, rtol, atol).unwrap();
+        m.open_piece(0.0, &series, &frame);
+        m.ode.set_h_proposal(0.05);
+        let (mut tau, mut retaken) = (0.0, 0);
+        for _ in 0..5 {
+            let (before, rebases) = (m.ode.stats().accepted, counters.series_rebases);
+            let y0 = m.y(tau);
+            let step = m.step(&mut ctx(&mut series, &frame, &mut counters), tau, 1.0).unwrap();
+            m.finish(&step, step.s1, &series).unwrap();
+            tau = step.s1;
+            if m.ode.stats().accepted == before + 2 && counters.series_rebases == rebases {
+                assert_eq!(step.cubic_error, 0.0);
+                let e = (step.y_hi - y0).max(y0 - step.y_lo);
+                let (_, r4) = series.taylor_at(y0, series.radius() - (y0 - series.base()).abs());
+                assert!(r4 * e.powi(4) > CUBIC_SHARE * rtol * series.scale(), "retaken within the cubic's range");
+                retaken += 1;
+            }
+        }
+        assert!(retaken >= 1, "no step left the cubic");
+    }
 }
