@@ -12,4 +12,4 @@ pub use bond::{Bond, BondParams, Strong, Weak};
 pub use force::{ExactMethod, ForceLaw, LawParams, Linear, ParamError, Tilted};
 pub use plate::Plate;
 pub use rates::Formation;
-pub use series::{SeriesSum, tilted_taylor};
+pub use series::{LocalCubic, SeriesSum, tilted_taylor};

@@ -109,6 +109,11 @@
 //! per-operation round-off without limit). The state serialises (checkpoints) with the
 //! residue count; the per-bin matrices `G_b` are not stored at all (a re-base forms them
 //! bin by bin).
+//!
+//! **Local cubic** (`taylor_at`, `LocalCubic`): `[S, S', S''/2, S'''/6]` at a point in one
+//! Horner pass, with `r4 = sum_(k>=4) C(k,4) |A_k| rho^(k-4)` bounding `|S''''|/24` (so the
+//! cubic's remainder by `r4 e^4`) against the series; the plate's steps evaluate it instead
+//! of the series when their excursion is small (`engine::exact::series::motion`).
 
 use serde::{Deserialize, Serialize};
 
@@ -837,6 +842,83 @@ impl SeriesSum {
     }
 }
 
+/// `C(k, 4)` for `k < PMAX` (exact in `f64`).
+const BINOM4: [f64; PMAX] = {
+    let mut t = [0.0; PMAX];
+    let mut k = 4;
+    while k < PMAX {
+        t[k] = (k * (k - 1) * (k - 2) * (k - 3) / 24) as f64;
+        k += 1;
+    }
+    t
+};
+
+/// The cubic Taylor polynomial of the series about a point `at`,
+/// `S(z) ~ c0 + c1 e + c2 e^2 + c3 e^3`, `e = z - at` ([`SeriesSum::taylor_at`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LocalCubic {
+    pub at: f64,
+    pub c: [f64; 4],
+}
+
+impl LocalCubic {
+    /// `c0 + c1 e + c2 e^2 + c3 e^3`, `e = z - at`.
+    #[inline]
+    pub fn force(&self, z: f64) -> f64 {
+        let e = z - self.at;
+        let [c0, c1, c2, c3] = self.c;
+        c0 + e * (c1 + e * (c2 + e * c3))
+    }
+
+    /// The cubic and its derivative `c1 + 2 c2 e + 3 c3 e^2`.
+    #[inline]
+    pub fn force_and_stiffness(&self, z: f64) -> (f64, f64) {
+        let e = z - self.at;
+        let [c0, c1, c2, c3] = self.c;
+        (c0 + e * (c1 + e * (c2 + e * c3)), c1 + e * (2.0 * c2 + e * (3.0 * c3)))
+    }
+}
+
+impl SeriesSum {
+    /// `kappa l0 max(len, 1)`: the unit of the stated tolerance (`error_bound() <= rtol` of it).
+    #[inline]
+    pub fn scale(&self) -> f64 {
+        self.law.kappa * self.law.l0 * self.n.max(1) as f64
+    }
+
+    /// The series' cubic Taylor polynomial about `y`, `[S, S', S''/2, S'''/6](y)`, and `r4`,
+    /// a bound on `|S''''|/24` over `|z - y| <= d`, so that
+    /// `|S(z) - cubic(z)| <= r4 |z - y|^4` there (Lagrange remainder).
+    ///
+    /// With `P(t) = sum_k A_k t^k` (`t = z - base`) the series and `t0 = y - base`:
+    /// `c_j = sum_k C(k, j) A_k t0^(k-j)` (`j <= 3`, Horner's scheme for normalised
+    /// derivatives, one pass; the linear part `kappa (X0 + n t0)` adds to `c0` and `kappa n`
+    /// to `c1`), and `r4 = sum_(k>=4) C(k, 4) |A_k| rho^(k-4)`, `rho = |t0| + d` (every
+    /// `|z - base| <= rho` has `|P''''(z)|/24 <= r4`; the linear part has no fourth
+    /// derivative), widened by `1 + 4 (p+1) eps` for its own rounding (positive terms). This
+    /// bounds the cubic against the series; the series' own `error_bound` (against the true
+    /// force, within `radius()` of the base) applies unchanged. The rounding of the `c_j` is
+    /// that of the Horner evaluation the round-off allowance charges.
+    pub fn taylor_at(&self, y: f64, d: f64) -> ([f64; 4], f64) {
+        let t0 = y - self.base;
+        let rho = t0.abs() + d;
+        let (mut b0, mut b1, mut b2, mut b3) = (0.0, 0.0, 0.0, 0.0);
+        let mut r4 = 0.0;
+        for k in (0..=self.p).rev() {
+            let a = self.a[k] + self.al[k];
+            b3 = b3 * t0 + b2;
+            b2 = b2 * t0 + b1;
+            b1 = b1 * t0 + b0;
+            b0 = b0 * t0 + a;
+            if k >= 4 {
+                r4 = r4 * rho + BINOM4[k] * a.abs();
+            }
+        }
+        let r4 = r4 * (1.0 + 4.0 * (self.p as f64 + 1.0) * EPS);
+        ([self.linear(t0) + b0, self.law.kappa * self.n as f64 + b1, b2, b3], r4)
+    }
+}
+
 /// The rounding error of `prod = a * b` (Dekker's TwoProduct without fma).
 #[inline]
 fn two_product_err(a: f64, b: f64, prod: f64) -> f64 {
@@ -1026,5 +1108,142 @@ mod tests {
             assert!(s.dense.slots.len() <= DENSE_MAX);
         }
         assert!(s.dense.slots.len() > 100);
+    }
+
+    /// A series of `n` anchors spread over about `2 l0` (several bins), re-based at `y0`.
+    fn cubic_fixture(law: Tilted, n: usize, y0: f64) -> (SeriesSum, Vec<f64>) {
+        let mut s = SeriesSum::new(law, 1e-10);
+        let mut state = 99u64;
+        let anchors: Vec<f64> = (0..n)
+            .map(|_| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+                law.l0 * (2.0 * u - 1.2)
+            })
+            .collect();
+        for &c in &anchors {
+            s.add(c);
+        }
+        s.rebase(y0);
+        (s, anchors)
+    }
+
+    /// `taylor_at`'s `c_j` against (a) the series' own derivatives by a direct sum
+    /// `sum_k C(k, j) A_k t0^(k-j)` (no Horner; relative 1e-13 of the sum of absolute terms)
+    /// and `force`, `force_and_stiffness` (bit for bit is not required: a few ulps), and
+    /// (b) the law's closed forms summed over the junctions, `sum_i f^x_j(y - c_i)`
+    /// (`tilted_taylor`), within the bins' truncation of the `j`-th coefficient,
+    /// `n kappa l0^(1-j) sum_(k>p) C(k, j) q^(k-j)` (`|phi_k| <= kappa l0^(1-k)`,
+    /// `|d - e| <= q l0`), plus the coefficients' round-off allowance seen through the `j`-th
+    /// derivative, `C(p, j) rho^-j` times it.
+    #[test]
+    fn taylor_at_matches_the_series_and_the_law() {
+        let binom = |k: usize, j: usize| (0..j).fold(1.0, |acc, i| acc * (k - i) as f64 / (i + 1) as f64);
+        for &(kappa, l0) in &[(1.0, 1.0), (0.3, 0.07)] {
+            let law = Tilted { kappa, l0 };
+            let (s, anchors) = cubic_fixture(law, 300, 0.1 * l0);
+            let (p, rho) = (s.order(), s.radius());
+            let n = anchors.len() as f64;
+            for frac in [-0.95, -0.5, 0.0, 0.3, 0.99] {
+                let y = s.base() + frac * rho;
+                let (c, _) = s.taylor_at(y, 0.0);
+                let t0 = y - s.base();
+                let (f, fs) = s.force_and_stiffness(y);
+                assert!((c[0] - f).abs() <= 4.0 * EPS * f.abs().max(kappa * l0), "c0 {} vs {f}", c[0]);
+                assert!((c[1] - fs).abs() <= 4.0 * EPS * fs.abs().max(kappa), "c1 {} vs {fs}", c[1]);
+                for j in 0..4 {
+                    let (mut direct, mut mag) = (0.0, 0.0);
+                    for k in j..=p {
+                        let term = binom(k, j) * (s.a[k] + s.al[k]) * t0.powi((k - j) as i32);
+                        direct += term;
+                        mag += term.abs();
+                    }
+                    if j == 0 {
+                        direct += s.linear(t0);
+                        mag += s.linear(t0).abs();
+                    } else if j == 1 {
+                        direct += kappa * n;
+                        mag += kappa * n;
+                    }
+                    assert!((c[j] - direct).abs() <= 1e-13 * mag, "j = {j}: {} vs {direct}", c[j]);
+                    let mut law_sum = 0.0;
+                    let mut buf = [0.0; 5];
+                    for &a in &anchors {
+                        tilted_taylor(&law, y - a, &mut buf);
+                        law_sum += buf[j];
+                    }
+                    let trunc: f64 = (p + 1..200).map(|k| binom(k, j) * Q.powi((k - j) as i32)).sum();
+                    let mut tol = n * kappa * l0.powi(1 - j as i32) * trunc
+                        + binom(p, j) * rho.powi(-(j as i32)) * s.coeff_roundoff();
+                    if j <= 1 {
+                        tol += if j == 0 { s.linear_roundoff() } else { 4.0 * EPS * kappa * n };
+                    }
+                    assert!((c[j] - law_sum).abs() <= tol, "j = {j}, y = {y}: {} vs {law_sum}, tol {tol}", c[j]);
+                }
+            }
+        }
+    }
+
+    /// The remainder bound: for `|z - y| <= d` (`|y - base| + d <= radius`), the series
+    /// `force(z)` and the cubic differ by at most `r4 |z - y|^4` plus the rounding of the two
+    /// evaluations (`8 eps` of the sum of absolute terms, far below the remainder here: `d` is
+    /// large); `|S''''|/24` of the law's closed forms summed over the junctions is below `r4`
+    /// (plus the truncation of the 4th coefficient, as above); and the bound is not vacuous:
+    /// the largest observed remainder is at least 1e-3 of it.
+    #[test]
+    fn taylor_at_remainder_bound_holds() {
+        let binom = |k: usize, j: usize| (0..j).fold(1.0, |acc, i| acc * (k - i) as f64 / (i + 1) as f64);
+        for &(kappa, l0) in &[(1.0, 1.0), (0.3, 0.07)] {
+            let law = Tilted { kappa, l0 };
+            let (s, anchors) = cubic_fixture(law, 300, -0.2 * l0);
+            let rho = s.radius();
+            let n = anchors.len() as f64;
+            let mut worst: f64 = 0.0;
+            for &(frac, dfrac) in &[(0.0, 1.0), (0.0, 0.5), (0.5, 0.5), (-0.25, 0.75), (0.9, 0.1)] {
+                let y = s.base() + frac * rho;
+                let d = dfrac * rho;
+                let (c, r4) = s.taylor_at(y, d);
+                let cubic = LocalCubic { at: y, c };
+                assert!(r4 > 0.0 && r4.is_finite());
+                for i in 0..=40 {
+                    let z = y + d * (i as f64 / 20.0 - 1.0);
+                    let e = z - y;
+                    let mag = s.linear(z - s.base()).abs()
+                        + (0..=s.order()).map(|k| (s.a[k] + s.al[k]).abs() * rho.powi(k as i32)).sum::<f64>();
+                    let diff = (s.force(z) - cubic.force(z)).abs();
+                    let bound = r4 * e.powi(4);
+                    assert!(diff <= bound + 8.0 * EPS * mag, "y = {y}, z = {z}: {diff} > {bound}");
+                    if bound > 1e6 * EPS * mag {
+                        worst = worst.max(diff / bound);
+                    }
+                    let mut buf = [0.0; 5];
+                    let mut d4 = 0.0;
+                    for &a in &anchors {
+                        tilted_taylor(&law, z - a, &mut buf);
+                        d4 += buf[4];
+                    }
+                    let trunc: f64 = (s.order() + 1..200).map(|k| binom(k, 4) * Q.powi(k as i32 - 4)).sum();
+                    let tol = n * kappa * l0.powi(-3) * trunc + binom(s.order(), 4) * rho.powi(-4) * s.coeff_roundoff();
+                    assert!(d4.abs() <= r4 + tol, "z = {z}: |S''''|/24 = {} > r4 = {r4}", d4.abs());
+                }
+            }
+            println!("largest remainder / bound: {worst:.3e}");
+            assert!(worst >= 1e-3, "the bound is vacuous here: {worst}");
+        }
+    }
+
+    /// The cubic's derivative is the derivative of its value (`force_and_stiffness` against
+    /// a central difference of `force`, exact for a cubic up to rounding).
+    #[test]
+    fn local_cubic_stiffness_is_its_derivative() {
+        let cubic = LocalCubic { at: 0.3, c: [1.5, -2.0, 0.7, 4.0] };
+        for z in [0.3, 0.31, 0.25, -1.0] {
+            let h = 1e-4;
+            let fd = (cubic.force(z + h) - cubic.force(z - h)) / (2.0 * h);
+            // Central difference of a cubic: exact but for c3 h^2 and rounding.
+            let (f, fs) = cubic.force_and_stiffness(z);
+            assert_eq!(f, cubic.force(z));
+            assert!((fs - fd).abs() <= 4.0 * h * h + 1e-10, "{fs} vs {fd}");
+        }
     }
 }

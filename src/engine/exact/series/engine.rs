@@ -59,6 +59,11 @@ pub struct ExactSeries<K: Kinetics, P: Motion> {
     /// Not serialised: a resumed run records it again at its first plate step.
     #[serde(skip, default = "yes")]
     error_stale: bool,
+    /// The series' relative error bound as last recorded by [`ExactSeries::track_error`]; a
+    /// step that evaluated the local cubic records it plus the cubic's remainder. Not
+    /// serialised: recorded again at a resumed run's first plate step (`error_stale`).
+    #[serde(skip)]
+    last_rel: f64,
 }
 
 fn yes() -> bool {
@@ -102,6 +107,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
             rtol: scene.exact.rtol,
             error_floor: 0.0,
             error_stale: true,
+            last_rel: 0.0,
         };
         if !P::KINEMATIC {
             e.counters.ode_steps = Some(0);
@@ -138,19 +144,23 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
     /// residue count above the attached count (so the truncation part stays `<= rtol/2`;
     /// amortised, once each time the count halves), and here, once the whole bound passes
     /// `rtol / 2`, unless that did not halve it the last time.
+    /// Returns the bound recorded (before a refresh); `last_rel` is the bound after it.
     #[inline]
-    fn track_error(&mut self) {
+    fn track_error(&mut self) -> f64 {
         self.error_stale = false;
         let scale = self.law.kappa * self.law.l0 * self.bags.n_attached().max(1) as f64;
         let rel = self.series.error_bound() / scale;
+        self.last_rel = rel;
         if rel > 0.5 * self.rtol && rel > 2.0 * self.error_floor {
             self.refresh_series();
             self.error_floor = self.series.error_bound() / scale;
+            self.last_rel = self.error_floor;
         }
         let e = self.counters.series_error.get_or_insert(0.0);
         if rel > *e {
             *e = rel;
         }
+        rel
     }
 
     /// Re-bases the series at its own base point: the residue and the round-off allowance
@@ -302,8 +312,18 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
         self.motion.finish(&step, end, &self.series)?;
         self.tau = end;
         self.motion.sync_counters(&mut self.counters);
-        if self.error_stale || self.counters.series_rebases != rebases {
-            self.track_error();
+        // The series' bound over the step: as it was when the step took its cubic.
+        let series_rel = if self.error_stale || self.counters.series_rebases != rebases {
+            self.track_error()
+        } else {
+            self.last_rel
+        };
+        if step.cubic_error > 0.0 {
+            let rel = series_rel + step.cubic_error;
+            let e = self.counters.series_error.get_or_insert(0.0);
+            if rel > *e {
+                *e = rel;
+            }
         }
         Ok(hit.map(|(_, slot)| slot))
     }

@@ -23,7 +23,7 @@ use crate::engine::exact::direct::ode_error;
 use crate::engine::exact::frame::Frame;
 use crate::engine::{Counters, EngineError};
 use crate::observe::Segment;
-use crate::physics::Plate;
+use crate::physics::{LocalCubic, Plate};
 
 /// One plate step `[s0, s1]` and proven bounds of `y` over it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,6 +32,9 @@ pub struct Step {
     pub s1: f64,
     pub y_lo: f64,
     pub y_hi: f64,
+    /// Bound on the bond force's error from evaluating a local cubic instead of the series
+    /// over the step, relative to [`SeriesSum::scale`] (0 when the series was evaluated).
+    pub cubic_error: f64,
 }
 
 /// What a step may change besides the motion: the series (re-basings) and the counters.
@@ -91,6 +94,42 @@ pub trait Motion: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send 
     fn sync_counters(&self, counters: &mut Counters);
 }
 
+/// The bond force as the plate's right-hand side sees it: the series, or its local cubic
+/// (chosen once per step, [`Dynamic::step`]).
+trait BondForce {
+    fn force(&self, y: f64) -> f64;
+    fn force_and_stiffness(&self, y: f64) -> (f64, f64);
+}
+
+impl BondForce for SeriesSum {
+    #[inline]
+    fn force(&self, y: f64) -> f64 {
+        SeriesSum::force(self, y)
+    }
+    #[inline]
+    fn force_and_stiffness(&self, y: f64) -> (f64, f64) {
+        SeriesSum::force_and_stiffness(self, y)
+    }
+}
+
+impl BondForce for LocalCubic {
+    #[inline]
+    fn force(&self, y: f64) -> f64 {
+        LocalCubic::force(self, y)
+    }
+    #[inline]
+    fn force_and_stiffness(&self, y: f64) -> (f64, f64) {
+        LocalCubic::force_and_stiffness(self, y)
+    }
+}
+
+/// Part of the series' error budget `rtol kappa l0 max(N, 1)` a step's local cubic may use:
+/// its remainder `r4 d^4` over the step's excursion `d`.
+const CUBIC_SHARE: f64 = 1.0 / 16.0;
+/// The local cubic is used when the step's expected excursion (velocity times the proposed
+/// step) is at most this fraction of the excursion the cubic allows.
+const CUBIC_MARGIN: f64 = 0.25;
+
 /// Largest dimension of the plate's ODE: `[u, W]`.
 const DIM: usize = 2;
 
@@ -99,8 +138,8 @@ const DIM: usize = 2;
 /// (`dynamic = false`). In these variables the drive's force `K u` has no cancellation (in
 /// `y`, `K (y - V t)` loses `K eps |y|`, which at `K = 1e9` exceeds any velocity tolerance),
 /// and the tolerance on `u` is one on the friction `-K u`.
-struct System<'a> {
-    series: &'a SeriesSum,
+struct System<'a, F: BondForce> {
+    series: &'a F,
     plate: Plate,
     lag_ref: f64,
     dynamic: bool,
@@ -110,14 +149,14 @@ struct System<'a> {
     scale: f64,
 }
 
-impl System<'_> {
+impl<F: BondForce> System<'_, F> {
     #[inline]
     fn y(&self, u: f64, t: f64) -> f64 {
         u + self.plate.v * t - self.lag_ref
     }
 }
 
-impl StiffSystem for System<'_> {
+impl<F: BondForce> StiffSystem for System<'_, F> {
     /// `u' = w`, `M w' = -(eta (w + V) + S + K u)` (in `W = tau_w w`); overdamped:
     /// `u' = -(S + K u)/eta - V`.
     #[inline]
@@ -143,7 +182,7 @@ impl StiffSystem for System<'_> {
     }
 }
 
-impl System<'_> {
+impl<F: BondForce> System<'_, F> {
     /// The right-hand side at state `s` with bond force `fb`.
     #[inline]
     fn fill_rhs(&self, fb: f64, s: &[f64], d: &mut [f64]) {
@@ -214,6 +253,14 @@ pub struct Dynamic {
     /// `int (u - u0)` and `int (u - u0)^2` over the piece so far.
     l1: f64,
     l2: f64,
+    /// Whether steps may evaluate the series' local cubic (on; off only in tests comparing
+    /// the two). Not serialised.
+    #[serde(skip, default = "on")]
+    cubic: bool,
+}
+
+fn on() -> bool {
+    true
 }
 
 impl Dynamic {
@@ -250,6 +297,7 @@ impl Dynamic {
             w0: state[1],
             l1: 0.0,
             l2: 0.0,
+            cubic: true,
         })
     }
     /// The ODE's dimension: 2 (`[u, W]`), or 1 (`[u]`) for the overdamped plate. Derived,
@@ -261,6 +309,53 @@ impl Dynamic {
     #[inline]
     fn y_of(&self, u: f64, tau: f64) -> f64 {
         u + self.plate.v * tau - self.lag_ref
+    }
+
+    /// The plate's ODE with the bond force `f`.
+    #[inline]
+    fn system<'a, F: BondForce>(&self, f: &'a F) -> System<'a, F> {
+        let p = &self.plate;
+        System {
+            series: f,
+            plate: *p,
+            lag_ref: self.lag_ref,
+            dynamic: self.dynamic,
+            inv_tau_w: 1.0 / self.tau_w,
+            scale: if self.dynamic { self.tau_w / p.mass } else { 1.0 / p.eta },
+        }
+    }
+
+    /// The series' local cubic at the step's start `y0` ([`SeriesSum::taylor_at`] over the
+    /// rest of the disc, `room = radius - |y0 - base|`), its `r4`, and the largest excursion
+    /// `d <= room` with `r4 d^4 <= CUBIC_SHARE rtol kappa l0 max(N, 1)` (`r4` bounds
+    /// `|S''''|/24` over `|z - y0| <= room`, so over `|z - y0| <= d` too). `None` (the
+    /// series is evaluated) when the step's expected excursion, `|velocity| h` with `h` the
+    /// proposed step, exceeds `CUBIC_MARGIN d`: few junctions, or large steps.
+    fn local_cubic(
+        &self,
+        series: &SeriesSum,
+        y0: f64,
+        tau: f64,
+        target: f64,
+        rtol: f64,
+    ) -> Option<(LocalCubic, f64, f64)> {
+        let room = series.radius() - (y0 - series.base()).abs();
+        if room.is_nan() || room <= 0.0 {
+            return None;
+        }
+        let (c, r4) = series.taylor_at(y0, room);
+        if !(r4.is_finite() && c.iter().all(|x| x.is_finite())) {
+            return None;
+        }
+        let tol = CUBIC_SHARE * rtol * series.scale();
+        let d = if r4 > 0.0 { room.min((tol / r4).sqrt().sqrt()) } else { room };
+        let v = if self.dynamic {
+            self.state[1] / self.tau_w + self.plate.v
+        } else {
+            self.plate.overdamped_velocity(self.state[0], c[0])
+        };
+        let h = self.ode.h_proposal().map_or(target - tau, |h| h.min(target - tau));
+        if (v * h).abs() <= CUBIC_MARGIN * d { Some((LocalCubic { at: y0, c }, r4, d)) } else { None }
     }
 }
 
@@ -300,20 +395,23 @@ impl Motion for Dynamic {
         self.saved = self.state;
         let n = self.dim();
         let mut retakes = 0;
+        // The local cubic is tried until a step of it leaves the excursion it allows.
+        let mut try_cubic = self.cubic;
         loop {
             let mut t = tau;
-            let p = &self.plate;
-            let mut sys = System {
-                series: ctx.series,
-                plate: *p,
-                lag_ref: self.lag_ref,
-                dynamic: self.dynamic,
-                inv_tau_w: 1.0 / self.tau_w,
-                scale: if self.dynamic { self.tau_w / p.mass } else { 1.0 / p.eta },
+            let y0 = self.y_of(self.state[0], tau);
+            let cubic = if try_cubic { self.local_cubic(ctx.series, y0, tau, target, rtol) } else { None };
+            let stepped = match &cubic {
+                Some((lc, _, _)) => {
+                    let mut sys = self.system(lc);
+                    self.ode.step(&mut sys, &mut t, &mut self.state[..n], target)
+                }
+                None => {
+                    let mut sys = self.system(&*ctx.series);
+                    self.ode.step(&mut sys, &mut t, &mut self.state[..n], target)
+                }
             };
-            self.ode
-                .step(&mut sys, &mut t, &mut self.state[..n], target)
-                .map_err(|e| ode_error(e, ctx.frame.time(tau), rtol))?;
+            stepped.map_err(|e| ode_error(e, ctx.frame.time(tau), rtol))?;
             let (ulo, uhi) = self.ode.component_bounds(0).map_err(|e| ode_error(e, ctx.frame.time(tau), rtol))?;
             // y = u + V s - lag_ref with V >= 0: bounded by the u bounds at the two ends.
             let (lo, hi) = (self.y_of(ulo, tau), self.y_of(uhi, t));
@@ -324,23 +422,35 @@ impl Motion for Dynamic {
             // (only less tight), and a spread below what the plate can resolve (an
             // overflowing rate exponent) becomes an immediate rupture in the thinning.
             let tight = hi - lo <= ctx.max_spread || retakes >= LOOSE_AFTER;
-            if valid && tight {
+            // The cubic's remainder `r4 e^4` over the step's excursion `e`, if within its `d`.
+            let (in_cubic, cubic_error) = match cubic {
+                Some((_, r4, d)) => {
+                    let e = (hi - y0).max(y0 - lo).max(0.0);
+                    (e <= d, r4 * (e * e) * (e * e) / ctx.series.scale())
+                }
+                None => (true, 0.0),
+            };
+            if valid && tight && in_cubic {
                 self.tau = t;
-                return Ok(Step { s0: tau, s1: t, y_lo: lo, y_hi: hi });
+                return Ok(Step { s0: tau, s1: t, y_lo: lo, y_hi: hi, cubic_error });
             }
             retakes += 1;
             if retakes > MAX_RETAKES {
                 return Err(EngineError::StepSizeUnderflow { t: ctx.frame.time(tau), h: t - tau, rtol });
             }
-            // Restore the state before the step and retake it, shorter.
+            // Restore the state before the step and retake it: shorter when it left the
+            // disc or was too wide; with the series, at the same size, when it left the
+            // cubic's excursion.
             self.state = self.saved;
-            let y0 = self.y_of(self.saved[0], tau);
-            let mut factor: f64 = 0.5;
+            let mut factor: f64 = if valid && tight { 1.0 } else { 0.5 };
             if !valid && y0 != base {
                 ctx.rebase_series(y0);
             }
             if !tight {
                 factor = factor.min(0.5 * ctx.max_spread / (hi - lo));
+            }
+            if !in_cubic {
+                try_cubic = false;
             }
             self.ode.reset();
             self.ode.set_h_proposal((t - tau) * factor);
@@ -462,7 +572,7 @@ impl Motion for Kinematic {
     fn step(&mut self, ctx: &mut StepCtx<'_>, tau: f64, target: f64) -> Result<Step, EngineError> {
         let y = self.y(tau);
         if self.v == 0.0 {
-            return Ok(Step { s0: tau, s1: target, y_lo: y, y_hi: y });
+            return Ok(Step { s0: tau, s1: target, y_lo: y, y_hi: y, cubic_error: 0.0 });
         }
         ctx.recentre(y);
         let room = ctx.series.base() + ctx.series.radius() - y;
@@ -473,7 +583,7 @@ impl Motion for Kinematic {
             // overflowing envelope, an immediate rupture).
             s1 = target.min(tau + room / self.v);
         }
-        Ok(Step { s0: tau, s1, y_lo: y, y_hi: self.y(s1) })
+        Ok(Step { s0: tau, s1, y_lo: y, y_hi: self.y(s1), cubic_error: 0.0 })
     }
     #[inline]
     fn y_at(&mut self, s: f64) -> Result<f64, EngineError> {
@@ -657,5 +767,103 @@ mod tests {
         assert!((seg.friction - mean).abs() < 1e-9 * mean.abs(), "{} vs {mean}", seg.friction);
         assert!((seg.friction_m2 - m2).abs() < 1e-7 * m2, "{} vs {m2}", seg.friction_m2);
         assert_eq!(seg.viscous, 0.0);
+    }
+
+    /// The local cubic against the series: an overdamped plate over 3000 junctions, stepped
+    /// to event-like targets `1e-4` apart (so most steps take the cubic: its excursion
+    /// `d ~ l0 (rtol/31)^(1/4) ~ 1e-3` here) and then in one long stretch (steps too long for
+    /// it: the series). Every cubic step's remainder is within `CUBIC_SHARE rtol`, and the
+    /// lag agrees with the same plate on the series alone within twice the integrators'
+    /// summed local tolerances plus the remainder's effect, `|du| <= T max(r4 e^4) / eta`
+    /// (`u' = -(S + K u)/eta - V`, the force perturbed by at most that, and `d/du` of the
+    /// right-hand side negative).
+    #[test]
+    fn local_cubic_plate_matches_the_series_plate() {
+        let law = Tilted { kappa: 0.1, l0: 1.0 };
+        let plate = Plate { mass: 0.0, eta: 50.0, k: 10.0, v: 0.5 };
+        let (rtol, atol) = (1e-10, 1e-12);
+        let mut base = SeriesSum::new(law, rtol);
+        for i in 0..3000 {
+            base.add(-0.9 + 0.6 * (i as f64 / 3000.0));
+        }
+        base.rebase(0.0);
+        let frame = Frame::new(plate.v);
+        let run = |cubic: bool| {
+            let mut series = base.clone();
+            let mut counters = Counters::default();
+            let mut m = Dynamic::new(plate, law.kappa * 3000.0, rtol, atol).unwrap();
+            m.cubic = cubic;
+            m.open_piece(0.0, &series, &frame);
+            let (mut tau, mut used, mut series_steps, mut worst, mut state_max) = (0.0, 0, 0, 0.0f64, 0.0f64);
+            for target in (1..=2000).map(|i| i as f64 * 1e-4).chain([1.0]) {
+                while tau < target {
+                    let step = m.step(&mut ctx(&mut series, &frame, &mut counters), tau, target).unwrap();
+                    m.finish(&step, step.s1, &series).unwrap();
+                    tau = step.s1;
+                    if step.cubic_error > 0.0 {
+                        used += 1;
+                    } else {
+                        series_steps += 1;
+                    }
+                    worst = worst.max(step.cubic_error);
+                    state_max = state_max.max(m.state[0].abs());
+                }
+            }
+            let steps = m.ode.stats().accepted as f64;
+            (m.lag(tau, &frame), used, series_steps, worst, steps * (atol + rtol * state_max), series.scale())
+        };
+        let (u_c, used, series_steps, worst, e_c, scale) = run(true);
+        let (u_s, used_s, _, _, e_s, _) = run(false);
+        assert_eq!(used_s, 0);
+        assert!(used >= 1500, "cubic steps {used}");
+        assert!(series_steps >= 1, "the long stretch should fall back to the series");
+        assert!(worst > 0.0 && worst <= CUBIC_SHARE * rtol, "remainder {worst}");
+        let allowed = e_c + e_s + 1.0 * worst * scale / plate.eta;
+        assert!((u_c - u_s).abs() <= allowed, "{u_c} vs {u_s}, allowed {allowed}");
+        println!(
+            "cubic steps {used}, series steps {series_steps}, |du| {:.3e}, allowed {allowed:.3e}",
+            (u_c - u_s).abs()
+        );
+    }
+
+    /// A step that leaves the cubic's excursion is retaken on the series: a heavy plate at
+    /// rest (velocity 0, so the expected excursion is 0 and the cubic is tried) under a large
+    /// junction force, with a loose `atol` and a proposed first step of 0.05, accelerates
+    /// beyond the cubic's `d` (~1.3e-3 at `rtol = 1e-10`) in its first step. That step comes
+    /// back with `cubic_error == 0` after two accepted integrator steps (the cubic's, then
+    /// the series' at the same size) and no re-basing, and its excursion `e` has
+    /// `r4 e^4` above the cubic's share of the budget (so the cubic's attempt, along nearly
+    /// the same path, could not be accepted).
+    #[test]
+    fn step_leaving_the_cubic_is_retaken_on_the_series() {
+        let law = Tilted { kappa: 1.0, l0: 1.0 };
+        let plate = Plate { mass: 1.0, eta: 0.1, k: 1.0, v: 0.01 };
+        let (rtol, atol) = (1e-10, 1e-4);
+        let mut series = SeriesSum::new(law, rtol);
+        for _ in 0..1000 {
+            series.add(-0.5);
+        }
+        series.rebase(0.0);
+        let frame = Frame::new(plate.v);
+        let mut counters = Counters::default();
+        let mut m = Dynamic::new(plate, law.kappa * 1000.0, rtol, atol).unwrap();
+        m.open_piece(0.0, &series, &frame);
+        m.ode.set_h_proposal(0.05);
+        let (mut tau, mut retaken) = (0.0, 0);
+        for _ in 0..5 {
+            let (before, rebases) = (m.ode.stats().accepted, counters.series_rebases);
+            let y0 = m.y(tau);
+            let step = m.step(&mut ctx(&mut series, &frame, &mut counters), tau, 1.0).unwrap();
+            m.finish(&step, step.s1, &series).unwrap();
+            tau = step.s1;
+            if m.ode.stats().accepted == before + 2 && counters.series_rebases == rebases {
+                assert_eq!(step.cubic_error, 0.0);
+                let e = (step.y_hi - y0).max(y0 - step.y_lo);
+                let (_, r4) = series.taylor_at(y0, series.radius() - (y0 - series.base()).abs());
+                assert!(r4 * e.powi(4) > CUBIC_SHARE * rtol * series.scale(), "retaken within the cubic's range");
+                retaken += 1;
+            }
+        }
+        assert!(retaken >= 1, "no step left the cubic");
     }
 }
