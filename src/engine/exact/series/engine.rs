@@ -294,7 +294,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
         };
         let step: Step = self.motion.step(&mut ctx, self.tau, target)?;
         let mut hit = None;
-        if K::WEAK {
+        if K::IS_WEAK {
             let mut cands = 0;
             let motion = &mut self.motion;
             hit = self.kinetics.thin(

@@ -29,7 +29,7 @@ const A_RESOLVABLE: f64 = 1e12;
 /// How attached junctions rupture, for the series engine.
 pub trait Kinetics: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static {
     /// `true` for force-dependent rates (thinning inside steps).
-    const WEAK: bool;
+    const IS_WEAK: bool;
     /// Rate of the rupture channel clock (`k0 N_att` for strong bonds, 0 for weak).
     fn channel_rate(&self, n_att: usize) -> f64;
     /// A junction was attached into `slot` with anchor `c` while the plate is at `y`.
@@ -65,7 +65,7 @@ pub struct StrongKinetics {
 }
 
 impl Kinetics for StrongKinetics {
-    const WEAK: bool = false;
+    const IS_WEAK: bool = false;
     #[inline]
     fn channel_rate(&self, n_att: usize) -> f64 {
         self.k0 * n_att as f64
@@ -123,7 +123,7 @@ impl WeakKinetics {
 }
 
 impl Kinetics for WeakKinetics {
-    const WEAK: bool = true;
+    const IS_WEAK: bool = true;
     #[inline]
     fn channel_rate(&self, _n_att: usize) -> f64 {
         0.0
