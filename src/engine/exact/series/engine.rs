@@ -156,11 +156,17 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
             self.error_floor = self.series.error_bound() / scale;
             self.last_rel = self.error_floor;
         }
+        self.record_error(rel);
+        rel
+    }
+
+    /// `series_error = max(series_error, rel)`.
+    #[inline]
+    fn record_error(&mut self, rel: f64) {
         let e = self.counters.series_error.get_or_insert(0.0);
         if rel > *e {
             *e = rel;
         }
-        rel
     }
 
     /// Re-bases the series at its own base point: the residue and the round-off allowance
@@ -319,11 +325,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
             self.last_rel
         };
         if step.cubic_error > 0.0 {
-            let rel = series_rel + step.cubic_error;
-            let e = self.counters.series_error.get_or_insert(0.0);
-            if rel > *e {
-                *e = rel;
-            }
+            self.record_error(series_rel + step.cubic_error);
         }
         Ok(hit.map(|(_, slot)| slot))
     }
