@@ -108,7 +108,7 @@ impl<const N: usize> Lu<N> {
     }
 
     /// Solves `(fac I - J) x = b` with the stored factors; `b` is overwritten by `x`.
-    #[inline]
+    #[inline(always)]
     pub(super) fn solve(&self, b: &mut [f64]) {
         let n = self.n;
         if n == 2 {

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::SeriesSum;
 use super::kinetics::Kinetics;
 use super::motion::{Motion, Step, StepCtx};
-use crate::engine::exact::bags::{Bags, Detached};
+use crate::engine::exact::bags::{Bags, Detached, prefetch};
 use crate::engine::exact::clocks::{ArrayQueue, Channels};
 use crate::engine::exact::frame::Frame;
 use crate::engine::{Counters, Engine, EngineError};
@@ -40,9 +40,8 @@ pub struct ExactSeries<K: Kinetics, P: Motion> {
     frame: Frame,
     /// Local time.
     tau: f64,
+    /// The junctions; each attached one carries its `SeriesSum` handle (`Attached::bin`).
     bags: Bags,
-    /// `SeriesSum` handle of each attached junction, parallel to `bags.attached`.
-    handles: Vec<u32>,
     series: SeriesSum,
     kinetics: K,
     motion: P,
@@ -88,7 +87,6 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
             formation: Formation::from_scene(scene),
             frame: Frame::new(plate.v),
             tau: 0.0,
-            handles: Vec::with_capacity(j.n),
             bags,
             series,
             kinetics,
@@ -115,7 +113,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
         }
         for slot in 0..e.bags.n_attached() {
             let c = e.bags.attached[slot].c;
-            e.handles.push(e.series.add(c));
+            e.bags.attached[slot].bin = e.series.add(c);
             // Every initial junction is unstretched (x = 0): its rate cannot overflow.
             e.kinetics.attached(slot, c, 0.0);
         }
@@ -206,8 +204,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
     fn rupture_slot<O: Observer>(&mut self, slot: usize, obs: &mut O) {
         let last = self.bags.n_attached() - 1;
         let a = self.bags.take_attached(slot);
-        let h = self.handles.swap_remove(slot);
-        self.series.remove(a.c, h);
+        self.series.remove(a.c, a.bin);
         if self.series.residue() > self.series.len() as u64 {
             self.refresh_series();
         }
@@ -231,8 +228,8 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
         };
         let y = self.y();
         let c = y - x;
-        self.bags.attach(c, d.id);
-        self.handles.push(self.series.add(c));
+        let bin = self.series.add(c);
+        self.bags.attach_in_bin(c, d.id, bin);
         self.error_stale = true;
         self.counters.formations += 1;
         self.emit(obs, EventKind::Formation, d.id, x);
@@ -285,6 +282,33 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
             return Err(EngineError::NonFinite { t: self.time(), quantity: "X", value: y });
         }
         Ok(())
+    }
+
+    /// Strong bonds: the plate step draws no random numbers, so the junction the due event
+    /// on channel `ch` will pick is already known; asking for its record now lets the memory
+    /// access (a random one among millions at large N) overlap the step. The picks are
+    /// drawn on a copy of the generator, exactly as the event will draw them (formation:
+    /// after the thinning's uniform when `g < 1`, so both candidates), and the run's
+    /// stream is untouched.
+    #[inline]
+    fn prefetch_pick(&self, ch: usize) {
+        match ch {
+            FORMATION => {
+                let n = self.bags.n_detached();
+                if n > 0 {
+                    let mut rng = self.rng.clone();
+                    prefetch(&self.bags.detached[rng.clone().random_range(0..n)]);
+                    rng.uniform();
+                    prefetch(&self.bags.detached[rng.random_range(0..n)]);
+                }
+            }
+            _ => {
+                let n = self.bags.n_attached();
+                if n > 0 {
+                    prefetch(&self.bags.attached[self.rng.clone().random_range(0..n)]);
+                }
+            }
+        }
     }
 
     /// One plate step towards `target`; weak bonds thin their rupture candidates over it.
@@ -349,6 +373,9 @@ impl<K: Kinetics, P: Motion> Engine for ExactSeries<K, P> {
             let (ch, t_next) = self.channels.first();
             let target = t_next.min(tau_stop);
             if self.tau < target {
+                if !K::IS_WEAK && t_next <= tau_stop {
+                    self.prefetch_pick(ch);
+                }
                 if let Some(slot) = self.plate_step(target)? {
                     self.check()?;
                     self.close_piece(obs);

@@ -205,7 +205,7 @@ mod tests {
     fn thinning_rate_matches_the_tilted_rate() {
         let law = Tilted { kappa: 0.5, l0: 1.0 };
         let mut k = WeakKinetics::new(0.3, 2.0, law.kappa, 4);
-        let att = [Attached { c: -0.7, id: 0 }];
+        let att = [Attached { c: -0.7, id: 0, bin: 0 }];
         assert!(k.attached(0, att[0].c, 0.0));
         let (y, mut rng, mut cand) = (0.2, pcg(7), 0u64);
         let expected_rate = 0.3 * (2.0 * law.tension(y - att[0].c)).exp();

@@ -326,11 +326,12 @@ impl Dynamic {
     }
 
     /// The series' local cubic at the step's start `y0` ([`SeriesSum::taylor_at`] over the
-    /// rest of the disc, `room = radius - |y0 - base|`), its `r4`, and the largest excursion
-    /// `d <= room` with `r4 d^4 <= CUBIC_SHARE rtol kappa l0 max(N, 1)` (`r4` bounds
-    /// `|S''''|/24` over `|z - y0| <= room`, so over `|z - y0| <= d` too). `None` (the
+    /// rest of the disc, `room = radius - |y0 - base|`) and the excursions it allows
+    /// ([`Reach`]: `e <= room` with `r4 e^4 <= CUBIC_SHARE rtol kappa l0 max(N, 1)`; `r4`
+    /// bounds `|S''''|/24` over `|z - y0| <= room`, so over `|z - y0| <= e` too). `None` (the
     /// series is evaluated) when the step's expected excursion, `|velocity| h` with `h` the
-    /// proposed step, exceeds `CUBIC_MARGIN d`: few junctions, or large steps.
+    /// proposed step, is more than `CUBIC_MARGIN` of what it allows: few junctions, or
+    /// large steps.
     fn local_cubic(
         &self,
         series: &SeriesSum,
@@ -338,7 +339,7 @@ impl Dynamic {
         tau: f64,
         target: f64,
         rtol: f64,
-    ) -> Option<(LocalCubic, f64, f64)> {
+    ) -> Option<(LocalCubic, Reach)> {
         let room = series.radius() - (y0 - series.base()).abs();
         if room.is_nan() || room <= 0.0 {
             return None;
@@ -347,15 +348,32 @@ impl Dynamic {
         if !(r4.is_finite() && c.iter().all(|x| x.is_finite())) {
             return None;
         }
-        let tol = CUBIC_SHARE * rtol * series.scale();
-        let d = if r4 > 0.0 { room.min((tol / r4).sqrt().sqrt()) } else { room };
+        let reach = Reach { room, r4, tol: CUBIC_SHARE * rtol * series.scale() };
         let v = if self.dynamic {
             self.state[1] / self.tau_w + self.plate.v
         } else {
             self.plate.overdamped_velocity(self.state[0], c[0])
         };
         let h = self.ode.h_proposal().map_or(target - tau, |h| h.min(target - tau));
-        if (v * h).abs() <= CUBIC_MARGIN * d { Some((LocalCubic { at: y0, c }, r4, d)) } else { None }
+        if reach.allows((v * h).abs() / CUBIC_MARGIN) { Some((LocalCubic { at: y0, c }, reach)) } else { None }
+    }
+}
+
+/// The excursions `e` from its centre over which a local cubic stands for the series:
+/// `e <= room` (inside the series' disc) and `r4 e^4 <= tol` (its remainder within its
+/// share of the tolerance). Tested as written, without taking the fourth root.
+#[derive(Clone, Copy, Debug)]
+struct Reach {
+    room: f64,
+    r4: f64,
+    tol: f64,
+}
+
+impl Reach {
+    #[inline]
+    fn allows(&self, e: f64) -> bool {
+        let e2 = e * e;
+        e <= self.room && self.r4 * (e2 * e2) <= self.tol
     }
 }
 
@@ -402,7 +420,7 @@ impl Motion for Dynamic {
             let y0 = self.y_of(self.state[0], tau);
             let cubic = if try_cubic { self.local_cubic(ctx.series, y0, tau, target, rtol) } else { None };
             let stepped = match &cubic {
-                Some((lc, _, _)) => {
+                Some((lc, _)) => {
                     let mut sys = self.system(lc);
                     self.ode.step(&mut sys, &mut t, &mut self.state[..n], target)
                 }
@@ -424,9 +442,9 @@ impl Motion for Dynamic {
             let tight = hi - lo <= ctx.max_spread || retakes >= LOOSE_AFTER;
             // The cubic's remainder `r4 e^4` over the step's excursion `e`, if within its `d`.
             let (in_cubic, cubic_error) = match cubic {
-                Some((_, r4, d)) => {
+                Some((_, reach)) => {
                     let e = (hi - y0).max(y0 - lo).max(0.0);
-                    (e <= d, r4 * (e * e) * (e * e) / ctx.series.scale())
+                    (reach.allows(e), reach.r4 * (e * e) * (e * e) / ctx.series.scale())
                 }
                 None => (true, 0.0),
             };
