@@ -152,7 +152,9 @@ struct System<'a, F: BondForce> {
 impl<F: BondForce> System<'_, F> {
     #[inline]
     fn y(&self, u: f64, t: f64) -> f64 {
-        u + self.plate.v * t - self.lag_ref
+        // `u` last: the only operand on the critical path of a stage (`V t - lag_ref` is known
+        // before the stage argument).
+        u + (self.plate.v * t - self.lag_ref)
     }
 }
 
@@ -193,7 +195,8 @@ impl<F: BondForce> System<'_, F> {
         if self.dynamic {
             let w = s[1] * self.inv_tau_w;
             d[0] = w;
-            d[1] = -(p.eta * (w + p.v) + fb + p.k * u) * self.scale;
+            // `fb` last: it is ready last (after the bond force's evaluation).
+            d[1] = -((p.eta * (w + p.v) + p.k * u) + fb) * self.scale;
         } else {
             d[0] = -(fb + p.k * u) * self.scale - p.v;
         }
@@ -308,7 +311,7 @@ impl Dynamic {
     }
     #[inline]
     fn y_of(&self, u: f64, tau: f64) -> f64 {
-        u + self.plate.v * tau - self.lag_ref
+        u + (self.plate.v * tau - self.lag_ref)
     }
 
     /// The plate's ODE with the bond force `f`.
