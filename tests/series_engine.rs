@@ -146,6 +146,25 @@ fn stiff_plates_cost_what_their_events_cost() {
     }
 }
 
+/// The scaled Fig. 1 scene of the path-by-path comparisons (`K = N/2`, `M = eta = N/4`,
+/// tilted law, `t_end = 100`) with `exact.tilted = method` and the `extra` overrides.
+fn path_scene(n: usize, seed: u64, method: &str, extra: &[&str]) -> Scene {
+    let o = [
+        "run.engine=exact".to_string(),
+        "junctions.force_law=tilted".into(),
+        format!("junctions.n={n}"),
+        format!("plate.k={}", 0.5 * n as f64),
+        format!("plate.mass={}", 0.25 * n as f64),
+        format!("plate.eta={}", 0.25 * n as f64),
+        format!("run.seed={seed}"),
+        "run.t_end=100".into(),
+        format!("exact.tilted={method}"),
+    ];
+    let mut o: Vec<&str> = o.iter().map(String::as_str).collect();
+    o.extend_from_slice(extra);
+    scene(stickslip_testkit::FIG1, &o)
+}
+
 /// Strong bonds: the series engine and the direct (DOP853, O(N)) engine draw the same
 /// random numbers in the same order (initial state, channel clocks, uniform picks, the
 /// formation acceptance), so with a few junctions they follow the same path: the same
@@ -155,24 +174,7 @@ fn stiff_plates_cost_what_their_events_cost() {
 fn strong_bonds_follow_the_direct_engine_path_by_path() {
     for n in [3, 30] {
         for seed in 1..=3u64 {
-            let base = [
-                "run.engine=exact".to_string(),
-                "junctions.force_law=tilted".into(),
-                format!("junctions.n={n}"),
-                format!("plate.k={}", 0.5 * n as f64),
-                format!("plate.mass={}", 0.25 * n as f64),
-                format!("plate.eta={}", 0.25 * n as f64),
-                format!("run.seed={seed}"),
-                "run.t_end=100".into(),
-                "output.sample_dt=0.5".into(),
-            ];
-            let run = |method: &str| {
-                let mut o: Vec<&str> = base.iter().map(String::as_str).collect();
-                let m = format!("exact.tilted={method}");
-                o.push(&m);
-                let s = scene(stickslip_testkit::FIG1, &o);
-                record(&s).0
-            };
+            let run = |method: &str| record(&path_scene(n, seed, method, &["output.sample_dt=0.5"])).0;
             let (a, b) = (run("series"), run("direct"));
             assert!(a.events.len() > 10, "n = {n}: {} events", a.events.len());
             assert_eq!(a.events.len(), b.events.len(), "n = {n} seed {seed}: event counts");
@@ -189,6 +191,40 @@ fn strong_bonds_follow_the_direct_engine_path_by_path() {
             for (x, y) in a.samples.iter().zip(&b.samples) {
                 assert!((x.x - y.x).abs() <= 1e-6 * (1.0 + y.x.abs()), "t = {}: {} vs {}", x.t, x.x, y.x);
                 assert!((x.v - y.v).abs() <= 1e-6 * (1.0 + y.v.abs()), "t = {}: {} vs {}", x.t, x.v, y.v);
+            }
+        }
+    }
+}
+
+/// The run's main outputs, the friction mean and standard deviation and the mean bond
+/// and viscous forces, from the series engine's piece statistics (dense-output integrals
+/// and the force balance) against the direct engine's quadratures, on realisations that
+/// coincide path-wise (strong bonds, a few junctions: the same events, see
+/// `strong_bonds_follow_the_direct_engine_path_by_path`). They differ by the two integrators' and the series'
+/// errors: relative `rtol` per step at most, added over the steps of the longer run.
+#[test]
+fn statistics_match_the_direct_engine_path_by_path() {
+    for n in [3usize, 30] {
+        for seed in 1..=2u64 {
+            let run = |method: &str| {
+                let s = path_scene(n, seed, method, &["output.trace=false"]);
+                (stickslip::run_scene(&s, None).unwrap(), s.exact.rtol)
+            };
+            let ((a, rtol), (b, _)) = (run("series"), run("direct"));
+            assert_eq!((a.counters.ruptures, a.counters.formations), (b.counters.ruptures, b.counters.formations));
+            let steps = a.counters.ode_steps.unwrap().max(b.counters.ode_steps.unwrap()) as f64;
+            let tol = steps * rtol;
+            let scale = a.friction_mean.abs().max(a.bond_force_mean.abs());
+            for (name, x, y) in [
+                ("friction_mean", a.friction_mean, b.friction_mean),
+                ("friction_std", a.friction_std, b.friction_std),
+                ("bond_force_mean", a.bond_force_mean, b.bond_force_mean),
+                ("viscous_force_mean", a.viscous_force_mean, b.viscous_force_mean),
+            ] {
+                assert!(
+                    (x - y).abs() <= tol * scale,
+                    "n = {n} seed {seed}: {name} {x} vs {y}, tolerance {tol:.1e} x {scale}"
+                );
             }
         }
     }

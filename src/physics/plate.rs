@@ -19,10 +19,16 @@ impl Plate {
     pub fn spring_force(&self, lag: f64) -> f64 {
         -self.k * lag
     }
+    /// Net force on the plate `-(eta Xd + F_b + K u)`, with `u = X - V t`: the plate
+    /// equation is `M Xdd = ` this (and `0 = ` this with `M = 0`).
+    #[inline]
+    pub fn net_force(&self, lag: f64, xd: f64, bond_force: f64) -> f64 {
+        -(self.eta * xd + bond_force + self.k * lag)
+    }
     /// Acceleration `Xdd = -(eta Xd + F_b + K u) / M` for `M > 0`, with `u = X - V t`.
     #[inline]
     pub fn acceleration(&self, lag: f64, xd: f64, bond_force: f64) -> f64 {
-        -(self.eta * xd + bond_force + self.k * lag) / self.mass
+        self.net_force(lag, xd, bond_force) / self.mass
     }
     /// Overdamped velocity `Xd = -(F_b + K u) / eta` for `M = 0`.
     #[inline]

@@ -152,10 +152,16 @@ struct System<'a, F: BondForce> {
 impl<F: BondForce> System<'_, F> {
     #[inline]
     fn y(&self, u: f64, t: f64) -> f64 {
-        // `u` last: the only operand on the critical path of a stage (`V t - lag_ref` is known
-        // before the stage argument).
-        u + (self.plate.v * t - self.lag_ref)
+        position(u, t, self.plate.v, self.lag_ref)
     }
+}
+
+/// The plate's position `y = u + V t - lag_ref` in the frame from the lag `u`, summed as
+/// `u + (V t - lag_ref)`: inside a step, `u` is the only operand on the critical path of a
+/// stage (`V t - lag_ref` is known before the stage argument).
+#[inline]
+fn position(u: f64, t: f64, v: f64, lag_ref: f64) -> f64 {
+    u + (v * t - lag_ref)
 }
 
 impl<F: BondForce> StiffSystem for System<'_, F> {
@@ -188,17 +194,16 @@ impl<F: BondForce> System<'_, F> {
     /// The right-hand side at state `s` with bond force `fb`.
     #[inline]
     fn fill_rhs(&self, fb: f64, s: &[f64], d: &mut [f64]) {
-        // tau_w Plate::acceleration and Plate::overdamped_velocity, with the division by `M`
-        // (or `eta`) as a multiplication by the precomputed `scale`.
+        // The plate equation's net force (`Plate::net_force`), divided by `M` (or `eta`) as a
+        // multiplication by the precomputed `scale`.
         let u = s[0];
         let p = &self.plate;
         if self.dynamic {
             let w = s[1] * self.inv_tau_w;
             d[0] = w;
-            // `fb` last: it is ready last (after the bond force's evaluation).
-            d[1] = -((p.eta * (w + p.v) + p.k * u) + fb) * self.scale;
+            d[1] = p.net_force(u, w + p.v, fb) * self.scale;
         } else {
-            d[0] = -(fb + p.k * u) * self.scale - p.v;
+            d[0] = p.net_force(u, 0.0, fb) * self.scale - p.v;
         }
     }
 
@@ -311,7 +316,7 @@ impl Dynamic {
     }
     #[inline]
     fn y_of(&self, u: f64, tau: f64) -> f64 {
-        u + (self.plate.v * tau - self.lag_ref)
+        position(u, tau, self.plate.v, self.lag_ref)
     }
 
     /// The plate's ODE with the bond force `f`.
