@@ -87,7 +87,7 @@ pub trait ForceLaw: Copy + Send + Sync + std::fmt::Debug + Serialize + Deseriali
 
 /// Numerical checks every law must pass: `stiffness_x` is the derivative of `force_x`,
 /// `f <= c |x|`, the stiffness stays in its range, `(f, f^x)` agree with the separate calls.
-/// Used by each law's unit test and by tests/law_extension.rs.
+/// Used by each law's unit test and by tests/suite/law_extension.rs.
 pub fn check_law<L: ForceLaw>(law: &L, xs: &[f64]) -> Result<(), String> {
     let c = law.thinning_slope();
     let (lo, hi) = law.stiffness_range();

@@ -2,7 +2,7 @@
 //!
 //! A single point's error is its bias plus sampling noise, and at small steps the noise
 //! dominates. The fixed-step scheme is consistent and first order (`docs/engines.md`,
-//! `tests/convergence.rs`), so its bias is modelled as `b(dt) = c1 dt + c2 dt^2` and fitted
+//! `tests/suite/convergence.rs`), so its bias is modelled as `b(dt) = c1 dt + c2 dt^2` and fitted
 //! by generalised least squares to every stable point's error, with the covariance
 //! `C_ij = se_i^2 delta_ij + se_ref^2`: the errors share the reference's sampling error.
 //! The fit's chi-square tests the model; a scheme that does not converge to the model (the

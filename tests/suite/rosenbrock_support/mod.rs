@@ -1,4 +1,4 @@
-//! Test systems for the Rosenbrock integrator (`tests/rosenbrock.rs`, `benches/rosenbrock.rs`),
+//! Test systems for the Rosenbrock integrator (`tests/suite/rosenbrock.rs`, `benches/rosenbrock.rs`),
 //! each with its analytic Jacobian.
 #![allow(dead_code)]
 
@@ -143,7 +143,7 @@ impl StiffSystem for VanDerPol {
     }
 }
 
-/// A non-autonomous nonlinear system with known solution (as `tests/ode_support::Mixed`):
+/// A non-autonomous nonlinear system with known solution (as `tests/suite/ode_support::Mixed`):
 /// `y0 = 1/(1 + t^2)`, `y1 = exp(sin t)`, `(y2, y3) = (sin t, cos t)`, `y4 = exp(t)`.
 pub struct Mixed;
 

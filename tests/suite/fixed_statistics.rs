@@ -14,7 +14,7 @@
 //! independent junctions. Every test uses a two-sided significance level `ALPHA` per test,
 //! fixed seeds, and checks its own power: the same data must reject a nearby wrong rule.
 
-mod common;
+use crate::common;
 
 use statrs::distribution::{Binomial, ChiSquared, ContinuousCDF, Discrete, Normal};
 use stickslip::Scene;

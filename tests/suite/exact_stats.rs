@@ -1,8 +1,8 @@
 //! Statistical tests of the exact engine against exact results (docs/model.md, "Exact
 //! facts used as checks"). Fixed seeds; every tolerance is a critical value at level `ALPHA`.
-//! Run with `cargo test --release --test exact_stats`.
+//! Run with `cargo test --release --test suite exact_stats::`.
 
-mod common;
+use crate::common;
 
 use common::*;
 use stickslip::observe::EventKind;

@@ -3,7 +3,7 @@
 //! estimators of orders 5 and 3. These catch coefficient typos that the algebraic checks in
 //! `src/ode/coefficients.rs` might not (e.g. a wrong stage index in the stepper).
 
-mod ode_support;
+use crate::ode_support;
 
 use ode_support::{Driven, Mixed, max_abs_diff, sci, slope};
 use stickslip::ode::{Dop853, OdeSystem};

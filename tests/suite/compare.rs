@@ -1,7 +1,7 @@
 //! `stickslip compare` end to end on a tiny scene: the three files with finite numbers, the
 //! same CSV (timing columns aside) with 1 and 2 threads, a diverging step reported rather
 //! than fatal, and bad arguments refused with one line and nothing written.
-//! Run with `cargo test --release --test compare` (a few seconds).
+//! Run with `cargo test --release --test suite compare::` (a few seconds).
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

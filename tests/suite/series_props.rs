@@ -6,8 +6,8 @@
 //! `int S` at random points within the radius must match the oracle within `error_bound()`,
 //! `stiffness_error_bound()` and `|y1 - y0| error_bound()`.
 //!
-//! Fast by default (`cargo test --release --test series_props`); more cases with
-//! `PROPTEST_CASES=5000 cargo test --release --test series_props -- --nocapture`.
+//! Fast by default (`cargo test --release --test suite series_props::`); more cases with
+//! `PROPTEST_CASES=5000 cargo test --release --test suite series_props:: -- --nocapture`.
 
 use proptest::prelude::*;
 use rand::{RngExt, SeedableRng};

@@ -1,8 +1,8 @@
 //! The fixed-step engine converges to the exact engine as `dt -> 0` on the letter's Fig. 1
 //! scene: the bias of `friction_mean` is proportional to `dt`.
-//! Run with `cargo test --release --test convergence`.
+//! Run with `cargo test --release --test suite convergence::`.
 
-mod common;
+use crate::common;
 
 use common::{ALPHA, chi2_critical};
 use statrs::distribution::{ContinuousCDF, Normal};

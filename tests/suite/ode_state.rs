@@ -1,6 +1,6 @@
 //! Counters, FSAL/restart bookkeeping, step-size memory across `t_max` cuts, checkpoints.
 
-mod ode_support;
+use crate::ode_support;
 
 use ode_support::Driven;
 use std::cell::Cell;

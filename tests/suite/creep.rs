@@ -5,10 +5,10 @@
 //! `E[f] = f_b e^a E1(a)`, `a = k0 f_b / r`; by renewal-reward the mean friction per junction
 //! is `E[f^2] / (2 r) / (E[f] / r + 1 / kon0) + eta V / N`. Each replica's window averages
 //! are independent (disjoint seeds), so their mean has a Student-t interval; the test fails
-//! if the theory lies outside the 99.9 % interval. Run with `cargo test --release --test creep`
+//! if the theory lies outside the 99.9 % interval. Run with `cargo test --release --test suite creep::`
 //! (about a second).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

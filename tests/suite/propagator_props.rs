@@ -13,8 +13,8 @@
 //! i.e. the conditioning with respect to `M, eta, k`). Both this sup-based scale and the
 //! stricter pointwise one (`|U_*(tau)|` instead of `sup`) are asserted at `1e-10`.
 //!
-//! Fast by default (`cargo test --release --test propagator_props`); the heavy run is
-//! `PROPTEST_CASES=20000 cargo test --release --test propagator_props -- --include-ignored --nocapture`.
+//! Fast by default (`cargo test --release --test suite propagator_props::`); the heavy run is
+//! `PROPTEST_CASES=20000 cargo test --release --test suite propagator_props:: -- --include-ignored --nocapture`.
 
 #![allow(clippy::needless_range_loop)] // index-heavy matrix code reads better with ranges
 
@@ -573,14 +573,14 @@ fn sweep(n: usize, seed: u64) -> Worst {
 }
 
 /// Prints the worst errors (the numbers quoted in docs/propagator.md):
-/// `cargo test --release --test propagator_props sweep -- --nocapture`.
+/// `cargo test --release --test suite propagator_props::sweep -- --nocapture`.
 #[test]
 fn sweep_records_worst_errors() {
     sweep(60, 0x9e37_79b9_7f4a_7c15);
 }
 
 /// The heavy run: 8 x 2500 cases.
-/// `cargo test --release --test propagator_props -- --ignored --nocapture`.
+/// `cargo test --release --test suite propagator_props:: -- --ignored --nocapture`.
 #[test]
 #[ignore = "heavy: 20000 reference cases, about a minute"]
 fn sweep_heavy() {

@@ -1,5 +1,5 @@
 //! The regime criterion against the `N -> infinity` moment equations of strong linear bonds
-//! (`tests/common/moments.rs`), on the scene of issue 11: per-junction plate `m = M/N =
+//! (`tests/suite/common/moments.rs`), on the scene of issue 11: per-junction plate `m = M/N =
 //! 0.25`, `e = eta/N = 0.05`, `k = K/N = 0.1`, `kappa = 0.1`, `k0 = 1`, `kon0 = 0.2`,
 //! `lambda = 0.01`, `V0 = 0.5`, all junctions detached at `t = 0`, window `[700, 1500]`.
 //!
@@ -17,10 +17,10 @@
 //!   sizes (the `O(1/N)` finite-size term eliminated: Richardson), agree with the moment
 //!   equations within the 99.9 % Student-t interval of the extrapolation.
 //!
-//! The largest sizes are `#[ignore]`d (minutes): `cargo test --release --test regime --
+//! The largest sizes are `#[ignore]`d (minutes): `cargo test --release --test suite regime:: --
 //! --ignored` (docs/model.md, "Regime criterion", lists the commands and times).
 
-mod common;
+use crate::common;
 
 use common::mean_ci;
 use common::moments::MomentModel;
@@ -133,7 +133,7 @@ fn the_exact_engine_agrees_at_n_1e4() {
 }
 
 #[test]
-#[ignore = "slow; the three ignored tests take 90 s: cargo test --release --test regime -- --ignored"]
+#[ignore = "slow; the three ignored tests take 90 s: cargo test --release --test suite regime:: -- --ignored"]
 fn the_exact_engine_agrees_at_n_1e5() {
     agrees(100_000, 1, &[]);
 }
@@ -144,7 +144,7 @@ fn the_fixed_step_engine_agrees_at_n_1e3() {
 }
 
 #[test]
-#[ignore = "slow; the three ignored tests take 90 s: cargo test --release --test regime -- --ignored"]
+#[ignore = "slow; the three ignored tests take 90 s: cargo test --release --test suite regime:: -- --ignored"]
 fn the_fixed_step_engine_agrees_at_n_1e4() {
     agrees(10_000, 1, &["run.engine=fixed", "fixed.dt=0.01"]);
 }
@@ -211,7 +211,7 @@ fn the_exact_engine_has_the_moment_equations_friction_and_oscillation() {
 }
 
 #[test]
-#[ignore = "slow; the three ignored tests take 90 s: cargo test --release --test regime -- --ignored"]
+#[ignore = "slow; the three ignored tests take 90 s: cargo test --release --test suite regime:: -- --ignored"]
 fn the_exact_engine_has_the_moment_equations_friction_and_oscillation_at_n_1e5() {
     check_extrapolation(10_000, 8);
 }
@@ -244,7 +244,7 @@ fn the_fig2_scene_agrees_with_its_moment_equations() {
 fn the_fig2_stability_table_of_the_results() {
     // docs/results.md ("The roles of K, M = eta, lambda and the kinetic rates"): the range of
     // V where fig2's steady sliding is unstable, with one parameter changed. Printed by
-    // `cargo test --release --test regime the_fig2_stability_table -- --nocapture`.
+    // `cargo test --release --test suite regime::the_fig2_stability_table -- --nocapture`.
     let fig2 =
         Scene::from_file(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/fig2.toml"), &[]).unwrap();
     type Row<'a> = (&'a [&'a str], Option<(f64, f64)>);

@@ -1,19 +1,19 @@
 //! Weak bonds at a kinematic drive against their renewal theory (docs/model.md, "Weak bonds
-//! at a kinematic drive: renewal theory"; reference in `tests/common/renewal.rs`).
+//! at a kinematic drive: renewal theory"; reference in `tests/suite/common/renewal.rs`).
 //!
 //! Each engine run is one replica; `R` replicas with independent seeds give a Student-t
 //! interval at level `1 - ALPHA` for the time averages of `summary.json`
 //! (`attached_fraction_mean`, and `bond_force_mean / N`, the time average of `q f^x` per
 //! junction, which for the `linear` law at `V > 0` is also the mean tension). A test passes
 //! when the reference lies within the interval's half-width plus the reference's own error
-//! bound. Run with `cargo test --release --test renewal`.
+//! bound. Run with `cargo test --release --test suite renewal::`.
 //!
 //! The start (all detached, `x = 0`) is a renewal point of every junction, and the window
 //! starts after `T_WARMUP = 400`, more than 20 mean cycles: the transient of the expectation
 //! decays at least like the detached phase's `exp(-kon t)` mixing (`kon t_w > 30` here), far
 //! below the statistical resolution.
 
-mod common;
+use crate::common;
 
 use common::renewal::{Bounded, Renewal, linear_closed_form};
 use common::*;

@@ -2,9 +2,9 @@
 //! the fixed-step engine: the output convention, the single weak bond's exact survival, and
 //! the strong-bond mean field of a plate moving at exactly `V` (docs/model.md, "Exact facts
 //! used as checks"). Fixed seeds; tolerances are KS critical values or Student-t intervals at
-//! level `ALPHA`. Run with `cargo test --release --test kinematic`.
+//! level `ALPHA`. Run with `cargo test --release --test suite kinematic::`.
 
-mod common;
+use crate::common;
 
 use common::*;
 use stickslip::observe::EventKind;

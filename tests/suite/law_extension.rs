@@ -14,7 +14,7 @@
 //!   Binomial(N, kon0/(kon0+k0)) whatever the law: `Saturating` on both engines, pooled over
 //!   seeds, within the binomial's 99.99% two-sided normal interval.
 
-mod common;
+use crate::common;
 
 use serde::{Deserialize, Serialize};
 use stickslip::Scene;

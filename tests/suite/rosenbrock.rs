@@ -3,10 +3,10 @@
 //! stiff problem (Van der Pol, `eps = 1e-6`), convergence orders, dense output and its
 //! bounds, the event-cut workload, checkpoints and error paths.
 //!
-//! Run: `cargo test --profile quick --test rosenbrock -- --nocapture` (prints the measured
+//! Run: `cargo test --profile quick --test suite rosenbrock:: -- --nocapture` (prints the measured
 //! numbers quoted in docs/ode.md).
 
-mod rosenbrock_support;
+use crate::rosenbrock_support;
 
 use proptest::prelude::*;
 use rosenbrock_support::{CubicPlate, Explicit, LinPlate, Mixed, VanDerPol};

@@ -13,7 +13,7 @@
 //! stream used the same way): two runs with the same seed and different plate parameters
 //! have the same event times and junctions. Several cases use that to compare plates exactly.
 
-mod common;
+use crate::common;
 
 use common::*;
 use stickslip::Scene;
@@ -425,7 +425,7 @@ fn many_junctions_ci_size() {
     many_junctions(100_000);
 }
 
-/// Full size: `cargo test --release --test extreme -- --ignored` (docs/stability.md).
+/// Full size: `cargo test --release --test suite extreme:: -- --ignored` (docs/stability.md).
 #[test]
 #[ignore]
 fn many_junctions_full_size() {

@@ -7,11 +7,11 @@
 //! over the observables compared): Welch's t over independent seeds; where two runs consume
 //! the same random numbers and their realisations coincide path-wise, they are compared
 //! per seed to a tolerance derived from the physics they differ by.
-//! Run: `cargo test --release --test tilted_series`; the 1 %-power comparison of the two
-//! engines is `#[ignore]`d (about a minute): `cargo test --release --test tilted_series --
+//! Run: `cargo test --release --test suite tilted_series::`; the 1 %-power comparison of the two
+//! engines is `#[ignore]`d (about a minute): `cargo test --release --test suite tilted_series:: --
 //! --ignored`.
 
-mod common;
+use crate::common;
 
 use common::{ALPHA, Welch, welch};
 use stickslip::output::Summary;
@@ -113,7 +113,7 @@ fn series_against_direct(t_end: f64, r_direct: u64, r_series: u64) -> Vec<(&'sta
 /// draw the same clocks but keep their detached junctions in differently ordered bags, so
 /// the first formation that picks a junction with a residual extension starts different
 /// realisations: no path-wise comparison here; the engine's own tests compare paths with
-/// a few junctions, tests/series_engine.rs.)
+/// a few junctions, tests/suite/series_engine.rs.)
 #[test]
 fn series_and_direct_engines_agree_on_fig1() {
     let detectable = series_against_direct(300.0, 8, 16);
@@ -126,7 +126,7 @@ fn series_and_direct_engines_agree_on_fig1() {
 /// detects 0.93 % (friction mean), 0.39 % (attached fraction) and 5.5 % (the friction's
 /// standard deviation, which fluctuates too much from run to run for 1 % at an affordable
 /// cost: printed, not asserted). About two and a half minutes:
-/// `cargo test --release --test tilted_series -- --ignored`.
+/// `cargo test --release --test suite tilted_series:: -- --ignored`.
 #[test]
 #[ignore]
 fn series_and_direct_engines_agree_on_fig1_to_one_percent() {

@@ -3,7 +3,7 @@
 //! short every 0.03 by `t_max` (the engine's pattern), the same with `reset` at each limit,
 //! and a forcing that jumps at each limit (a real discontinuity, handled by `reset`).
 
-mod ode_support;
+use crate::ode_support;
 
 use ode_support::Driven;
 use stickslip::ode::{Dop853, Dop853Config, OdeStats};
