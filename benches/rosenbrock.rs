@@ -19,7 +19,7 @@ use std::time::Duration;
 use criterion::{Criterion, criterion_group, criterion_main};
 use stickslip::ode::{Dop853, Rosenbrock};
 
-#[path = "../tests/rosenbrock_support/mod.rs"]
+#[path = "../tests/suite/rosenbrock_support/mod.rs"]
 mod support;
 use support::{CubicPlate, Explicit};
 

@@ -76,6 +76,9 @@ pub enum EngineError {
 pub trait Engine: Serialize + DeserializeOwned + Send + 'static {
     /// Which engine this is.
     const KIND: EngineKind;
+    /// Whether its bonds are weak (ruptures drawn from a force-dependent rate). The run loop
+    /// keeps rupture-force statistics only then, chosen by this constant at compile time.
+    const WEAK_BONDS: bool;
     /// Current time.
     fn time(&self) -> f64;
     /// The engine's fixed step, if it has one: it can only stop on multiples of it.

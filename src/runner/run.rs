@@ -103,11 +103,20 @@ pub(super) fn run_from<E: Engine>(engine: E, plan: &RunPlan, mut start: RunStart
     let run = &plan.scene.run;
     let weak = plan.scene.junctions.bond == BondKind::Weak;
     let ruptures = start.ruptures.take().unwrap_or_else(|| RuptureForces::new(run.t_warmup, run.t_end));
-    match (start.writers.events.take(), weak) {
-        (None, false) => run_engine(engine, plan, Nothing, start),
-        (None, true) => run_engine(engine, plan, ruptures, start),
-        (Some(ev), false) => run_engine(engine, plan, ev, start),
-        (Some(ev), true) => run_engine(engine, plan, (ev, ruptures), start),
+    debug_assert_eq!(weak, E::WEAK_BONDS, "the engine's bonds are the scene's");
+    // `E::WEAK_BONDS` is a constant, so each engine is compiled with the two observer sets
+    // of its own bond kind only.
+    let events = start.writers.events.take();
+    if E::WEAK_BONDS {
+        match events {
+            None => run_engine(engine, plan, ruptures, start),
+            Some(ev) => run_engine(engine, plan, (ev, ruptures), start),
+        }
+    } else {
+        match events {
+            None => run_engine(engine, plan, Nothing, start),
+            Some(ev) => run_engine(engine, plan, ev, start),
+        }
     }
 }
 

@@ -128,6 +128,14 @@ impl Simulation {
     }
 }
 
+/// A recorder, and the core observers if given: the one observer type of
+/// [`Observed::Recorder`] and [`Observed::RecorderAndCore`].
+type Recording<'a> = (&'a mut Recorder, Option<&'a mut CoreObservers>);
+
+fn recording<'a>(r: &'a mut Recorder, c: Option<&'a mut CoreObservers>) -> Recording<'a> {
+    (r, c)
+}
+
 /// What [`Simulation`] needs of an engine, object-safe. Every method is one virtual call
 /// into code monomorphised for the engine.
 trait ErasedEngine: Send {
@@ -162,19 +170,22 @@ impl<E: Engine> ErasedEngine for E {
         Engine::counters(self)
     }
     fn advance(&mut self, t_stop: f64, obs: Observed<'_>) -> Result<(), EngineError> {
+        // Three observer types, not four: a recorder, with or without the core observers, is
+        // one type (`Recording`: the core's presence is a predictable branch per segment), so
+        // each engine is compiled once less.
         match obs {
             Observed::Nothing => Engine::advance(self, t_stop, &mut Nothing),
-            Observed::Recorder(r) => Engine::advance(self, t_stop, r),
             Observed::Core(c) => Engine::advance(self, t_stop, c),
-            Observed::RecorderAndCore(r, c) => Engine::advance(self, t_stop, &mut (r, c)),
+            Observed::Recorder(r) => Engine::advance(self, t_stop, &mut recording(r, None)),
+            Observed::RecorderAndCore(r, c) => Engine::advance(self, t_stop, &mut recording(r, Some(c))),
         }
     }
     fn drive(&mut self, walk: &mut Walk, obs: Observed<'_>, stop: Option<&StopFlag>) -> Result<Outcome, EngineError> {
         match obs {
             Observed::Nothing => drive_walk(self, walk, &mut Nothing, stop, nothing_at_stops),
-            Observed::Recorder(r) => drive_walk(self, walk, r, stop, nothing_at_stops),
             Observed::Core(c) => drive_walk(self, walk, c, stop, nothing_at_stops),
-            Observed::RecorderAndCore(r, c) => drive_walk(self, walk, &mut (r, c), stop, nothing_at_stops),
+            Observed::Recorder(r) => drive_walk(self, walk, &mut recording(r, None), stop, nothing_at_stops),
+            Observed::RecorderAndCore(r, c) => drive_walk(self, walk, &mut recording(r, Some(c)), stop, nothing_at_stops),
         }
     }
     fn state(&self) -> Vec<u8> {

@@ -1,7 +1,6 @@
 //! Event location on the dense output: crossings inside a step, exactly at a step end, no
 //! false crossings, non-monotone event functions, errors.
 
-use crate::ode_support;
 
 use std::f64::consts::LN_2;
 

@@ -423,6 +423,7 @@ pub(crate) fn ode_error(e: OdeError, t: f64, rtol: f64) -> EngineError {
 
 impl<L: ForceLaw, B: Bond> Engine for ExactDirect<L, B> {
     const KIND: EngineKind = EngineKind::Exact;
+    const WEAK_BONDS: bool = B::IS_WEAK;
 
     fn time(&self) -> f64 {
         self.frame.time(self.tau)

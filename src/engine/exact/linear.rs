@@ -376,6 +376,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
 
 impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Engine for ExactLinear<R, Q, M> {
     const KIND: EngineKind = EngineKind::Exact;
+    const WEAK_BONDS: bool = R::IS_WEAK;
 
     fn time(&self) -> f64 {
         self.frame.time(self.tau)

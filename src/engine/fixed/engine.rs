@@ -303,6 +303,7 @@ where
     R: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static,
 {
     const KIND: EngineKind = EngineKind::Fixed;
+    const WEAK_BONDS: bool = B::IS_WEAK;
 
     /// `t_n = n dt`, from the integer step count.
     fn time(&self) -> f64 {

@@ -357,6 +357,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
 
 impl<K: Kinetics, P: Motion> Engine for ExactSeries<K, P> {
     const KIND: EngineKind = EngineKind::Exact;
+    const WEAK_BONDS: bool = K::IS_WEAK;
 
     fn time(&self) -> f64 {
         self.frame.time(self.tau)
