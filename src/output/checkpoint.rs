@@ -29,6 +29,7 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 
 use super::atomic::sync_dir;
+use super::state_codec;
 
 /// The checkpoint's file name in the output directory.
 pub const FILE: &str = "checkpoint.bin";
@@ -171,7 +172,7 @@ fn write_part<H: Serialize, E: Serialize>(part: &Path, header: &H, engine: &E) -
     w.write_all(&VERSION.to_le_bytes())?;
     w.write_all(&(head.len() as u64).to_le_bytes())?;
     w.write_all(&head)?;
-    engine.serialize(&mut rmp_serde::Serializer::new(&mut w).with_struct_map()).map_err(encode_error)?;
+    state_codec::encode(&mut w, engine).map_err(encode_error)?;
     w.flush()?;
     let Summing { inner: mut file, sum } = w.into_inner().map_err(|e| e.into_error())?;
     let len = sum.len;
@@ -198,9 +199,7 @@ impl<H> Loaded<H> {
     /// Decodes the engine state as type `E`.
     pub fn engine<E: DeserializeOwned>(&self) -> Result<E, CheckpointError> {
         let body = &self.bytes[self.engine_at..self.bytes.len() - TRAILER];
-        let mut de = rmp_serde::Deserializer::from_read_ref(body);
-        let e = E::deserialize(&mut de).map_err(|e| self.decode("engine state", e))?;
-        Ok(e)
+        state_codec::decode(body).map_err(|e| self.decode("engine state", e))
     }
     fn decode(&self, what: &'static str, e: impl std::fmt::Display) -> CheckpointError {
         CheckpointError::Decode { path: self.path.clone(), what, message: e.to_string() }

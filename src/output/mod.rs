@@ -3,6 +3,7 @@
 pub mod atomic;
 pub mod checkpoint;
 pub mod csv;
+pub mod state_codec;
 pub mod summary;
 
 pub use summary::Summary;

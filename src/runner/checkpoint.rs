@@ -269,7 +269,7 @@ mod tests {
 
     fn state_bytes<E: Engine>(e: &E) -> Vec<u8> {
         let mut v = Vec::new();
-        e.serialize(&mut rmp_serde::Serializer::new(&mut v).with_struct_map()).unwrap();
+        crate::output::state_codec::encode(&mut v, e).unwrap();
         v
     }
 
@@ -362,7 +362,7 @@ mod tests {
             let (mut rec, mut walk) = (Recorder::default(), grid.walk_from(GridPosition::default()));
             let mut copies = Vec::new();
             drive_walk(&mut whole, &mut walk, &mut rec, None, |e, r, p| {
-                let copy: E = rmp_serde::from_slice(&state_bytes(e)).unwrap();
+                let copy: E = crate::output::state_codec::decode(&state_bytes(e)).unwrap();
                 copies.push((copy, r.clone(), *p));
                 Ok::<(), RunError>(())
             })

@@ -10,7 +10,6 @@
 
 use std::any::type_name;
 
-use serde::Serialize;
 use serde::de::IgnoredAny;
 
 use super::drive::{Outcome, StopFlag, drive_walk};
@@ -18,6 +17,7 @@ use super::grid::{GridPosition, OutputGrid, Walk};
 use super::observers::CoreObservers;
 use crate::engine::{Counters, Engine, EngineError, EngineVisitor, with_engine};
 use crate::observe::{Nothing, Recorder, Sample};
+use crate::output::state_codec;
 use crate::scene::{EngineKind, Scene};
 
 /// The observers an advance of a [`Simulation`] can feed.
@@ -38,7 +38,7 @@ pub enum StateError {
     #[error(transparent)]
     Engine(#[from] EngineError),
     #[error("the state is not a simulation state: {0}")]
-    Malformed(#[source] rmp_serde::decode::Error),
+    Malformed(#[source] state_codec::CodecError),
     #[error("the state holds engine {found}, but the scene builds {expected}")]
     WrongEngine { found: String, expected: &'static str },
 }
@@ -190,9 +190,7 @@ impl<E: Engine> ErasedEngine for E {
     }
     fn state(&self) -> Vec<u8> {
         let mut v = Vec::new();
-        (type_name::<E>(), self)
-            .serialize(&mut rmp_serde::Serializer::new(&mut v).with_struct_map())
-            .expect("an engine serializes to memory");
+        state_codec::encode(&mut v, &(type_name::<E>(), self)).expect("an engine serializes to memory");
         v
     }
 }
@@ -223,11 +221,11 @@ impl EngineVisitor for Restore<'_> {
     fn visit<E: Engine>(self, fresh: E) -> Self::Output {
         // The fresh engine only told the type; the state replaces it.
         drop(fresh);
-        let (found, _): (String, IgnoredAny) = rmp_serde::from_slice(self.state).map_err(StateError::Malformed)?;
+        let (found, _): (String, IgnoredAny) = state_codec::decode(self.state).map_err(StateError::Malformed)?;
         if found != type_name::<E>() {
             return Err(StateError::WrongEngine { found, expected: type_name::<E>() });
         }
-        let (_, engine): (IgnoredAny, E) = rmp_serde::from_slice(self.state).map_err(StateError::Malformed)?;
+        let (_, engine): (IgnoredAny, E) = state_codec::decode(self.state).map_err(StateError::Malformed)?;
         Ok(Simulation::with(self.scene, engine))
     }
 }
