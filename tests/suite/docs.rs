@@ -505,7 +505,8 @@ fn history_marks(text: &str) -> Vec<(usize, String)> {
             continue;
         }
         let token_len = b[i..].iter().take_while(|&&c| word(c)).count();
-        let token = &text[i..i + token_len];
+        // An ASCII word starts on a character boundary; anything else is no token.
+        let token = if token_len > 0 { &text[i..i + token_len] } else { "" };
         let digits_after = |from: usize| b[from..].iter().take_while(|c| c.is_ascii_digit()).count();
         if token.eq_ignore_ascii_case("issue") || token.eq_ignore_ascii_case("issues") {
             let mut j = i + token_len;
@@ -521,7 +522,8 @@ fn history_marks(text: &str) -> Vec<(usize, String)> {
             }
         } else if b[i] == b'#' && i > 0 && matches!(b[i - 1], b' ' | b'(') {
             let n = digits_after(i + 1);
-            if n > 0 && !b.get(i + 1 + n).is_some_and(|&c| word(c)) {
+            // Not an anchor such as `#1-units`.
+            if n > 0 && !b.get(i + 1 + n).is_some_and(|&c| word(c) || c == b'-') {
                 out.push((i, format!("an issue number ({})", &text[i..i + 1 + n])));
             }
         } else if token == "h" && b.get(i + 1) == Some(&b'-') {
@@ -615,9 +617,10 @@ fn links_and_citations_are_found() {
 
 #[test]
 fn history_marks_are_found() {
-    let text = "issue 11's scene; Issue #5 item 1; see (#12) and #3, commit `993d295` and 6c37857; \
-                branch h-plate, `h-engine`. Not: 1.0e-13, 9.094947017729282e-13, 1234567, deadbeef, \
-                [a](#fig-1), #L12, x#5, abc1234def, issues, with-h-bar, 3e10000, f(#x)";
+    let text = "issue 11's scene; Issue #5 item 1; Dormand–Prince ±0.1 µs; see (#12) and #3, \
+                commit `993d295` and 6c37857; branch h-plate, `h-engine`. Not: 1.0e-13, \
+                9.094947017729282e-13, 1234567, deadbeef, [a](#fig-1), [b](#2-units), #L12, x#5, \
+                abc1234def, issues, with-h-bar, 3e10000, f(#x)";
     let found: Vec<String> = history_marks(text).into_iter().map(|(_, w)| w).collect();
     assert_eq!(
         found,
