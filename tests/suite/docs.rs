@@ -519,6 +519,8 @@ fn history_marks(text: &str) -> Vec<(usize, String)> {
             let n = digits_after(j);
             if n > 0 {
                 out.push((i, format!("an issue number ({})", &text[i..j + n])));
+                i = j + n;
+                continue;
             }
         } else if b[i] == b'#' && i > 0 && matches!(b[i - 1], b' ' | b'(') {
             let n = digits_after(i + 1);
