@@ -4,8 +4,8 @@
 //! theory of `stickslip::studies::compare::creep`.
 //!
 //! ```sh
-//! cargo run --release --example creep                 # everything (about a minute of CPU)
-//! cargo run --release --example creep -- --replicas 8 --threads 2
+//! cargo run --profile perf --example creep              # everything (about a minute of CPU)
+//! cargo run --profile perf --example creep -- --replicas 8 --threads 2
 //! ```
 //!
 //! Prints Markdown tables on stdout. Seeds: replica `r` of velocity point `k` uses

@@ -4,10 +4,10 @@
 //! Speed figures belong to `cargo bench --bench exact`; this is for looking inside.
 //!
 //! ```text
-//! cargo build --release --example profile_exact
-//! target/release/examples/profile_exact strong 1000000 100          # engine alone
-//! target/release/examples/profile_exact weak 1000000 50 --stats     # with the run's statistics
-//! valgrind --tool=callgrind target/release/examples/profile_exact strong 1000000 10
+//! cargo build --profile perf --example profile_exact
+//! target/perf/examples/profile_exact strong 1000000 100          # engine alone
+//! target/perf/examples/profile_exact weak 1000000 50 --stats     # with the run's statistics
+//! valgrind --tool=callgrind target/perf/examples/profile_exact strong 1000000 10
 //! ```
 
 use stickslip::engine::Engine;

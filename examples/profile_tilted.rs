@@ -5,9 +5,9 @@
 //! `cargo bench --bench exact -- tilted`; this is for profilers and quick looks.
 //!
 //! ```text
-//! cargo build --release --example profile_tilted
-//! target/release/examples/profile_tilted strong 1000000 10
-//! target/release/examples/profile_tilted weak 1000 100 plate.k=1e9 plate.mass=1e-6 plate.eta=100
+//! cargo build --profile perf --example profile_tilted
+//! target/perf/examples/profile_tilted strong 1000000 10
+//! target/perf/examples/profile_tilted weak 1000 100 plate.k=1e9 plate.mass=1e-6 plate.eta=100
 //! ```
 
 use stickslip::runner::Simulation;

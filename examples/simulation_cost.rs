@@ -4,9 +4,9 @@
 //! and commands in docs/performance.md, "The Simulation handle"):
 //!
 //! ```sh
-//! cargo build --release --example simulation_cost
+//! cargo build --profile perf --example simulation_cost
 //! for w in fixed exact; do for h in direct direct-boxed handle; do
-//!   valgrind --tool=callgrind --callgrind-out-file=/dev/null target/release/examples/simulation_cost $w $h
+//!   valgrind --tool=callgrind --callgrind-out-file=/dev/null target/perf/examples/simulation_cost $w $h
 //! done; done
 //! ```
 //!

@@ -31,7 +31,7 @@
 //!
 //! For stiff plates (tiny mass, large `K/eta`, large `kappa N`) [`Rosenbrock`] is the
 //! linearly implicit, L-stable RODAS4 with analytic Jacobian ([`StiffSystem`]), dense output
-//! and rigorous bounds of it (see `docs/ode.md`, "The Rosenbrock integrator").
+//! and rigorous bounds of it (see `docs/rosenbrock.md`).
 //!
 //! Layout: [`coefficients`] (the Butcher table), `stepper` (step-size control, the public
 //! [`Dop853`] type), `dense` (continuous extension), `root` (crossing detection and Brent's

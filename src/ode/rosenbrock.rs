@@ -37,7 +37,7 @@
 //! round-off margin.
 //! [`RosenbrockN::dense_integrals`] integrates the cubic (and its square) exactly.
 //!
-//! See `docs/ode.md` ("The Rosenbrock integrator").
+//! See `docs/rosenbrock.md`.
 
 #![allow(clippy::needless_range_loop)] // stage and component loops over fixed arrays read better indexed
 

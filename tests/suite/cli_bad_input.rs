@@ -324,7 +324,7 @@ fn stability_command_bad_input() {
     expect_bad_input_in(dir.path(), &["stability", "scene.toml", "--set", "plate.v"], &["--set plate.v"]);
 }
 
-/// Item 2 of issue #5: a fixed-step run beyond the stability limit prints one warning line
+/// A fixed-step run beyond the stability limit prints one warning line
 /// on stderr and still runs; below the limit it prints none.
 #[test]
 fn unstable_fixed_step_warns_on_stderr() {

@@ -11,7 +11,12 @@
 //!   full stop);
 //! - the specification outside this repository is named (its file name is the project's
 //!   model document's in capitals, see `SPEC` below): the project's own is `docs/model.md`.
-//!   `docs/model.md` alone may name it, in the marked form `SPEC_MARKED`.
+//!   `docs/model.md` alone may name it, in the marked form `SPEC_MARKED`;
+//! - a markdown file (`README.md`, `docs/`) cites the project's history instead of stating
+//!   what is true now: an issue number (`issue 11`, `issue #5`, `#5`), a commit hash (7 to
+//!   40 hexadecimal digits with a digit and a letter other than `e`, so that no decimal
+//!   exponent qualifies) or a branch name (`h-` and a word). The history is `CHANGELOG.md`,
+//!   which is not scanned.
 //!
 //! ATX headings (`# Heading`) outside fenced code count; a heading's anchor is GitHub's
 //! slug of its text (inline code and emphasis marks removed, lower case, punctuation other
@@ -487,16 +492,75 @@ fn check_references(file: &Path, text: &Text, docs: &mut Docs, problems: &mut Ve
     }
 }
 
+/// Issue numbers, commit hashes and branch names in `text`: `(byte offset, what)`.
+fn history_marks(text: &str) -> Vec<(usize, String)> {
+    let b = text.as_bytes();
+    let word = |c: u8| c.is_ascii_alphanumeric() || c == b'_';
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < b.len() {
+        let starts_token = i == 0 || !(word(b[i - 1]) || matches!(b[i - 1], b'-' | b'.' | b'/'));
+        if !starts_token {
+            i += 1;
+            continue;
+        }
+        let token_len = b[i..].iter().take_while(|&&c| word(c)).count();
+        // An ASCII word starts on a character boundary; anything else is no token.
+        let token = if token_len > 0 { &text[i..i + token_len] } else { "" };
+        let digits_after = |from: usize| b[from..].iter().take_while(|c| c.is_ascii_digit()).count();
+        if token.eq_ignore_ascii_case("issue") || token.eq_ignore_ascii_case("issues") {
+            let mut j = i + token_len;
+            if b.get(j) == Some(&b' ') {
+                j += 1;
+            }
+            if b.get(j) == Some(&b'#') {
+                j += 1;
+            }
+            let n = digits_after(j);
+            if n > 0 {
+                out.push((i, format!("an issue number ({})", &text[i..j + n])));
+                i = j + n;
+                continue;
+            }
+        } else if b[i] == b'#' && i > 0 && matches!(b[i - 1], b' ' | b'(') {
+            let n = digits_after(i + 1);
+            // Not an anchor such as `#1-units`.
+            if n > 0 && !b.get(i + 1 + n).is_some_and(|&c| word(c) || c == b'-') {
+                out.push((i, format!("an issue number ({})", &text[i..i + 1 + n])));
+            }
+        } else if token == "h" && b.get(i + 1) == Some(&b'-') {
+            let n = b[i + 2..].iter().take_while(|c| c.is_ascii_lowercase()).count();
+            if n > 0 && !b.get(i + 2 + n).is_some_and(|&c| word(c)) {
+                out.push((i, format!("a branch name ({})", &text[i..i + 2 + n])));
+            }
+        } else if (7..=40).contains(&token_len)
+            && token.bytes().all(|c| matches!(c, b'0'..=b'9' | b'a'..=b'f'))
+            && token.bytes().any(|c| c.is_ascii_digit())
+            && token.bytes().any(|c| matches!(c, b'a'..=b'd' | b'f'))
+            && !b.get(i + token_len).is_some_and(|&c| matches!(c, b'.' | b'-' | b'+'))
+        {
+            out.push((i, format!("a commit hash ({token})")));
+        }
+        i += token_len.max(1);
+    }
+    out
+}
+
 /// Every problem of the project's cross-references, sorted.
 fn problems(root: &Path) -> Vec<Problem> {
     let mut docs = Docs { root: root.to_path_buf(), cache: BTreeMap::new() };
     let mut problems = Vec::new();
     for file in scanned_files(root) {
         let text = std::fs::read_to_string(root.join(&file)).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        let text = Text::new(text);
         if file.extension().is_some_and(|e| e == "md") {
-            check_links(&file, &text, &mut docs, &mut problems);
+            check_links(&file, &text.text, &mut docs, &mut problems);
+            for (at, what) in history_marks(&text.text) {
+                let what = format!("{what}: history belongs in CHANGELOG.md, docs state what is true now");
+                problems.push(Problem { file: file.clone(), line: text.line(at), what });
+            }
         }
-        check_references(&file, &Text::new(text), &mut docs, &mut problems);
+        check_references(&file, &text, &mut docs, &mut problems);
     }
     problems.sort_by(|a, b| (&a.file, a.line, &a.what).cmp(&(&b.file, b.line, &b.what)));
     problems
@@ -551,6 +615,29 @@ fn links_and_citations_are_found() {
     let text = "see docs/a.md#b, and (src/x/y.rs) but not ../src/z.rs or foo/docs/q.md; tests/{a,b}.rs";
     let found: Vec<&str> = named_paths(text).into_iter().map(|(_, p, _)| p).collect();
     assert_eq!(found, ["docs/a.md", "src/x/y.rs", "tests/"]);
+}
+
+#[test]
+fn history_marks_are_found() {
+    let text = "issue 11's scene; Issue #5 item 1; Dormand–Prince ±0.1 µs; see (#12) and #3, \
+                commit `993d295` and 6c37857; branch h-plate, `h-engine`. Not: 1.0e-13, \
+                9.094947017729282e-13, 1234567, deadbeef, [a](#fig-1), [b](#2-units), #L12, x#5, \
+                abc1234def, issues, with-h-bar, 3e10000, f(#x)";
+    let found: Vec<String> = history_marks(text).into_iter().map(|(_, w)| w).collect();
+    assert_eq!(
+        found,
+        [
+            "an issue number (issue 11)",
+            "an issue number (Issue #5)",
+            "an issue number (#12)",
+            "an issue number (#3)",
+            "a commit hash (993d295)",
+            "a commit hash (6c37857)",
+            "a branch name (h-plate)",
+            "a branch name (h-engine)",
+            "a commit hash (abc1234def)",
+        ]
+    );
 }
 
 #[test]

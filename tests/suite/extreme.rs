@@ -1,4 +1,4 @@
-//! Extreme cases (issue #5 item 1; the table is docs/stability.md): stiff and free plates,
+//! Extreme cases (the table is docs/stability.md): stiff and free plates,
 //! exactly critical and zero damping, no drive and a drive 1000 V0, one and very many
 //! junctions, rates from 1e-12 to 1e9, lambda = 0 and 1e9, weak bonds whose rate overflows,
 //! a run to t = 1e12 and a run shifted by 1e12 in time and position.

@@ -1,5 +1,5 @@
 //! The regime criterion against the `N -> infinity` moment equations of strong linear bonds
-//! (`tests/suite/common/moments.rs`), on the scene of issue 11: per-junction plate `m = M/N =
+//! (`tests/suite/common/moments.rs`), on the scene of `scenarios/limit-cycle.toml`: per-junction plate `m = M/N =
 //! 0.25`, `e = eta/N = 0.05`, `k = K/N = 0.1`, `kappa = 0.1`, `k0 = 1`, `kon0 = 0.2`,
 //! `lambda = 0.01`, `V0 = 0.5`, all junctions detached at `t = 0`, window `[700, 1500]`.
 //!
@@ -34,7 +34,7 @@ use stickslip_testkit::verdict_of as verdict;
 const CASES: [(f64, Regime); 4] =
     [(0.3, Regime::Smooth), (1.0, Regime::StickSlip), (2.0, Regime::Smooth), (5.0, Regime::Smooth)];
 
-/// Issue 11's scene at velocity `v` with `n` junctions (plate scaled with `N`), exact engine
+/// The limit-cycle scene at velocity `v` with `n` junctions (plate scaled with `N`), exact engine
 /// unless `extra` says otherwise.
 fn issue(v: f64, n: usize, extra: &[&str]) -> Scene {
     let text = format!(
@@ -197,7 +197,7 @@ fn at_infinity() -> [f64; 4] {
 fn check_extrapolation(n1: usize, replicas: u64) {
     let names = ["friction mean / N", "friction std / N", "period", "amplitude / N"];
     let exact = at_infinity();
-    // Issue 11's numbers: 0.2121 and 0.1081 (here to more digits).
+    // The moment equations' 0.2121 and 0.1081 (here to more digits).
     assert!((exact[0] - 0.21204).abs() < 1e-5 && (exact[1] - 0.10809).abs() < 1e-5, "{exact:?}");
     for (q, (m, h)) in extrapolated(n1, replicas).into_iter().enumerate() {
         println!("{}: extrapolated {m:.6} +- {h:.6}, moment equations {:.6}", names[q], exact[q]);

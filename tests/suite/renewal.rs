@@ -187,8 +187,7 @@ fn exact_linear_engine_matches_renewal_theory() {
     check("mean tension (= bond force, linear law)", &f, theory.mean_tension());
 }
 
-/// The tilted law's kinematic plate is the series engine of branch h-engine (without it
-/// this test fails with "plate.kinematic is not implemented yet"). `N = 300` rather than
+/// The tilted law's kinematic plate runs on the series engine. `N = 300` rather than
 /// 1000: that engine re-bases its series every `l0/4` of plate travel at `O(N)` each, so a
 /// kinematic run costs `O(N V t / l0)` beyond its events.
 #[test]

@@ -4,7 +4,7 @@
 //! bounds, the event-cut workload, checkpoints and error paths.
 //!
 //! Run: `cargo test --profile quick --test suite rosenbrock:: -- --nocapture` (prints the measured
-//! numbers quoted in docs/ode.md).
+//! numbers quoted in docs/rosenbrock.md).
 
 use crate::rosenbrock_support;
 
@@ -85,7 +85,7 @@ fn linear_plate_matches_closed_form_in_every_regime() {
         // The velocity of the very stiff plate is X' = (a + b t - k X - M X'')/eta with
         // `k X ~ 1e9`: its round-off floor is ~eps k |X| / eta ~ 2e-9 absolute, above rtol
         // 1e-10 times |X'| ~ 0.1, where the error estimate is pure round-off and the steps
-        // collapse (see docs/ode.md, "Tolerances below the round-off floor"). Not tested there.
+        // collapse (see docs/rosenbrock.md, "Tolerances below the round-off floor"). Not tested there.
         let rtols: &[f64] = if p.m > 0.0 && p.k / p.eta >= 1e6 { &[1e-6, 1e-8] } else { &[1e-6, 1e-8, 1e-10] };
         for &rtol in rtols {
             let r = run_linear(p, 0.0, 0.0, t_end, rtol, rtol * 1e-2);
@@ -279,7 +279,7 @@ fn event_cut_steps_are_exact_and_cheap() {
 /// case (where DOP853 cannot go) agrees with the first-order (`M = 0`) plate to the
 /// tolerance, quadratures included, and `M = 1e-12` takes no more steps than `M = 1e-9`
 /// (within 10%). (`M > 0` takes more steps than `M = 0`: its velocity component, absent
-/// from the first-order system, is also error-controlled; see docs/ode.md.)
+/// from the first-order system, is also error-controlled; see docs/rosenbrock.md.)
 #[test]
 fn cubic_plate_with_quadratures() {
     let t_end = 1.0;

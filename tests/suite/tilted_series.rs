@@ -288,7 +288,7 @@ fn a_stiff_plate_agrees_with_the_kinematic_plate() {
 /// Fig. 1, with both methods: each run completes with finite, sensible statistics, and its
 /// window means satisfy the plate equation averaged over the window, `friction_mean =
 /// bond_force_mean + viscous_force_mean + M (Xd(t_end) - Xd(t_warmup)) / (t_end - t_warmup)`
-/// (README, `summary.json`), to the integrator's tolerance: at most `rtol` relative to the
+/// (docs/runs.md, `summary.json`), to the integrator's tolerance: at most `rtol` relative to the
 /// largest force per step, added over the steps.
 #[test]
 fn undamped_and_overdamped_plates_balance_their_forces() {
