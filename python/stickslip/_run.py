@@ -61,8 +61,16 @@ class Result:
 
     @property
     def regime(self) -> str:
-        """``smooth`` or ``stick-slip``."""
+        """``smooth`` or ``stick-slip``, or ``unstable`` for a fixed-step run whose plate step
+        failed (its numbers are the scheme's, not the model's; ``docs/stability.md``)."""
         return self.summary["regime"]
+
+    @property
+    def stability(self) -> Optional[dict]:
+        """Fixed-step runs: the plate step's ``growth_factor``, ``largest_stable_dt``,
+        ``unstable`` (``predicted`` or ``seen``, when it is) and the locked period-2
+        oscillation (``locked_steps``, ``locked_amplitude``); ``None`` otherwise."""
+        return self.summary.get("stability")
 
 
 def _table(columns, frames: bool):

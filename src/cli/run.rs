@@ -94,6 +94,21 @@ pub(crate) fn draw_plot(scene: &Scene, out: &Path) -> Result<(), crate::runner::
         .map_err(|e| crate::runner::RunError::Output { path: out.join("trace.svg"), source: std::io::Error::other(e) })
 }
 
+/// The regime as the summary line gives it: an unstable run with its growth factor and
+/// the largest stable step.
+fn regime_text(s: &Summary) -> String {
+    match (&s.stability, s.regime) {
+        (Some(n), crate::observe::regime::Regime::Unstable) => format!(
+            "regime unstable ({}: the plate step grows x{} per step with every junction attached; \
+             largest stable dt {}, see `stickslip stability`)",
+            n.unstable.map_or("seen", |c| c.as_str()),
+            crate::stability::num(n.growth_factor),
+            crate::stability::num(n.largest_stable_dt)
+        ),
+        _ => format!("regime {} ({} stick-slip cycles)", s.regime.as_str(), s.stick_slip_cycles),
+    }
+}
+
 /// The four summary lines `run` and `resume` print.
 pub(crate) fn summary_lines(s: &Summary, out: &Path) -> String {
     let work = match (s.counters.steps, s.counters.events) {
@@ -104,7 +119,7 @@ pub(crate) fn summary_lines(s: &Summary, out: &Path) -> String {
     format!(
         "scene {} ({} engine, seed {}, N = {}, t_end = {})\n\
          friction per junction {:.6} (std of total {:.6}) over [{}, {}]\n\
-         attached fraction {:.4}; regime {} ({} stick-slip cycles)\n\
+         attached fraction {:.4}; {}\n\
          {work}, {} ruptures, {} formations in {:.3} s; output in {}\n",
         s.scene,
         s.engine_name(),
@@ -116,8 +131,7 @@ pub(crate) fn summary_lines(s: &Summary, out: &Path) -> String {
         s.t_warmup,
         s.t_end,
         s.attached_fraction_mean,
-        s.regime.as_str(),
-        s.stick_slip_cycles,
+        regime_text(s),
         s.counters.ruptures,
         s.counters.formations,
         s.wall_seconds,

@@ -3,6 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::engine::Counters;
+use crate::observe::regime::numerics::Numerics;
 use crate::observe::regime::{Oscillation, Regime};
 use crate::scene::{EngineKind, Scene};
 
@@ -35,7 +36,8 @@ pub struct Summary {
     /// Standard error of `rupture_force_mean`.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub rupture_force_sem: Option<f64>,
-    /// `smooth` or `stick-slip` (docs/model.md, "Regime criterion").
+    /// `smooth` or `stick-slip` (docs/model.md, "Regime criterion"), or `unstable` when a
+    /// fixed-step run's plate step failed (docs/stability.md, "Unstable runs").
     pub regime: Regime,
     /// Whole periods of the oscillation in the window when stick-slip, else 0.
     pub stick_slip_cycles: u64,
@@ -45,6 +47,11 @@ pub struct Summary {
     /// and the supporting signs `stuck_fraction` and `slips`.
     #[serde(flatten)]
     pub oscillation: Oscillation,
+    /// Fixed-step runs with a plate equation: the plate step's growth factor per step,
+    /// the largest stable `dt`, why the run is unstable (if it is) and the longest locked
+    /// period-2 oscillation.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub stability: Option<Numerics>,
     #[serde(flatten)]
     pub counters: Counters,
     /// Wall-clock time of the run in seconds.

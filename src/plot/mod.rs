@@ -36,6 +36,8 @@ pub const PALETTE: [RGBColor; 6] = [
 /// Band colours: sliding (smooth) and stick-slip regions.
 pub const BAND_SMOOTH: RGBColor = RGBColor(0, 114, 178);
 pub const BAND_STICK_SLIP: RGBColor = RGBColor(213, 94, 0);
+/// Shading of fixed steps whose plate step failed (regime `unstable`).
+pub const BAND_UNSTABLE: RGBColor = RGBColor(128, 128, 128);
 
 /// The font family of every text in a figure.
 pub const FONT: &str = "sans-serif";

@@ -229,6 +229,7 @@ pub fn summarize<E: Engine>(
         regime: verdict.regime,
         stick_slip_cycles: verdict.cycles,
         oscillation: verdict.oscillation,
+        stability: verdict.numerics,
         counters: engine.counters(),
         wall_seconds,
         parameters: scene.clone(),

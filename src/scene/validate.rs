@@ -219,12 +219,9 @@ impl SceneFile {
             }
         }
 
-        let output = OutputParams {
-            sample_dt,
-            trace: o.trace.unwrap_or(true),
-            events: o.events.unwrap_or(false),
-            plot: o.plot.unwrap_or(false),
-        };
+        let trace = o.trace.unwrap_or(true);
+        // trace.svg by default whenever trace.csv is written: a run shows its picture.
+        let output = OutputParams { sample_dt, trace, events: o.events.unwrap_or(false), plot: o.plot.unwrap_or(trace) };
         if output.plot && !output.trace {
             return Err(SceneError::invalid(
                 "output.plot",

@@ -38,4 +38,5 @@ mod series_props;
 mod sumtree_props;
 mod sweep;
 mod tilted_series;
+mod unstable;
 mod validate_scenarios;

@@ -30,19 +30,26 @@
 //! `slips`): a sawtooth sticks, a relaxation oscillation need not. A scene with `V = 0` is
 //! smooth.
 //!
+//! A fixed-step run whose plate step failed (predicted by the stability analysis, or seen as
+//! a locked period-2 dt oscillation, [`numerics`]) is **unstable** instead: no physical
+//! regime is given to it.
+//!
 //! Memory: the detector keeps a bounded, decimating record of `F` ([`buffer`], at most
 //! [`buffer::CAPACITY`] bins) and a few counters, whatever `t_end`; its state serialises
 //! (it is part of a checkpoint). The analysis runs once, at the end ([`RegimeDetector::verdict`]).
 
 pub mod autocorr;
 pub mod buffer;
+pub mod numerics;
 pub mod slips;
 
 use serde::{Deserialize, Serialize};
 
 use super::{Observer, Sample};
 use crate::scene::Scene;
+use super::Segment;
 use buffer::Decimator;
+use numerics::{Numerics, NumericsDetector};
 use slips::SlipCounter;
 
 /// Coherence `rho(P)` needed: the periodic part carries at least half the variance
@@ -70,6 +77,8 @@ pub const MIN_COLLECTIVE: f64 = std::f64::consts::SQRT_2;
 pub enum Regime {
     Smooth,
     StickSlip,
+    /// The fixed-step scheme's plate step failed: no physical regime ([`numerics`]).
+    Unstable,
 }
 
 impl Regime {
@@ -77,6 +86,7 @@ impl Regime {
         match self {
             Regime::Smooth => "smooth",
             Regime::StickSlip => "stick-slip",
+            Regime::Unstable => "unstable",
         }
     }
 }
@@ -113,6 +123,8 @@ pub struct Verdict {
     /// Whole periods in the window when stick-slip, else 0.
     pub cycles: u64,
     pub oscillation: Oscillation,
+    /// A fixed-step run's numerics (`None` for the exact engine and a kinematic plate).
+    pub numerics: Option<Numerics>,
 }
 
 /// Online regime detector over samples with `t >= t_lo`.
@@ -131,6 +143,8 @@ pub struct RegimeDetector {
     /// Sums over samples of `F_b` and of the attached count.
     bond_sum: f64,
     attached_sum: f64,
+    /// The plate step's verdict (fixed-step scenes with a plate equation only).
+    numerics: Option<NumericsDetector>,
 }
 
 impl RegimeDetector {
@@ -147,12 +161,17 @@ impl RegimeDetector {
             t_second: f64::NAN,
             bond_sum: 0.0,
             attached_sum: 0.0,
+            numerics: None,
         }
     }
 
-    /// The detector of a scene: its averaging window, driving velocity and `N`.
+    /// The detector of a scene: its averaging window, driving velocity and `N`, and for a
+    /// fixed-step scene the plate step's verdict.
     pub fn for_scene(scene: &Scene) -> Self {
-        RegimeDetector::new(scene.run.t_warmup, scene.plate.v, scene.junctions.n as u64)
+        RegimeDetector {
+            numerics: NumericsDetector::for_scene(scene),
+            ..RegimeDetector::new(scene.run.t_warmup, scene.plate.v, scene.junctions.n as u64)
+        }
     }
 
     /// Feeds one sample (whatever its time).
@@ -186,15 +205,27 @@ impl RegimeDetector {
         if attached > 0.0 { bond.abs() * ((1.0 - attached) / (attached * n)).sqrt() } else { 0.0 }
     }
 
-    /// The analysis of everything fed so far.
+    /// The analysis of everything fed so far: the physical regime, unless the plate step
+    /// failed ([`numerics::NumericsDetector::judge`]).
     pub fn verdict(&self) -> Verdict {
+        let mut v = self.physical();
+        v.numerics = self.numerics.as_ref().map(|d| d.judge(v.oscillation.junction_noise));
+        if v.numerics.as_ref().is_some_and(|n| n.unstable.is_some()) {
+            v.regime = Regime::Unstable;
+            v.cycles = 0;
+        }
+        v
+    }
+
+    /// The regime criterion on the trace alone.
+    fn physical(&self) -> Verdict {
         let mut o = Oscillation {
             junction_noise: self.junction_noise(),
             stuck_fraction: self.slips.stuck_fraction(),
             slips: self.slips.slips(),
             ..Oscillation::default()
         };
-        let smooth = |o: Oscillation| Verdict { regime: Regime::Smooth, cycles: 0, oscillation: o };
+        let smooth = |o: Oscillation| Verdict { regime: Regime::Smooth, cycles: 0, oscillation: o, numerics: None };
         let bins = self.friction.bins();
         let spacing = self.t_second - self.t_first;
         if bins.len() < 2 * MIN_PERIODS || spacing.is_nan() || spacing <= 0.0 {
@@ -217,7 +248,7 @@ impl RegimeDetector {
         };
         let collective = amplitude > 0.0 && amplitude >= MIN_COLLECTIVE * o.junction_noise;
         if self.v_drive > 0.0 && periodic && regular && collective {
-            Verdict { regime: Regime::StickSlip, cycles: ranges.len() as u64, oscillation: o }
+            Verdict { regime: Regime::StickSlip, cycles: ranges.len() as u64, oscillation: o, numerics: None }
         } else {
             smooth(o)
         }
@@ -265,6 +296,13 @@ pub fn regularity(ranges: &[f64]) -> (Option<f64>, Option<f64>) {
 }
 
 impl Observer for RegimeDetector {
+    /// The fixed-step engine reports one segment per step, starting at `F_n`.
+    #[inline]
+    fn segment(&mut self, s: &Segment) {
+        if let Some(d) = &mut self.numerics {
+            d.step(s.friction);
+        }
+    }
     fn sample(&mut self, s: &Sample) {
         if s.t >= self.t_lo {
             self.push(s);

@@ -30,9 +30,11 @@
 //!
 //! **Guards.** A fixed point in which any replica diverges (`EngineError::Diverged`, or a
 //! non-finite state) is reported as `diverged` with the number of diverged replicas. A
-//! point whose `dt` lies beyond the plate step's linear stability with every junction
-//! attached (the plate growth factor [`PlateLimit::radius_all`] of
-//! [`crate::stability::analyse`] > 1) is reported as `unstable`, with its numbers.
+//! point at which any replica's run is `unstable` (the verdict of `stickslip run`,
+//! [`crate::observe::regime::numerics`]: predicted by the stability analysis or seen as a
+//! locked period-2 oscillation) is reported as `unstable`, with its numbers and the plate
+//! growth factor with every junction attached ([`PlateLimit::radius_all`] of
+//! [`crate::stability::analyse`]).
 //!
 //! Layout: this file plans, runs and aggregates (data only); [`fit`] the bias model,
 //! [`report`] `compare.csv` and `compare.md`, [`files`] writes them with `compare.svg`
@@ -52,6 +54,7 @@ use rayon::prelude::*;
 use super::seeds::{self, Role};
 use super::stats::{ReplicaStats, t_quantile};
 use crate::engine::EngineError;
+use crate::observe::regime::Regime;
 use crate::output::Summary;
 use crate::runner::{RunError, run_scene};
 use crate::scene::{BondKind, EngineKind, RngKind, Scene};
@@ -329,7 +332,7 @@ impl Plan {
             let growth = self.plate_growth[j];
             let status = if diverged > 0 {
                 Status::Diverged
-            } else if growth > 1.0 {
+            } else if outs.iter().any(|o| matches!(o, Outcome::Done { unstable: true, .. })) {
                 Status::Unstable
             } else {
                 Status::Ok
@@ -371,7 +374,8 @@ impl Plan {
 /// What one job gave.
 #[derive(Debug)]
 enum Outcome {
-    Done { values: Vec<Option<f64>>, wall: f64, cpu: f64 },
+    /// `unstable`: the run's regime is `unstable`.
+    Done { values: Vec<Option<f64>>, unstable: bool, wall: f64, cpu: f64 },
     Diverged { wall: f64, cpu: f64 },
     Failed(RunError),
 }
@@ -412,7 +416,12 @@ fn run_job(job: &Job, obs: &[Observable]) -> Outcome {
     let wall = started.elapsed().as_secs_f64();
     let cpu = thread_cpu_seconds() - cpu0;
     match r {
-        Ok(s) => Outcome::Done { values: obs.iter().map(|o| o.of(&s)).collect(), wall, cpu },
+        Ok(s) => Outcome::Done {
+            values: obs.iter().map(|o| o.of(&s)).collect(),
+            unstable: s.regime == Regime::Unstable,
+            wall,
+            cpu,
+        },
         Err(RunError::Engine(EngineError::Diverged { .. } | EngineError::NonFinite { .. }))
             if job.role == Role::Fixed =>
         {
@@ -436,7 +445,7 @@ pub struct Reference {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Status {
     Ok,
-    /// Completed, but `dt` lies beyond the plate step's linear stability (all attached).
+    /// Completed, but a replica's run is `unstable` (its plate step failed).
     Unstable,
     /// At least one replica diverged; no estimate.
     Diverged,

@@ -11,7 +11,8 @@ use crate::observe::regime::Regime;
 use crate::output::Summary;
 use crate::studies::stats::mean_ci95;
 
-/// The regime of a grid point across its replicas.
+/// The regime of a grid point across its replicas: `Unstable` when any replica is (its
+/// numbers are the scheme's, not the model's), else the majority.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Majority {
@@ -21,6 +22,8 @@ pub enum Majority {
     StickSlip,
     /// Exactly half are.
     Mixed,
+    /// At least one replica is unstable (a fixed step beyond the plate step's stability).
+    Unstable,
 }
 
 impl Majority {
@@ -29,6 +32,7 @@ impl Majority {
             Majority::Smooth => "smooth",
             Majority::StickSlip => "stick-slip",
             Majority::Mixed => "mixed",
+            Majority::Unstable => "unstable",
         }
     }
 }
@@ -68,6 +72,7 @@ impl Row {
         let col = |f: fn(&Summary) -> f64| mean_ci95(&runs.iter().map(f).collect::<Vec<_>>());
         let ss = runs.iter().filter(|s| s.regime == Regime::StickSlip).count();
         let regime = match (2 * ss).cmp(&runs.len()) {
+            _ if runs.iter().any(|s| s.regime == Regime::Unstable) => Majority::Unstable,
             std::cmp::Ordering::Less => Majority::Smooth,
             std::cmp::Ordering::Greater => Majority::StickSlip,
             std::cmp::Ordering::Equal => Majority::Mixed,

@@ -5,6 +5,7 @@
 
 pub mod moments;
 pub mod renewal;
+pub mod svg;
 
 use statrs::distribution::{ChiSquared, ContinuousCDF, StudentsT};
 
