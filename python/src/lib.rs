@@ -31,6 +31,7 @@ fn _stickslip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scene::Scene>()?;
     m.add_class::<sweep::Sweep>()?;
     m.add_class::<sweep::SweepOutcome>()?;
+    m.add_class::<sweep::SweepJournal>()?;
     m.add_function(wrap_pyfunction!(run::run_to_dir, m)?)?;
     m.add_function(wrap_pyfunction!(run::run_summary_json, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::parse_values, m)?)?;

@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use pyo3::prelude::*;
 use stickslip::output::Summary;
+use stickslip::studies::journal::{Header, Journal, StudyKind};
 use stickslip::studies::sweep::{self as lib, SweepAxis, SweepSpec, Timing, ValueSpec};
 
 use crate::scene::Scene;
@@ -74,6 +75,18 @@ impl Sweep {
         Ok(self.0.describe(point))
     }
 
+    /// Opens (or starts) the journal of this sweep in the existing directory `out`
+    /// (`journal.jsonl`, the one `stickslip sweep` keeps) and locks it: the runs it already
+    /// holds are not run again. A journal of another sweep or scene, or a damaged one, is a
+    /// `ValueError` with the CLI's message.
+    fn journal(&self, py: Python<'_>, out: PathBuf) -> PyResult<SweepJournal> {
+        let header = Header::new(StudyKind::Sweep, self.0.arguments(), &self.0.base, self.0.len(), None);
+        let seeds = self.0.seeds();
+        let opened = py.detach(|| Journal::open::<Summary>(&out, &header, &seeds)).map_err(bad_input)?;
+        let done = opened.done.iter().map(|d| d.as_ref().map(|s| serde_json::to_string(s).expect("a summary serializes")));
+        Ok(SweepJournal { done: done.collect(), journal: opened.journal, seeds })
+    }
+
     /// The outcome from every run's `summary.json` text, in the order of `runs`; with
     /// `wall_seconds` and `workers`, `sweep.json` records how long it took.
     #[pyo3(signature = (summaries, wall_seconds = None, workers = None))]
@@ -124,5 +137,41 @@ impl SweepOutcome {
     /// directory `out`, as `stickslip sweep` does.
     fn write(&self, py: Python<'_>, out: PathBuf) -> PyResult<()> {
         py.detach(|| self.outcome.write(&self.sweep, &out)).map_err(failed)
+    }
+}
+
+/// A sweep's journal, open and locked (closed when the object is dropped).
+#[pyclass(frozen, module = "stickslip._stickslip")]
+pub struct SweepJournal {
+    journal: Journal,
+    seeds: Vec<u64>,
+    done: Vec<Option<String>>,
+}
+
+#[pymethods]
+impl SweepJournal {
+    /// Per run, in the order of `Sweep.runs`: its `summary.json` text if the journal held
+    /// it when opened, else `None`.
+    fn done(&self) -> Vec<Option<String>> {
+        self.done.clone()
+    }
+
+    /// Appends run `run` with its `summary.json` text, as one synced line. The summary's
+    /// seed must be the run's.
+    fn append(&self, py: Python<'_>, run: usize, summary: &str) -> PyResult<()> {
+        let s: Summary = serde_json::from_str(summary).map_err(|e| bad_input(format!("summary of run {run}: {e}")))?;
+        let Some(&seed) = self.seeds.get(run) else {
+            return Err(bad_input(format!("run {run}: the sweep has {} runs", self.seeds.len())));
+        };
+        if s.seed != seed {
+            return Err(bad_input(format!("run {run} has seed {seed}; the summary's is {}", s.seed)));
+        }
+        py.detach(|| self.journal.append(run, seed, &s)).map_err(failed)
+    }
+
+    /// The journal's path.
+    #[getter]
+    fn path(&self) -> PathBuf {
+        self.journal.path().to_path_buf()
     }
 }

@@ -61,6 +61,17 @@ class Sweep:
         self, summaries: list[str], wall_seconds: Optional[float] = None, workers: Optional[int] = None
     ) -> SweepOutcome:
         """The outcome from every run's summary.json text, in the order of ``runs()``."""
+    def journal(self, out: str) -> SweepJournal:
+        """Opens (or starts) the sweep's journal.jsonl in the existing directory ``out``,
+        locked; a journal of another sweep or scene is a ValueError."""
+
+class SweepJournal:
+    def done(self) -> list[Optional[str]]:
+        """Per run: its summary.json text if the journal held it when opened, else None."""
+    def append(self, run: int, summary: str) -> None:
+        """Appends a finished run (its summary.json text) as one synced line."""
+    @property
+    def path(self) -> str: ...
 
 class SweepOutcome:
     def sweep_csv(self) -> str: ...

@@ -5,6 +5,8 @@ The library prepares the sweep (validation, the grid, every run's seed: the rule
 from the summaries. A task is a pure function of its arguments (a scene's complete TOML
 text, with the run's seed in it, and its name), so a task that Dask re-runs after a worker
 died gives the same summary, and the table is the same bytes as the CLI's ``sweep.csv``.
+With an output directory the client journals every finished run there (the CLI's
+``journal.jsonl``), so a sweep whose client died continues where it stopped.
 """
 
 from __future__ import annotations
@@ -104,14 +106,21 @@ def run_sweep(
     plan = Sweep(base, _axes(param, values, log), replicas, override_texts(overrides))
     runs = plan.runs()
     task = run_task or run_one
+    journal = None
+    summaries: list[Optional[str]] = [None] * len(runs)
+    if out is not None:
+        # The journal the CLI keeps: runs it holds are not run again.
+        os.makedirs(out, exist_ok=True)
+        journal = plan.journal(os.fspath(out))
+        summaries = journal.done()
 
     from dask.base import tokenize
-    from distributed import Client, LocalCluster, wait
+    from distributed import Client, LocalCluster, as_completed
 
     own = client is None
     cluster = None
     if own:
-        workers = n_workers or min(os.cpu_count() or 1, len(runs))
+        workers = n_workers or max(1, min(os.cpu_count() or 1, sum(s is None for s in summaries)))
         cluster = LocalCluster(
             n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=":0"
         )
@@ -121,17 +130,25 @@ def run_sweep(
         tomls = [s.to_toml() for _, _, s in runs]
         names = [s.name for _, _, s in runs]
         token = tokenize(tomls, names, task)
-        keys = [f"stickslip-run-{i}-{token}" for i in range(len(runs))]
-        futures = client.map(task, tomls, names, key=keys, pure=False)
-        wait(futures)
-        for (point, replica, s), f in zip(runs, futures):
+        todo = [i for i in range(len(runs)) if summaries[i] is None]
+        keys = [f"stickslip-run-{i}-{token}" for i in todo]
+        futures = client.map(task, [tomls[i] for i in todo], [names[i] for i in todo], key=keys, pure=False)
+        index = {f.key: i for f, i in zip(futures, todo)}
+        # Each run is journaled as soon as it is back, so a client that dies loses only
+        # the runs in flight.
+        for f in as_completed(futures):
+            if f.status == "finished":
+                summaries[index[f.key]] = f.result()
+                if journal is not None:
+                    journal.append(index[f.key], summaries[index[f.key]])
+        for i, f in zip(todo, futures):
             if f.status == "error":
+                point, replica, s = runs[i]
                 # The first failed run in the order of the runs, with the CLI's message
                 # (SweepError::Run).
                 raise RuntimeError(
                     f"the run for {plan.describe(point)}, replica {replica} (seed {s.seed}) failed: {f.exception()}"
                 )
-        summaries = client.gather(futures)
         workers = len(client.scheduler_info().get("workers", {}))
         outcome = plan.outcome(summaries, time.perf_counter() - started, workers)
         del futures
@@ -139,8 +156,8 @@ def run_sweep(
         if own:
             client.close()
             cluster.close()
+        del journal
     if out is not None:
-        os.makedirs(out, exist_ok=True)
         outcome.write(os.fspath(out))
     return SweepResult(read_csv(outcome.sweep_csv()), read_csv(outcome.runs_csv()), outcome, plan)
 
@@ -174,7 +191,11 @@ def sweep(
 
     Returns ``sweep.csv`` as a pandas DataFrame (the same table, from the same library
     code, as the CLI's file). With ``out`` the sweep's files (``sweep.csv``, ``runs.csv``,
-    ``sweep.svg``, ``sweep.json``) are written there, as the CLI writes them. ``run_task``
+    ``sweep.svg``, ``sweep.json``) are written there, as the CLI writes them, and every
+    finished run is appended to ``out/journal.jsonl`` as it comes back: calling the sweep
+    again with the same arguments (after the client died, say) runs only the runs the
+    journal does not hold, as ``stickslip resume`` does; it continues a journal written by
+    ``stickslip sweep`` as well. A journal of another sweep or scene is a ``ValueError``. ``run_task``
     replaces the function a worker calls for one run (``(scene_toml, name) -> summary
     JSON``), e.g. to wrap it; it must return what :func:`run_one` returns.
 

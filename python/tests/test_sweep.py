@@ -1,10 +1,16 @@
 """stickslip.sweep on Dask distributed against `stickslip sweep`: the same tables, byte for
-byte, on a LocalCluster of two worker processes, in 2-D, and when a worker process dies in
-the middle of the sweep."""
+byte, on a LocalCluster of two worker processes, in 2-D, when a worker process dies in
+the middle of the sweep, and when the sweep is continued from its journal (a killed CLI
+sweep continued by Python, a killed Python client's sweep called again)."""
 
 from __future__ import annotations
 
 import functools
+import os
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import cloudpickle
@@ -100,3 +106,77 @@ def test_a_failed_run_fails_the_sweep_with_the_cli_message(cli, repo, tmp_path, 
         stickslip.sweep(repo / "scenarios/fig1.toml", "plate.k", "150,1e9", 2, client, **sets)
     assert p.stderr.strip() == "error: " + str(e.value)
     assert str(e.value).startswith("the run for plate.k = 150, replica 0 (seed ")
+
+
+def journaled(out: Path) -> int:
+    """Runs the journal in ``out`` holds (whole lines after the header)."""
+    try:
+        return max(0, (out / "journal.jsonl").read_bytes().count(b"\n") - 1)
+    except FileNotFoundError:
+        return 0
+
+
+def kill_after(args: list, out: Path, k: int, **popen) -> None:
+    """Starts ``args`` and kills it (SIGKILL) once ``out``'s journal holds ``k`` runs."""
+    p = subprocess.Popen([str(a) for a in args], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, **popen)
+    deadline = time.monotonic() + 120
+    while journaled(out) < k:
+        assert p.poll() is None, f"ended before {k} runs were journaled: {p.stderr.read()}"
+        assert time.monotonic() < deadline, "no progress"
+        time.sleep(0.005)
+    p.send_signal(signal.SIGKILL)
+    p.wait()
+    p.stderr.close()
+
+
+def test_a_killed_cli_sweep_is_continued_by_python_on_dask(cli, repo, tmp_path, client):
+    c = cli_sweep(cli, tmp_path / "cli", "--param", "plate.v", "--values", "0.3,1,3", "--replicas", "2")
+    out = tmp_path / "killed"
+    binary = os.environ.get("STICKSLIP_BIN", repo / "target" / "release" / "stickslip")
+    args = [binary, "sweep", SCENE, *SET_ARGS, "--param", "plate.v", "--values", "0.3,1,3", "--replicas", "2",
+            "--threads", "1", "--out", out]
+    kill_after(args, out, 2, cwd=repo)
+    kept = journaled(out)
+    assert 2 <= kept < 6
+    table = stickslip.sweep(repo / SCENE, "plate.v", VALUES, 2, client, out=str(out), **SET)
+    assert journaled(out) == 6
+    assert_same_tables(c, out, table)
+
+
+def test_a_python_client_that_dies_is_continued_by_calling_the_sweep_again(cli, repo, tmp_path, client):
+    c = cli_sweep(cli, tmp_path / "cli", "--param", "plate.v", "--values", "0.3,1,3", "--replicas", "2")
+    out = tmp_path / "py"
+    # A client process on the shared cluster, killed once it journaled a run; the cluster
+    # lives on.
+    script = (
+        "import sys, stickslip\n"
+        "from distributed import Client\n"
+        "client = Client(sys.argv[1])\n"
+        f"stickslip.sweep({str(repo / SCENE)!r}, 'plate.v', {VALUES!r}, 2, client, out=sys.argv[2], **{SET!r})\n"
+    )
+    kill_after([sys.executable, "-c", script, client.scheduler.address, out], out, 1)
+    kept = journaled(out)
+    assert 1 <= kept <= 6
+    table = stickslip.sweep(repo / SCENE, "plate.v", VALUES, 2, client, out=str(out), **SET)
+    assert journaled(out) == 6
+    assert_same_tables(c, out, table)
+    # The journal is the CLI's: `stickslip sweep` with the same arguments runs nothing more,
+    # and `stickslip resume` points back to Python (no command line was recorded).
+    again = cli("sweep", SCENE, *SET_ARGS, "--param", "plate.v", "--values", "0.3,1,3", "--replicas", "2", "--out", out)
+    assert again.returncode == 0, again.stderr
+    assert "6 of 6 runs were already done" in again.stdout
+    assert_same_tables(c, out, table)
+    r = cli("resume", out)
+    assert r.returncode == 2 and "stickslip.sweep in Python" in r.stderr and r.stderr.count("\n") == 1, r.stderr
+
+
+def test_a_journal_of_another_sweep_is_a_value_error_and_is_left_alone(cli, repo, tmp_path, client):
+    out = cli_sweep(cli, tmp_path / "cli", "--param", "plate.v", "--values", "0.3,1", "--replicas", "1")
+    before = (out / "journal.jsonl").read_bytes()
+    with pytest.raises(ValueError) as e:
+        stickslip.sweep(repo / SCENE, "plate.v", [0.3, 1], 2, client, out=str(out), **SET)
+    assert "belongs to another study" in str(e.value)
+    with pytest.raises(ValueError) as e:
+        stickslip.sweep(repo / SCENE, "plate.v", [0.3, 1], 1, client, out=str(out), **{**SET, "plate.mass": 30.0})
+    assert "written for another scene" in str(e.value)
+    assert (out / "journal.jsonl").read_bytes() == before

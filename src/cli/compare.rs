@@ -4,8 +4,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use super::run::{load_scene, prepare_out_dir, remove_if_empty};
-use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
-use crate::studies::compare::{Plan, default_dts, report};
+use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail, study};
+use crate::studies::compare::{JobRecord, Plan, StudyError, default_dts, report};
+use crate::studies::journal::{Header, StudyKind};
 
 #[derive(clap::Args, Debug)]
 pub struct CompareArgs {
@@ -52,6 +53,11 @@ pub(crate) fn parse_dts(text: &str) -> Result<Vec<f64>, String> {
 
 /// The command line as typed, for the report.
 fn command_line() -> String {
+    quoted(&std::env::args().collect::<Vec<_>>())
+}
+
+/// A command line (program name first) as a shell reads it, `stickslip` first.
+pub(crate) fn quoted(argv: &[String]) -> String {
     let quote = |a: String| {
         if !a.is_empty() && a.chars().all(|c| c.is_ascii_alphanumeric() || "-_./=,:+".contains(c)) {
             a
@@ -59,10 +65,15 @@ fn command_line() -> String {
             format!("'{}'", a.replace('\'', r"'\''"))
         }
     };
-    std::iter::once("stickslip".to_string()).chain(std::env::args().skip(1).map(quote)).collect::<Vec<_>>().join(" ")
+    std::iter::once("stickslip".to_string()).chain(argv.iter().skip(1).cloned().map(quote)).collect::<Vec<_>>().join(" ")
 }
 
 pub(crate) fn compare(args: &CompareArgs) -> ExitCode {
+    compare_as(args, &command_line())
+}
+
+/// `compare`, with `command` the command line quoted in compare.md.
+pub(crate) fn compare_as(args: &CompareArgs, command: &str) -> ExitCode {
     let scene = match load_scene(&args.scene, &[]) {
         Ok(s) => s,
         Err(code) => return code,
@@ -87,17 +98,24 @@ pub(crate) fn compare(args: &CompareArgs) -> ExitCode {
         Ok(c) => c,
         Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
-    let failed = |m: String| {
-        remove_if_empty(&created);
-        fail(EXIT_RUN_FAILED, m)
+    let header = Header::new(StudyKind::Compare, plan.arguments(), &scene, plan.seeds().len(), study::invocation());
+    let mut journal = match study::open::<JobRecord>(StudyKind::Compare, &out, &header, &plan.seeds()) {
+        Ok(j) => j,
+        Err(code) => return code,
     };
-    let study = match plan.run(args.threads) {
+    let result = match plan.run_from(args.threads, journal.continuation()) {
         Ok(s) => s,
-        Err(e) => return failed(e.to_string()),
+        Err(StudyError::Interrupted(e)) => return study::interrupted(&e, &out),
+        Err(e) => {
+            journal.discard_if_new();
+            remove_if_empty(&created);
+            return fail(EXIT_RUN_FAILED, e);
+        }
     };
-    if let Err(e) = study.write(&out, &command_line()) {
-        return failed(e.to_string());
+    if let Err(e) = result.write(&out, command) {
+        return study::write_failed(e, &out);
     }
+    let study = result;
     println!("compare {}: {} points, reference of {} exact replicas", scene.name, study.points.len(), ref_replicas);
     for line in report::reading(&study) {
         println!("{line}");

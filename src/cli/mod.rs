@@ -8,8 +8,11 @@
 mod compare;
 mod resume;
 mod run;
+mod signals;
 mod stability;
 pub mod stdout;
+mod study;
+mod study_resume;
 mod sweep;
 mod validate;
 
@@ -69,7 +72,7 @@ pub enum Command {
         #[arg(long, value_name = "SECONDS", value_parser = resume::parse_seconds, allow_hyphen_values = true)]
         checkpoint_every: Option<f64>,
     },
-    /// Continue a killed run from the checkpoint in its output directory.
+    /// Continue a killed run from the checkpoint in its output directory, or a killed sweep or compare from its journal.
     Resume(resume::ResumeArgs),
     /// Sweep one scene field, or two for a regime map, over values, with replicas, in parallel; writes sweep.csv and sweep.svg.
     Sweep(sweep::SweepArgs),

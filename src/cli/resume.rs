@@ -1,5 +1,5 @@
 //! `stickslip resume DIR`: continues a killed run from the checkpoint in its output
-//! directory (docs/runs.md).
+//! directory, or a killed study from its journal ([`super::study_resume`]) (docs/runs.md).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -11,7 +11,7 @@ use crate::runner::{self, Resumed, RunOptions};
 
 #[derive(clap::Args, Debug)]
 pub struct ResumeArgs {
-    /// Output directory of the run (the one holding checkpoint.bin).
+    /// Output directory of the run (the one holding checkpoint.bin) or of the sweep or compare (the one holding journal.jsonl).
     pub dir: PathBuf,
     /// Checkpoint interval from now on (default: the run's own --checkpoint-every).
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, allow_hyphen_values = true)]
@@ -31,6 +31,9 @@ pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
 }
 
 pub(crate) fn resume(args: &ResumeArgs) -> ExitCode {
+    if let Some(code) = super::study_resume::resume(&args.dir, args.checkpoint_every) {
+        return code;
+    }
     let opts = RunOptions { checkpoint_every: args.checkpoint_every, progress: true, stop: None };
     // A directory that cannot be written is reported before anything else is done.
     if args.dir.is_dir() {

@@ -14,9 +14,11 @@ use clap::{Arg, ArgAction, ArgMatches};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::run::{load_scene, prepare_out_dir, remove_if_empty};
-use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
+use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail, study};
+use crate::output::Summary;
 use crate::scene::error::printable;
-use crate::studies::sweep::{MAX_AXES, Sweep, SweepAxis, SweepSpec, ValueSpec, parse_values};
+use crate::studies::journal::{Header, StudyKind};
+use crate::studies::sweep::{MAX_AXES, Sweep, SweepAxis, SweepError, SweepSpec, ValueSpec, parse_values};
 
 #[derive(clap::Args, Debug)]
 pub struct SweepArgs {
@@ -184,6 +186,11 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
         Ok(c) => c,
         Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
+    let header = Header::new(StudyKind::Sweep, sweep.arguments(), &sweep.base, sweep.len(), study::invocation());
+    let mut journal = match study::open::<Summary>(StudyKind::Sweep, &out, &header, &sweep.seeds()) {
+        Ok(j) => j,
+        Err(code) => return code,
+    };
     let progress = std::io::stderr().is_terminal().then(|| {
         let p = ProgressBar::new(sweep.len() as u64);
         if let Ok(style) =
@@ -193,21 +200,22 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
         }
         p
     });
-    let result = sweep.run(args.threads.unwrap_or(0) as usize, progress.as_ref());
+    let result = sweep.run_from(args.threads.unwrap_or(0) as usize, progress.as_ref(), journal.continuation());
     if let Some(p) = &progress {
         p.finish_and_clear();
     }
-    let written = result.map_err(|e| e.to_string()).and_then(|o| match o.write(&sweep, &out) {
-        Ok(()) => Ok(o),
-        Err(e) => Err(e.to_string()),
-    });
-    let outcome = match written {
+    let outcome = match result {
         Ok(o) => o,
-        Err(m) => {
+        Err(SweepError::Interrupted(e)) => return study::interrupted(&e, &out),
+        Err(e) => {
+            journal.discard_if_new();
             remove_if_empty(&created);
-            return fail(EXIT_RUN_FAILED, m);
+            return fail(EXIT_RUN_FAILED, e);
         }
     };
+    if let Err(e) = outcome.write(&sweep, &out) {
+        return study::write_failed(e, &out);
+    }
     let timing = outcome.timing.expect("Sweep::run records its timing");
     let fields = sweep.axes.iter().map(|a| a.param.as_str()).collect::<Vec<_>>().join(" x ");
     let sizes = sweep.axes.iter().map(|a| a.values.len().to_string()).collect::<Vec<_>>().join(" x ");

@@ -6,13 +6,17 @@
 //! - [`seeds`]: how each run's seed is derived from the scene's seed (one mixer for all).
 //! - [`stats`]: statistics across replicas (means, spreads, Student-t intervals).
 //! - [`format`]: numbers as text for reports.
+//! - [`journal`]: the journal of finished runs a study keeps in its output directory, and
+//!   [`execute`]: running the runs it does not hold yet, stoppable.
 //!
 //! Layers, each depending only on those before it: a study's data (plan, runs, outcome,
 //! tables) -> its figure ([`crate::plot`], which reads the outcome and draws) -> its files
 //! (`sweep::files`, `compare::files`: tables and figure written to disk) -> the CLI.
 
 pub mod compare;
+pub mod execute;
 pub mod format;
+pub mod journal;
 pub mod seeds;
 pub mod stats;
 pub mod sweep;

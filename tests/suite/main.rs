@@ -36,6 +36,7 @@ mod scene_fuzz;
 mod series_engine;
 mod series_props;
 mod sumtree_props;
+mod study_resume;
 mod sweep;
 mod tilted_series;
 mod unstable;

@@ -49,14 +49,13 @@ pub mod report;
 
 use std::time::Instant;
 
-use rayon::prelude::*;
-
+use super::execute::{Continuation, Interrupted, run_missing};
 use super::seeds::{self, Role};
 use super::stats::{ReplicaStats, t_quantile};
 use crate::engine::EngineError;
 use crate::observe::regime::Regime;
 use crate::output::Summary;
-use crate::runner::{RunError, run_scene};
+use crate::runner::{RunError, RunOptions, run_scene_with};
 use crate::scene::{BondKind, EngineKind, RngKind, Scene};
 
 /// An observable compared between the engines.
@@ -136,6 +135,8 @@ pub enum StudyError {
     },
     #[error("cannot build a thread pool: {0}")]
     Threads(String),
+    #[error(transparent)]
+    Interrupted(#[from] Interrupted),
 }
 
 /// One simulation of a study.
@@ -247,6 +248,25 @@ impl Plan {
 
     /// Runs every job (on `threads` threads, or rayon's default) and aggregates.
     pub fn run(&self, threads: Option<usize>) -> Result<Study, StudyError> {
+        self.run_from(threads, Continuation::fresh(self.jobs.len()))
+    }
+
+    /// The seed of every job, in job order (the order of the journal's run indices).
+    pub fn seeds(&self) -> Vec<u64> {
+        self.jobs.iter().map(|j| j.scene.run.seed).collect()
+    }
+
+    /// The study's arguments besides its scene, as one line in the command's syntax (the
+    /// journal's record of what decides the runs and the files).
+    pub fn arguments(&self) -> String {
+        let dts: Vec<String> = self.dts.iter().map(|&d| ryu::Buffer::new().format(d).to_string()).collect();
+        format!("--dts {} --replicas {} --ref-replicas {}", dts.join(","), self.replicas, self.ref_replicas)
+    }
+
+    /// As [`Plan::run`], running only the jobs not done in `from`, appending each finished
+    /// job to `from.journal`, and stopping when `from.stop` is set
+    /// ([`StudyError::Interrupted`]).
+    pub fn run_from(&self, threads: Option<usize>, from: Continuation<'_, JobRecord>) -> Result<Study, StudyError> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads.unwrap_or(0))
             .build()
@@ -257,18 +277,12 @@ impl Plan {
         // outcomes are put back in job order.
         let mut order: Vec<usize> = (0..self.jobs.len()).collect();
         order.sort_by_key(|&i| seeds::mix(i as u64));
-        let ran: Vec<(usize, Outcome)> =
-            pool.install(|| order.par_iter().map(|&i| (i, run_job(&self.jobs[i], obs))).collect());
-        let mut slots: Vec<Option<Outcome>> = (0..self.jobs.len()).map(|_| None).collect();
-        for (i, o) in ran {
-            slots[i] = Some(o);
-        }
-        let outcomes = slots.into_iter().map(|o| o.expect("every job ran"));
+        let outcomes = run_missing(&pool, &order, &self.seeds(), from, None, |i, opts| run_job(&self.jobs[i], opts))?;
         // The first failure in job order, so the message does not depend on scheduling.
         let mut results = Vec::with_capacity(outcomes.len());
         for (job, o) in self.jobs.iter().zip(outcomes) {
             match o {
-                Outcome::Failed(source) => {
+                Err(source) => {
                     let what = match job.role {
                         Role::Reference => "the exact reference run failed".to_string(),
                         Role::Exact => "an exact run failed".to_string(),
@@ -276,7 +290,7 @@ impl Plan {
                     };
                     return Err(StudyError::Run { what, seed: job.scene.run.seed, source });
                 }
-                o => results.push((job, o)),
+                Ok(record) => results.push((job, record.outcome(obs))),
             }
         }
         Ok(self.aggregate(&results))
@@ -371,32 +385,52 @@ impl Plan {
     }
 }
 
-/// What one job gave.
+/// What one job gave, as its study's journal records it: a finished run's summary, or a
+/// fixed-step run that diverged; with the wall and CPU seconds it took.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case", deny_unknown_fields)]
+pub enum JobRecord {
+    Done { summary: Box<Summary>, wall: f64, cpu: f64 },
+    Diverged { wall: f64, cpu: f64 },
+}
+
+impl JobRecord {
+    fn outcome(&self, obs: &[Observable]) -> Outcome {
+        match self {
+            JobRecord::Done { summary, wall, cpu } => Outcome::Done {
+                values: obs.iter().map(|o| o.of(summary)).collect(),
+                unstable: summary.regime == Regime::Unstable,
+                wall: *wall,
+                cpu: *cpu,
+            },
+            JobRecord::Diverged { wall, cpu } => Outcome::Diverged { wall: *wall, cpu: *cpu },
+        }
+    }
+}
+
+/// What one job gave, for the aggregation.
 #[derive(Debug)]
 enum Outcome {
     /// `unstable`: the run's regime is `unstable`.
     Done { values: Vec<Option<f64>>, unstable: bool, wall: f64, cpu: f64 },
     Diverged { wall: f64, cpu: f64 },
-    Failed(RunError),
 }
 
 impl Outcome {
     fn wall(&self) -> f64 {
         match self {
             Outcome::Done { wall, .. } | Outcome::Diverged { wall, .. } => *wall,
-            Outcome::Failed(_) => 0.0,
         }
     }
     fn cpu(&self) -> f64 {
         match self {
             Outcome::Done { cpu, .. } | Outcome::Diverged { cpu, .. } => *cpu,
-            Outcome::Failed(_) => 0.0,
         }
     }
     fn value(&self, i: usize) -> Option<f64> {
         match self {
             Outcome::Done { values, .. } => values[i],
-            _ => None,
+            Outcome::Diverged { .. } => None,
         }
     }
 }
@@ -409,25 +443,20 @@ pub fn thread_cpu_seconds() -> f64 {
     if rc == 0 { ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9 } else { 0.0 }
 }
 
-fn run_job(job: &Job, obs: &[Observable]) -> Outcome {
+fn run_job(job: &Job, opts: &RunOptions) -> Result<JobRecord, RunError> {
     let cpu0 = thread_cpu_seconds();
     let started = Instant::now();
-    let r = run_scene(&job.scene, None);
+    let r = run_scene_with(&job.scene, None, opts);
     let wall = started.elapsed().as_secs_f64();
     let cpu = thread_cpu_seconds() - cpu0;
     match r {
-        Ok(s) => Outcome::Done {
-            values: obs.iter().map(|o| o.of(&s)).collect(),
-            unstable: s.regime == Regime::Unstable,
-            wall,
-            cpu,
-        },
+        Ok(s) => Ok(JobRecord::Done { summary: Box::new(s), wall, cpu }),
         Err(RunError::Engine(EngineError::Diverged { .. } | EngineError::NonFinite { .. }))
             if job.role == Role::Fixed =>
         {
-            Outcome::Diverged { wall, cpu }
+            Ok(JobRecord::Diverged { wall, cpu })
         }
-        Err(e) => Outcome::Failed(e),
+        Err(e) => Err(e),
     }
 }
 

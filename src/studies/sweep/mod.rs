@@ -63,7 +63,6 @@ pub mod values;
 use std::time::Instant;
 
 use indicatif::ProgressBar;
-use rayon::prelude::*;
 
 pub use files::WriteError;
 pub use outcome::{Majority, OutcomeError, Row, SweepOutcome, Timing};
@@ -71,8 +70,9 @@ pub use plan::{GridPoint, MAX_AXES, MAX_RUNS, RunSpec, SpecError, Sweep, SweepAx
 pub use tables::{RUNS_COLUMNS, SWEEP_COLUMNS};
 pub use values::{MAX_VALUES, RangeProblem, SweepValue, ValueSpec, ValuesError, parse_values, round_sig, value_text};
 
+use super::execute::{Continuation, Interrupted, run_missing};
 use crate::output::Summary;
-use crate::runner::{RunError, run_scene};
+use crate::runner::{RunError, run_scene_with};
 
 /// Why a sweep failed while running.
 #[derive(Debug, thiserror::Error)]
@@ -90,6 +90,8 @@ pub enum SweepError {
     },
     #[error(transparent)]
     Outcome(#[from] OutcomeError),
+    #[error(transparent)]
+    Interrupted(#[from] Interrupted),
 }
 
 impl Sweep {
@@ -97,23 +99,28 @@ impl Sweep {
     /// and builds the outcome with [`Sweep::outcome`]; `progress` is advanced by one per
     /// finished run. The first failed run, in the order of `runs`, is the error.
     pub fn run(&self, threads: usize, progress: Option<&ProgressBar>) -> Result<SweepOutcome, SweepError> {
+        self.run_from(threads, progress, Continuation::fresh(self.len()))
+    }
+
+    /// As [`Sweep::run`], running only the runs not done in `from` (their summaries are
+    /// taken as they are), appending each finished run to `from.journal`, and stopping
+    /// when `from.stop` is set ([`SweepError::Interrupted`]).
+    pub fn run_from(
+        &self,
+        threads: usize,
+        progress: Option<&ProgressBar>,
+        from: Continuation<'_, Summary>,
+    ) -> Result<SweepOutcome, SweepError> {
         let started = Instant::now();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .map_err(|e| SweepError::Pool(e.to_string()))?;
         let runs: Vec<RunSpec<'_>> = self.runs().collect();
-        let results: Vec<Result<Summary, RunError>> = pool.install(|| {
-            runs.par_iter()
-                .map(|run| {
-                    let out = run_scene(run.scene, None);
-                    if let Some(p) = progress {
-                        p.inc(1);
-                    }
-                    out
-                })
-                .collect()
-        });
+        let seeds: Vec<u64> = runs.iter().map(|r| r.scene.run.seed).collect();
+        let order: Vec<usize> = (0..runs.len()).collect();
+        let results =
+            run_missing(&pool, &order, &seeds, from, progress, |i, opts| run_scene_with(runs[i].scene, None, opts))?;
         let mut summaries = Vec::with_capacity(results.len());
         for (run, res) in runs.iter().zip(results) {
             summaries.push(res.map_err(|source| SweepError::Run {
@@ -127,6 +134,27 @@ impl Sweep {
         outcome.timing =
             Some(Timing { wall_seconds: started.elapsed().as_secs_f64(), threads: pool.current_num_threads() });
         Ok(outcome)
+    }
+
+    /// The seed of every run, in the order of [`Sweep::runs`].
+    pub fn seeds(&self) -> Vec<u64> {
+        self.runs().map(|r| r.scene.run.seed).collect()
+    }
+
+    /// The sweep's arguments besides its scene, as one line in the command's syntax (the
+    /// journal's record of what decides the runs and the tables). The `--set` overrides
+    /// are not among them: their effect is in the scene's fingerprint, however spelt.
+    pub fn arguments(&self) -> String {
+        let mut parts = Vec::new();
+        for (k, a) in self.axes.iter().enumerate() {
+            let values = a.values.iter().map(|v| v.text.as_str()).collect::<Vec<_>>().join(",");
+            parts.push(format!("--param {} --values {values}", a.param));
+            if a.log {
+                parts.push(if k == 0 { "--log-x" } else { "--log-y" }.to_string());
+            }
+        }
+        parts.push(format!("--replicas {}", self.replicas));
+        crate::scene::error::printable(&parts.join(" "))
     }
 
     /// Grid point `g` as `P = V` for each swept field, e.g. `plate.v = 0.5, plate.k = 15`.
