@@ -82,6 +82,15 @@ pub(crate) fn compare(args: &CompareArgs) -> ExitCode {
         Ok(p) => p,
         Err(e) => return fail(EXIT_BAD_INPUT, e),
     };
+    let engines = [crate::scene::EngineKind::Fixed, crate::scene::EngineKind::Exact].map(|engine| {
+        let mut s = scene.clone();
+        s.run.engine = engine;
+        s
+    });
+    let threads = match crate::estimate::check::study_threads(engines.iter(), args.threads, "compare") {
+        Ok(t) => t,
+        Err(e) => return fail(EXIT_BAD_INPUT, e),
+    };
     let out = args.out.clone().unwrap_or_else(|| Path::new("out").join(format!("{}-compare", scene.name)));
     let created = match prepare_out_dir(&out) {
         Ok(c) => c,
@@ -91,7 +100,7 @@ pub(crate) fn compare(args: &CompareArgs) -> ExitCode {
         remove_if_empty(&created);
         fail(EXIT_RUN_FAILED, m)
     };
-    let study = match plan.run(args.threads) {
+    let study = match plan.run(Some(threads)) {
         Ok(s) => s,
         Err(e) => return failed(e.to_string()),
     };
