@@ -18,12 +18,10 @@ pub struct Available {
 /// minus `memory.usage_in_bytes`) and [`MEMORY_ENV`]; `None` where none of them can be read.
 pub fn available_memory() -> Option<Available> {
     let mut best: Option<Available> = None;
-    let mut take = |bytes: Option<u64>, source: &'static str| {
-        match (bytes, &best) {
-            (Some(bytes), Some(b)) if bytes >= b.bytes => {}
-            (Some(bytes), _) => best = Some(Available { bytes, source }),
-            (None, _) => {}
-        }
+    let mut take = |bytes: Option<u64>, source: &'static str| match (bytes, &best) {
+        (Some(bytes), Some(b)) if bytes >= b.bytes => {}
+        (Some(bytes), _) => best = Some(Available { bytes, source }),
+        (None, _) => {}
     };
     take(mem_available(), "MemAvailable in /proc/meminfo");
     take(cgroup_room(), "the cgroup memory limit");
@@ -46,9 +44,9 @@ fn read_u64(path: &Path) -> Option<u64> {
 /// the root of the hierarchy.
 fn cgroup_room() -> Option<u64> {
     let root = Path::new("/sys/fs/cgroup");
-    let own = std::fs::read_to_string("/proc/self/cgroup").ok().and_then(|t| {
-        t.lines().find_map(|l| l.strip_prefix("0::").map(|p| root.join(p.trim_start_matches('/'))))
-    });
+    let own = std::fs::read_to_string("/proc/self/cgroup")
+        .ok()
+        .and_then(|t| t.lines().find_map(|l| l.strip_prefix("0::").map(|p| root.join(p.trim_start_matches('/')))));
     let v2 = |dir: &Path| {
         let max = read_u64(&dir.join("memory.max"))?; // "max" (no limit) does not parse
         Some(max.saturating_sub(read_u64(&dir.join("memory.current")).unwrap_or(0)))

@@ -94,7 +94,8 @@ fn memory_estimates_match_the_measured_peak() {
             o.push(format!("junctions.n={n}"));
             let scene = Scene::from_file(&fig1, &o).unwrap();
             let out = dir.path().join(format!("{name}-{n}"));
-            let mut args = vec!["run".to_string(), fig1.display().to_string(), "--out".into(), out.display().to_string()];
+            let mut args =
+                vec!["run".to_string(), fig1.display().to_string(), "--out".into(), out.display().to_string()];
             args.extend(o.iter().flat_map(|s| ["--set".to_string(), s.clone()]));
             let (code, err, rss) = run_measured(&args);
             assert_eq!(code, 0, "{name} at N = {n}: {err}");
@@ -116,7 +117,11 @@ fn memory_estimates_match_the_measured_peak() {
 
 fn stickslip(args: &[String], env: &[(&str, String)]) -> (i32, String, String) {
     let o = Command::new(BIN).args(args).envs(env.iter().map(|(k, v)| (k, v))).output().expect("the binary runs");
-    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into(),
+        String::from_utf8_lossy(&o.stderr).into(),
+    )
 }
 
 fn run_args(scene: &str, out: &Path, overrides: &[&str]) -> Vec<String> {
@@ -161,9 +166,14 @@ fn runs_too_big_are_refused_in_one_line_leaving_nothing() {
 fn a_failed_allocation_ends_in_one_line() {
     let dir = tempfile::tempdir().unwrap();
     let n = 40_000_000usize; // the fixed engine: 360 MB; the exact engine: 1.6 GB
-    let need = Estimate::of(&Scene::from_file(&scenario("fig1-exact.toml"), &[format!("junctions.n={n}")]).unwrap(), false);
+    let need =
+        Estimate::of(&Scene::from_file(&scenario("fig1-exact.toml"), &[format!("junctions.n={n}")]).unwrap(), false);
     let free = available_memory().map_or(0, |a| a.bytes);
-    assert!(free > need.peak_bytes(), "this test needs {} bytes of free memory, {free} are available", need.peak_bytes());
+    assert!(
+        free > need.peak_bytes(),
+        "this test needs {} bytes of free memory, {free} are available",
+        need.peak_bytes()
+    );
     for scene in ["fig1.toml", "fig1-exact.toml"] {
         let out = dir.path().join("a/b");
         let mut cmd = Command::new(BIN);
@@ -181,19 +191,31 @@ fn a_failed_allocation_ends_in_one_line() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{scene}: {err}");
         assert_eq!(err.lines().count(), 1, "{scene}: {err}");
-        assert!(err.starts_with("error: out of memory: cannot allocate") && err.contains(&format!("junctions.n = {n}")), "{err}");
+        assert!(
+            err.starts_with("error: out of memory: cannot allocate") && err.contains(&format!("junctions.n = {n}")),
+            "{err}"
+        );
         assert!(!dir.path().join("a").exists(), "{scene}: a failed run leaves no directory");
     }
 }
 
 #[test]
 fn validate_prints_the_estimates() {
-    let args = vec!["validate".to_string(), scenario("fig1-exact.toml").display().to_string(), "--set".into(), "junctions.n=1000000".into()];
+    let args = vec![
+        "validate".to_string(),
+        scenario("fig1-exact.toml").display().to_string(),
+        "--set".into(),
+        "junctions.n=1000000".into(),
+    ];
     let (code, out, err) = stickslip(&args, &[]);
     assert_eq!(code, 0, "{err}");
     let est: Vec<&str> = out.lines().filter(|l| l.starts_with("# estimate:")).collect();
     assert_eq!(est.len(), 4, "{out}");
-    assert!(est[0].contains("peak memory") && est[0].contains("40.0 B per junction") && est[0].contains("N = 1000000"), "{}", est[0]);
+    assert!(
+        est[0].contains("peak memory") && est[0].contains("40.0 B per junction") && est[0].contains("N = 1000000"),
+        "{}",
+        est[0]
+    );
     assert!(est[1].contains("memory available"));
     assert!(est[2].contains("junction events expected"));
     assert!(est[3].contains("trace.csv") && est[3].contains("summary.json") && est[3].contains("free on the disk"));
@@ -207,9 +229,22 @@ fn studies_use_fewer_threads_or_refuse() {
     let est = Estimate::of(&Scene::from_file(&scene, &[format!("junctions.n={n}")]).unwrap(), false);
     let sweep = |avail: u64, out: &str| {
         let args: Vec<String> = [
-            "sweep", scene.to_str().unwrap(), "--param", "plate.v", "--values", "0.1,1", "--threads", "4",
-            "--set", &format!("junctions.n={n}"), "--set", "run.t_end=0.5", "--set", "run.t_warmup=0",
-            "--out", dir.path().join(out).to_str().unwrap(),
+            "sweep",
+            scene.to_str().unwrap(),
+            "--param",
+            "plate.v",
+            "--values",
+            "0.1,1",
+            "--threads",
+            "4",
+            "--set",
+            &format!("junctions.n={n}"),
+            "--set",
+            "run.t_end=0.5",
+            "--set",
+            "run.t_warmup=0",
+            "--out",
+            dir.path().join(out).to_str().unwrap(),
         ]
         .map(String::from)
         .to_vec();
@@ -228,9 +263,20 @@ fn studies_use_fewer_threads_or_refuse() {
     assert!(!dir.path().join("none").exists());
     // compare counts its largest run the same way.
     let args: Vec<String> = [
-        "compare", scene.to_str().unwrap(), "--set", &format!("junctions.n={n}"), "--set", "fixed.rng=pcg",
-        "--dts", "0.5", "--replicas", "2", "--threads", "3",
-        "--out", dir.path().join("cmp").to_str().unwrap(),
+        "compare",
+        scene.to_str().unwrap(),
+        "--set",
+        &format!("junctions.n={n}"),
+        "--set",
+        "fixed.rng=pcg",
+        "--dts",
+        "0.5",
+        "--replicas",
+        "2",
+        "--threads",
+        "3",
+        "--out",
+        dir.path().join("cmp").to_str().unwrap(),
     ]
     .map(String::from)
     .to_vec();
@@ -248,8 +294,15 @@ fn studies_use_fewer_threads_or_refuse() {
 fn expected_events_are_right_where_the_rates_are_constant() {
     for initial in ["detached", "attached", "stationary"] {
         let o: Vec<String> = [
-            "run.engine=exact", "plate.kinematic=true", "plate.v=0.7", "junctions.n=2000", "junctions.k0=0.3",
-            "junctions.kon0=0.2", "run.t_end=20", "run.t_warmup=0", "run.seed=7",
+            "run.engine=exact",
+            "plate.kinematic=true",
+            "plate.v=0.7",
+            "junctions.n=2000",
+            "junctions.k0=0.3",
+            "junctions.kon0=0.2",
+            "run.t_end=20",
+            "run.t_warmup=0",
+            "run.seed=7",
         ]
         .iter()
         .map(|s| s.to_string())

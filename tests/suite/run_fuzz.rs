@@ -14,7 +14,8 @@ use proptest::prelude::*;
 use stickslip::Scene;
 use stickslip::estimate::Estimate;
 
-const SCENES: &[&str] = &["fig1.toml", "fig1-exact.toml", "fig1-linear.toml", "weak.toml", "kinematic.toml", "creep.toml"];
+const SCENES: &[&str] =
+    &["fig1.toml", "fig1-exact.toml", "fig1-linear.toml", "weak.toml", "kinematic.toml", "creep.toml"];
 
 const FIELDS: &[&str] = &[
     "junctions.n",
