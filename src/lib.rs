@@ -10,6 +10,7 @@
 
 pub mod cli;
 pub mod engine;
+pub mod estimate;
 pub mod observe;
 pub mod ode;
 pub mod output;

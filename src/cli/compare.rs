@@ -93,6 +93,15 @@ pub(crate) fn compare_as(args: &CompareArgs, command: &str) -> ExitCode {
         Ok(p) => p,
         Err(e) => return fail(EXIT_BAD_INPUT, e),
     };
+    let engines = [crate::scene::EngineKind::Fixed, crate::scene::EngineKind::Exact].map(|engine| {
+        let mut s = scene.clone();
+        s.run.engine = engine;
+        s
+    });
+    let threads = match crate::estimate::check::study_threads(engines.iter(), args.threads, "compare") {
+        Ok(t) => t,
+        Err(e) => return fail(EXIT_BAD_INPUT, e),
+    };
     let out = args.out.clone().unwrap_or_else(|| Path::new("out").join(format!("{}-compare", scene.name)));
     let created = match prepare_out_dir(&out) {
         Ok(c) => c,
@@ -103,7 +112,7 @@ pub(crate) fn compare_as(args: &CompareArgs, command: &str) -> ExitCode {
         Ok(j) => j,
         Err(code) => return code,
     };
-    let result = match plan.run_from(args.threads, journal.continuation()) {
+    let result = match plan.run_from(Some(threads), journal.continuation()) {
         Ok(s) => s,
         Err(StudyError::Interrupted(e)) => return study::interrupted(&e, &out),
         Err(e) => {

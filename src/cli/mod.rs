@@ -126,7 +126,7 @@ pub fn main() -> ExitCode {
             };
         }
     };
-    match cli.command {
+    let code = match cli.command {
         Command::Run { scene, engine, seed, out, checkpoint_every } => {
             run::run(&scene, engine, seed, out, checkpoint_every)
         }
@@ -135,5 +135,18 @@ pub fn main() -> ExitCode {
         Command::Stability { scene } => stability::stability(&scene),
         Command::Compare(args) => compare::compare(&args),
         Command::Sweep(args) => sweep::sweep(&args),
+    };
+    report_peak_memory();
+    code
+}
+
+/// With [`crate::estimate::system::REPORT_PEAK_ENV`] set, prints the process's peak resident
+/// memory on stderr (one line), to compare with the estimate.
+fn report_peak_memory() {
+    use crate::estimate::system::{REPORT_PEAK_ENV, peak_resident};
+    if std::env::var_os(REPORT_PEAK_ENV).is_some() {
+        if let Some(b) = peak_resident() {
+            eprintln!("peak memory {b} bytes ({})", crate::estimate::bytes(b));
+        }
     }
 }

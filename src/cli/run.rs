@@ -65,6 +65,10 @@ pub(crate) fn run(
         Err(code) => return code,
     };
     let out = out.unwrap_or_else(|| Path::new("out").join(&scene.name));
+    // Before the output directory exists: a refused run leaves nothing behind.
+    if let Err(e) = crate::estimate::check_run(&scene, &out, checkpoint_every.is_some()) {
+        return fail(EXIT_BAD_INPUT, e);
+    }
     let created = match prepare_out_dir(&out) {
         Ok(c) => c,
         Err(m) => return fail(EXIT_BAD_INPUT, m),

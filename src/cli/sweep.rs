@@ -178,6 +178,11 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
         Ok(s) => s,
         Err(e) => return fail(EXIT_BAD_INPUT, e),
     };
+    let scenes = sweep.points.iter().flat_map(|p| &p.scenes);
+    let threads = match crate::estimate::check::study_threads(scenes, args.threads.map(|t| t as usize), "the sweep") {
+        Ok(t) => t,
+        Err(e) => return fail(EXIT_BAD_INPUT, e),
+    };
     let out = args
         .out
         .clone()
@@ -200,7 +205,7 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
         }
         p
     });
-    let result = sweep.run_from(args.threads.unwrap_or(0) as usize, progress.as_ref(), journal.continuation());
+    let result = sweep.run_from(threads, progress.as_ref(), journal.continuation());
     if let Some(p) = &progress {
         p.finish_and_clear();
     }

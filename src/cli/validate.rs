@@ -29,5 +29,9 @@ pub(crate) fn validate(args: &SceneArgs) -> ExitCode {
     for line in crate::stability::analyse(&scene).validate_block(scene.run.engine) {
         let _ = writeln!(text, "{line}");
     }
+    let out = std::path::Path::new("out").join(&scene.name);
+    for line in crate::estimate::Estimate::of(&scene, false).report(&out) {
+        let _ = writeln!(text, "{line}");
+    }
     emit(&text)
 }

@@ -2,6 +2,7 @@
 //! and the observers; an engine only advances to the time it is asked for and reports
 //! what happened on the way.
 
+pub mod alloc;
 pub mod exact;
 pub mod fixed;
 
@@ -66,6 +67,9 @@ pub enum EngineError {
     /// The scene's force law or bond kind refused its parameters (validation refuses them first).
     #[error("{0}")]
     Parameter(#[from] crate::physics::ParamError),
+    /// A large buffer could not be allocated.
+    #[error(transparent)]
+    OutOfMemory(#[from] alloc::AllocError),
     /// The engine cannot run this scene.
     #[error("the {engine} engine cannot run this scene: {reason}")]
     Unsupported { engine: &'static str, reason: &'static str },

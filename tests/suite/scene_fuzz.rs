@@ -116,7 +116,7 @@ const VALUES: &[&str] = &[
 ];
 
 /// TOML-like text built from the scene's own sections, keys and tricky values.
-fn scene_like() -> impl Strategy<Value = String> {
+pub(crate) fn scene_like() -> impl Strategy<Value = String> {
     let line = prop_oneof![
         prop::sample::select(SECTIONS).prop_map(|s| format!("[{s}]")),
         (prop::sample::select(KEYS), prop::sample::select(VALUES)).prop_map(|(k, v)| format!("{k} = {v}")),

@@ -10,6 +10,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::engine::alloc::{self, AllocError};
 use crate::rng::{Pcg64, UniformSource};
 use crate::scene::{Initial, JunctionParams};
 
@@ -74,20 +75,25 @@ pub struct Bags {
 
 impl Bags {
     pub fn with_capacity(n: usize) -> Bags {
+        Self::try_with_capacity(n).unwrap_or_else(|e| panic!("{e}"))
+    }
+    /// Bags with room for `n` junctions each, reserved fallibly.
+    pub fn try_with_capacity(n: usize) -> Result<Bags, AllocError> {
         let b = Bags {
-            attached: Vec::with_capacity(n),
-            detached: Vec::with_capacity(n),
+            attached: alloc::with_capacity(n, "the attached junctions")?,
+            detached: alloc::with_capacity(n, "the detached junctions")?,
             anchor_sum: CompensatedSum::default(),
         };
         advise_huge_pages(&b.attached);
         advise_huge_pages(&b.detached);
-        b
+        Ok(b)
     }
     /// The initial state of `j.n` junctions, all at zero extension: detached, attached, or
     /// each attached with probability `kon0/(kon0+k0)` (one uniform per junction, in index
     /// order).
-    pub fn initial(j: &JunctionParams, rng: &mut Pcg64) -> Bags {
-        let mut bags = Bags::with_capacity(j.n);
+    /// An allocation that fails is the error.
+    pub fn initial(j: &JunctionParams, rng: &mut Pcg64) -> Result<Bags, AllocError> {
+        let mut bags = Bags::try_with_capacity(j.n)?;
         let p_att = j.kon0 / (j.kon0 + j.k0);
         for id in 0..j.n as u32 {
             let attached = match j.initial {
@@ -101,7 +107,7 @@ impl Bags {
                 bags.detached.push(Detached { x: 0.0, t: 0.0, id });
             }
         }
-        bags
+        Ok(bags)
     }
     #[inline]
     pub fn n_attached(&self) -> usize {

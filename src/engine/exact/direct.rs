@@ -169,7 +169,7 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
     pub fn new(scene: &Scene, law: L, bond: B) -> Result<Self, EngineError> {
         let j = &scene.junctions;
         let mut rng = pcg(scene.run.seed);
-        let bags = Bags::initial(j, &mut rng);
+        let bags = Bags::initial(j, &mut rng)?;
         let plate = Plate::from_scene(scene);
         let layout = Layout::new(plate.mass == 0.0, B::IS_WEAK);
         let cfg = Dop853Config {

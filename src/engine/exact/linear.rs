@@ -29,6 +29,7 @@ use super::frame::Frame;
 use super::motion::{Drive, Dynamic, PlateMotion};
 use super::pick::Pick;
 use super::rupture::RuptureModel;
+use crate::engine::alloc::AllocError;
 use crate::engine::{Counters, Engine, EngineError};
 use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
 use crate::physics::{Formation, Plate};
@@ -121,12 +122,23 @@ impl PlateCache {
 impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
     /// The engine at `t = 0` for `scene`, with rupture kinetics made by `rupture` (after the
     /// initial state has been drawn from the generator).
+    ///
+    /// Panics if the junction buffers cannot be allocated; [`ExactLinear::try_new`] reports it.
     pub fn new(scene: &Scene, rupture: impl FnOnce(&mut Pcg64) -> R) -> Self {
+        Self::try_new(scene, |rng| Ok(rupture(rng))).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// [`ExactLinear::new`] with the junction buffers (bags, and the rupture model's, built by
+    /// `rupture`) reserved fallibly.
+    pub fn try_new(
+        scene: &Scene,
+        rupture: impl FnOnce(&mut Pcg64) -> Result<R, AllocError>,
+    ) -> Result<Self, AllocError> {
         let j = &scene.junctions;
         let mut rng = pcg(scene.run.seed);
-        let bags = Bags::initial(j, &mut rng);
+        let bags = Bags::initial(j, &mut rng)?;
         let plate = Plate::from_scene(scene);
-        let rupture = rupture(&mut rng);
+        let rupture = rupture(&mut rng)?;
         let next_formation = Pick::draw(&mut rng);
         let mut e = ExactLinear {
             n: j.n,
@@ -165,7 +177,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
         // plate moves at V from the start.
         e.yd = if M::KINEMATIC { e.plate.v } else { e.piece.traj.at(0.0).1 };
         e.refresh_clocks(None);
-        e
+        Ok(e)
     }
 
     /// Starts a new closed-form piece at the current time and state.

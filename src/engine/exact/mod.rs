@@ -91,7 +91,7 @@ impl<V: EngineVisitor> LawVisitor for WithLaw<'_, V> {
         let Self { scene, visitor } = self;
         let kinematic = scene.plate.kinematic;
         match method::<L>(scene) {
-            ExactMethod::ClosedForm => Ok(with_bond(&scene.junctions, ClosedForm { scene, law, visitor })?),
+            ExactMethod::ClosedForm => with_bond(&scene.junctions, ClosedForm { scene, law, visitor })?,
             ExactMethod::Series => series::dispatch(scene, visitor),
             ExactMethod::Direct if kinematic => Err(EngineError::Unsupported {
                 engine: "exact",
@@ -109,21 +109,21 @@ struct ClosedForm<'a, L, V> {
 }
 
 impl<L: ForceLaw, V: EngineVisitor> BondVisitor for ClosedForm<'_, L, V> {
-    type Output = V::Output;
+    type Output = Result<V::Output, EngineError>;
     /// Weak bonds: the rupture envelope `k0 exp(a |x|)`, `a = s c` from the bond's force
     /// sensitivity `s = beta dx` and the law's thinning slope `c = kappa`.
-    fn visit<B: Bond>(self, bond: B) -> V::Output {
+    fn visit<B: Bond>(self, bond: B) -> Self::Output {
         let Self { scene, law, visitor } = self;
         let (k0, n) = (bond.k0(), scene.junctions.n);
         let a = bond.force_sensitivity() * law.thinning_slope();
-        let weak = |_: &mut _| WeakRupture::new(k0, a, n);
-        let strong = |rng: &mut _| StrongRupture::new(k0, rng);
-        match (B::IS_WEAK, scene.plate.kinematic) {
-            (true, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::new(scene, weak)),
-            (true, false) => visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::new(scene, weak)),
-            (false, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::new(scene, strong)),
-            (false, false) => visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::new(scene, strong)),
-        }
+        let weak = |_: &mut _| WeakRupture::try_new(k0, a, n);
+        let strong = |rng: &mut _| Ok(StrongRupture::new(k0, rng));
+        Ok(match (B::IS_WEAK, scene.plate.kinematic) {
+            (true, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::try_new(scene, weak)?),
+            (true, false) => visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::try_new(scene, weak)?),
+            (false, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::try_new(scene, strong)?),
+            (false, false) => visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::try_new(scene, strong)?),
+        })
     }
 }
 

@@ -22,6 +22,7 @@ use super::bags::Attached;
 use super::motion::PlatePath;
 use super::pick::Pick;
 use super::sumtree::SumTree2;
+use crate::engine::alloc::AllocError;
 use crate::rng::{Pcg64, UniformSource};
 
 /// Rates whose exponent `a |x|` exceeds this are treated as infinite: the junction
@@ -151,10 +152,14 @@ const CANDIDATES_PER_HORIZON: f64 = 32.0;
 
 impl WeakRupture {
     pub fn new(k0: f64, a: f64, n: usize) -> WeakRupture {
-        WeakRupture {
+        Self::try_new(k0, a, n).unwrap_or_else(|e| panic!("{e}"))
+    }
+    /// [`WeakRupture::new`], with its sum tree reserved fallibly.
+    pub fn try_new(k0: f64, a: f64, n: usize) -> Result<WeakRupture, AllocError> {
+        Ok(WeakRupture {
             k0,
             a,
-            tree: SumTree2::new(n),
+            tree: SumTree2::try_new(n)?,
             y_lo: 0.0,
             y_hi: 0.0,
             e_hi: 1.0,
@@ -163,7 +168,7 @@ impl WeakRupture {
             last_rate: 0.0,
             immediate: false,
             bounding: false,
-        }
+        })
     }
     #[inline]
     fn weights(&self, c: f64) -> [f64; 2] {

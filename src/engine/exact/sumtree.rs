@@ -9,6 +9,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::engine::alloc::{self, AllocError};
+
 /// Children per node.
 const ARITY: usize = 4;
 
@@ -39,15 +41,28 @@ pub struct SumTree2 {
 impl SumTree2 {
     /// A tree for `slots` slots, all zero.
     pub fn new(slots: usize) -> SumTree2 {
+        Self::try_new(slots).unwrap_or_else(|e| panic!("{e}"))
+    }
+    /// [`SumTree2::new`], with its nodes reserved fallibly.
+    pub fn try_new(slots: usize) -> Result<SumTree2, AllocError> {
+        let (cap, nodes) = Self::shape(slots);
+        let lines = alloc::filled(nodes, Line::default(), "the rupture sum tree")?;
+        super::bags::advise_huge_pages(&lines);
+        Ok(SumTree2 { cap, first_bottom: nodes - cap / ARITY, lines })
+    }
+    /// `(slots of the bottom level, nodes)` of the tree for `slots` slots.
+    fn shape(slots: usize) -> (usize, usize) {
         let mut cap = ARITY;
         let mut nodes = 1;
         while cap < slots {
             cap *= ARITY;
             nodes = nodes * ARITY + 1;
         }
-        let lines = vec![Line::default(); nodes];
-        super::bags::advise_huge_pages(&lines);
-        SumTree2 { cap, first_bottom: nodes - cap / ARITY, lines }
+        (cap, nodes)
+    }
+    /// Bytes of the tree for `slots` slots (what [`SumTree2::new`] allocates).
+    pub fn bytes_for(slots: usize) -> u64 {
+        Self::shape(slots).1 as u64 * std::mem::size_of::<Line>() as u64
     }
     /// Number of slots.
     pub fn capacity(&self) -> usize {

@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use super::flip::Flip;
 use super::integrator::{Integrator, PlateState};
+use crate::engine::alloc::{self, AllocError};
 use crate::engine::{Counters, Engine, EngineError};
 use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
 use crate::physics::{Bond, ForceLaw, Formation, Plate};
@@ -93,20 +94,30 @@ where
     /// `initial = "stationary"` draws one uniform `xi_i` per junction, in index order, from
     /// `rng` here (before the first step): junction `i` starts attached iff
     /// `xi_i < kon0 / (kon0 + k0)`.
-    pub fn new(scene: &Scene, law: L, bond: B, mut rng: R, _flip: F) -> Self {
+    ///
+    /// Panics if the junction arrays cannot be allocated; [`FixedEngine::try_new`] reports it.
+    pub fn new(scene: &Scene, law: L, bond: B, rng: R, flip: F) -> Self {
+        Self::try_new(scene, law, bond, rng, flip).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// [`FixedEngine::new`] with the junction arrays reserved fallibly.
+    pub fn try_new(scene: &Scene, law: L, bond: B, mut rng: R, _flip: F) -> Result<Self, AllocError> {
         let j = &scene.junctions;
         let n = j.n;
         let q: Vec<u8> = match j.initial {
-            Initial::Detached => vec![0; n],
-            Initial::Attached => vec![1; n],
+            Initial::Detached => alloc::filled(n, 0, "the junction states")?,
+            Initial::Attached => alloc::filled(n, 1, "the junction states")?,
             Initial::Stationary => {
                 let p = j.kon0 / (j.kon0 + j.k0);
-                (0..n).map(|_| u8::from(rng.uniform() < p)).collect()
+                let mut q = alloc::with_capacity(n, "the junction states")?;
+                q.extend((0..n).map(|_| u8::from(rng.uniform() < p)));
+                q
             }
         };
+        let x = alloc::filled(n, 0.0, "the junction extensions")?;
         let attached = q.iter().map(|&b| u64::from(b)).sum();
         let dt = scene.fixed.dt;
-        FixedEngine {
+        Ok(FixedEngine {
             law,
             bond,
             flip: PhantomData,
@@ -123,13 +134,13 @@ where
             // A kinematic plate moves at V from the start (formation sees g(V)).
             plate_v: if scene.plate.kinematic { scene.plate.v } else { 0.0 },
             q,
-            x: vec![0.0; n],
+            x,
             pending_dx: 0.0,
             pending_relax: 1.0,
             attached,
             ruptures: 0,
             formations: 0,
-        }
+        })
     }
 
     /// Number of junctions `N`.

@@ -59,20 +59,26 @@ impl<L: ForceLaw, V: EngineVisitor> BondVisitor for WithBond<'_, L, V> {
                     engine: "fixed",
                     reason: "run.seed must lie in [1, 2^31 - 2] for the Park-Miller generator",
                 })?;
-                Ok(with_rng(scene, law, bond, rng, visitor))
+                with_rng(scene, law, bond, rng, visitor)
             }
-            RngKind::Pcg => Ok(with_rng(scene, law, bond, rng::pcg(seed), visitor)),
+            RngKind::Pcg => with_rng(scene, law, bond, rng::pcg(seed), visitor),
         }
     }
 }
 
-fn with_rng<L: ForceLaw, B: Bond, R, V: EngineVisitor>(scene: &Scene, law: L, bond: B, rng: R, visitor: V) -> V::Output
+fn with_rng<L: ForceLaw, B: Bond, R, V: EngineVisitor>(
+    scene: &Scene,
+    law: L,
+    bond: B,
+    rng: R,
+    visitor: V,
+) -> Result<V::Output, EngineError>
 where
     R: UniformSource + Clone + std::fmt::Debug + serde::Serialize + serde::de::DeserializeOwned + Send + 'static,
 {
-    match scene.fixed.flip {
-        FlipRule::Linear => visitor.visit(FixedEngine::new(scene, law, bond, rng, LinearFlip)),
-        FlipRule::Exponential => visitor.visit(FixedEngine::new(scene, law, bond, rng, ExponentialFlip)),
-        FlipRule::AsPrinted => visitor.visit(FixedEngine::new(scene, law, bond, rng, AsPrintedFlip)),
-    }
+    Ok(match scene.fixed.flip {
+        FlipRule::Linear => visitor.visit(FixedEngine::try_new(scene, law, bond, rng, LinearFlip)?),
+        FlipRule::Exponential => visitor.visit(FixedEngine::try_new(scene, law, bond, rng, ExponentialFlip)?),
+        FlipRule::AsPrinted => visitor.visit(FixedEngine::try_new(scene, law, bond, rng, AsPrintedFlip)?),
+    })
 }

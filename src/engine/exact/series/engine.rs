@@ -74,7 +74,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
     pub fn new(scene: &Scene, kinetics: K, motion: P) -> Result<Self, EngineError> {
         let j = &scene.junctions;
         let mut rng = pcg(scene.run.seed);
-        let bags = Bags::initial(j, &mut rng);
+        let bags = Bags::initial(j, &mut rng)?;
         let plate = Plate::from_scene(scene);
         let law = Tilted::from_scene(scene);
         let series = SeriesSum::new(law, scene.exact.rtol);

@@ -113,7 +113,16 @@ pub struct WeakKinetics {
 
 impl WeakKinetics {
     pub fn new(k0: f64, beta_dx: f64, kappa: f64, n: usize) -> WeakKinetics {
-        WeakKinetics { k0, beta_dx, envelope: WeakRupture::new(k0, beta_dx * kappa, n) }
+        Self::try_new(k0, beta_dx, kappa, n).unwrap_or_else(|e| panic!("{e}"))
+    }
+    /// [`WeakKinetics::new`], with the envelope's sum tree reserved fallibly.
+    pub fn try_new(
+        k0: f64,
+        beta_dx: f64,
+        kappa: f64,
+        n: usize,
+    ) -> Result<WeakKinetics, crate::engine::alloc::AllocError> {
+        Ok(WeakKinetics { k0, beta_dx, envelope: WeakRupture::try_new(k0, beta_dx * kappa, n)? })
     }
     /// `a = beta dx kappa`.
     #[inline]

@@ -42,12 +42,12 @@ pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output
         }
         (BondKind::Weak, false) => Ok(visitor.visit(ExactSeries::new(
             scene,
-            WeakKinetics::new(j.k0, j.beta_dx(), j.kappa, j.n),
+            WeakKinetics::try_new(j.k0, j.beta_dx(), j.kappa, j.n)?,
             Dynamic::new(plate, j.kappa * j.n as f64, e.rtol, e.atol)?,
         )?)),
         (BondKind::Weak, true) => Ok(visitor.visit(ExactSeries::new(
             scene,
-            WeakKinetics::new(j.k0, j.beta_dx(), j.kappa, j.n),
+            WeakKinetics::try_new(j.k0, j.beta_dx(), j.kappa, j.n)?,
             Kinematic::new(plate.v),
         )?)),
     }

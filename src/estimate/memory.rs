@@ -1,0 +1,123 @@
+//! Memory of a run: the engine's state per junction (from the sizes of the types it stores,
+//! so the figures follow the structs) and the buffers that do not grow with `N`.
+
+use std::mem::size_of;
+
+use crate::engine::exact::bags::{Attached, Detached};
+use crate::engine::exact::sumtree::SumTree2;
+use crate::engine::exact::{self};
+use crate::physics::ExactMethod;
+use crate::scene::laws::{LawVisitor, with_force_law};
+use crate::scene::{BondKind, EngineKind, Scene};
+
+/// Resident memory of the program itself before it allocates for a scene: code, libraries,
+/// stacks, the allocator's arenas and the runner's fixed buffers (part-file buffers,
+/// regime detector, progress). Measured as the peak resident set of a run at `N = 10`
+/// (`tests/suite/estimate.rs` measures it again and bounds the difference).
+pub const BASELINE_BYTES: u64 = 6 << 20;
+
+/// Buffer of a checkpoint being written (`output::checkpoint`).
+const CHECKPOINT_BUFFER: u64 = 1 << 20;
+/// The tilted law's series engine: its anchor bins and their O(1) lookup table
+/// (`physics::series`): they cover the spread of the anchors, not `N`; typically well
+/// under this allowance (the lookup table alone is capped at 4 MiB).
+const SERIES_BINS: u64 = 1 << 20;
+
+/// One buffer of the engine's state: what it holds and its bytes per junction.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Part {
+    pub what: &'static str,
+    /// Bytes for the whole scene.
+    pub bytes: u64,
+    /// Bytes per junction (for the sum tree, its bytes over `N`).
+    pub per_junction: f64,
+}
+
+/// Which method of which engine advances the scene (docs/runs.md, "Memory").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    Fixed,
+    /// Closed form (linear law).
+    ClosedForm,
+    /// The tilted law's series engine.
+    Series,
+    /// Direct summation with DOP853.
+    Direct,
+}
+
+impl Method {
+    pub fn of(scene: &Scene) -> Method {
+        struct Which<'a>(&'a Scene);
+        impl LawVisitor for Which<'_> {
+            type Output = ExactMethod;
+            fn visit<L: crate::physics::ForceLaw>(self, _law: L) -> ExactMethod {
+                exact::method::<L>(self.0)
+            }
+        }
+        match scene.run.engine {
+            EngineKind::Fixed => Method::Fixed,
+            EngineKind::Exact => match with_force_law(&scene.junctions, Which(scene)) {
+                Ok(ExactMethod::ClosedForm) => Method::ClosedForm,
+                Ok(ExactMethod::Series) => Method::Series,
+                Ok(ExactMethod::Direct) | Err(_) => Method::Direct,
+            },
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Fixed => "fixed-step engine",
+            Method::ClosedForm => "exact engine, closed form",
+            Method::Series => "exact engine, series",
+            Method::Direct => "exact engine, direct sum",
+        }
+    }
+}
+
+/// Bytes per junction of the fixed engine: a state byte `q_i` and an extension `x_i`.
+pub const FIXED_PER_JUNCTION: usize = size_of::<u8>() + size_of::<f64>();
+/// Bytes per junction of the exact engines' bags: each junction has a slot reserved in the
+/// attached bag and in the detached bag.
+pub const BAGS_PER_JUNCTION: usize = size_of::<Attached>() + size_of::<Detached>();
+
+/// The engine's buffers that grow with `N`, for `scene`.
+pub fn engine_parts(scene: &Scene) -> Vec<Part> {
+    let n = scene.junctions.n;
+    let part = |what, per: usize| Part { what, bytes: n as u64 * per as u64, per_junction: per as f64 };
+    let method = Method::of(scene);
+    if method == Method::Fixed {
+        return vec![part("junction states and extensions", FIXED_PER_JUNCTION)];
+    }
+    let mut parts = vec![part("attached and detached bags", BAGS_PER_JUNCTION)];
+    let bytes = tree_bytes(scene);
+    if bytes > 0 {
+        parts.push(Part { what: "rupture sum tree", bytes, per_junction: bytes as f64 / n.max(1) as f64 });
+    }
+    parts
+}
+
+/// Bytes of the weak-bond rupture sum tree: weak bonds in the exact engine rupture by
+/// thinning against it, except in the direct method.
+fn tree_bytes(scene: &Scene) -> u64 {
+    let m = Method::of(scene);
+    let uses_tree = scene.junctions.bond == BondKind::Weak && matches!(m, Method::ClosedForm | Method::Series);
+    if uses_tree { SumTree2::bytes_for(scene.junctions.n) } else { 0 }
+}
+
+/// Buffers that do not grow with `N`, beyond [`BASELINE_BYTES`]: the series engine's bins
+/// and a checkpoint's write buffer.
+pub fn fixed_buffers(scene: &Scene, checkpoints: bool) -> u64 {
+    let series = if Method::of(scene) == Method::Series { SERIES_BINS } else { 0 };
+    series + if checkpoints { CHECKPOINT_BUFFER } else { 0 }
+}
+
+/// Bytes of `checkpoint.bin` (MessagePack, structs as maps): per junction at most a bag
+/// entry with its field names (31 bytes), the fixed engine's state byte and extension (10),
+/// and a sum tree node (77 bytes per 64-byte node); plus 4 KiB of header and plate state.
+pub fn checkpoint_bytes(scene: &Scene) -> u64 {
+    let n = scene.junctions.n as u64;
+    let junctions = match Method::of(scene) {
+        Method::Fixed => 10 * n,
+        _ => 31 * n,
+    };
+    junctions + tree_bytes(scene) / 64 * 77 + 4096
+}
