@@ -375,8 +375,16 @@ impl Plan {
 #[derive(Debug)]
 enum Outcome {
     /// `unstable`: the run's regime is `unstable`.
-    Done { values: Vec<Option<f64>>, unstable: bool, wall: f64, cpu: f64 },
-    Diverged { wall: f64, cpu: f64 },
+    Done {
+        values: Vec<Option<f64>>,
+        unstable: bool,
+        wall: f64,
+        cpu: f64,
+    },
+    Diverged {
+        wall: f64,
+        cpu: f64,
+    },
     Failed(RunError),
 }
 
