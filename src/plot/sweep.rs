@@ -82,9 +82,7 @@ pub fn regime_map(sweep: &Sweep, outcome: &SweepOutcome) -> HeatMap {
         y: axis_of(b),
         xs: a.values.iter().map(|v| v.x).collect(),
         ys: b.values.iter().map(|v| v.x).collect(),
-        values: (0..nx)
-            .map(|i| (0..ny).map(|j| amplitude_per_junction(cell(i, j))).collect())
-            .collect(),
+        values: (0..nx).map(|i| (0..ny).map(|j| amplitude_per_junction(cell(i, j))).collect()).collect(),
         classes: (0..nx).map(|i| (0..ny).map(|j| label(cell(i, j).regime).to_string()).collect()).collect(),
         value_label: "oscillation amplitude per junction A/N  (kB T / l0)".to_string(),
     }

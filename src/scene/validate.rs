@@ -221,7 +221,8 @@ impl SceneFile {
 
         let trace = o.trace.unwrap_or(true);
         // trace.svg by default whenever trace.csv is written: a run shows its picture.
-        let output = OutputParams { sample_dt, trace, events: o.events.unwrap_or(false), plot: o.plot.unwrap_or(trace) };
+        let output =
+            OutputParams { sample_dt, trace, events: o.events.unwrap_or(false), plot: o.plot.unwrap_or(trace) };
         if output.plot && !output.trace {
             return Err(SceneError::invalid(
                 "output.plot",

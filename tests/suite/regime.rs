@@ -95,6 +95,7 @@ fn the_moment_equations_have_a_limit_cycle_between_two_smooth_ranges() {
                 assert!(mv.stable() && !(b[0] < v && v < b[1]), "V = {v}");
                 assert!(cycle.is_none(), "V = {v}: {cycle:?}");
             }
+            Regime::Unstable => unreachable!("the cases are physical regimes"),
         }
         // The detector on the N -> infinity trajectory.
         let d = verdict_at_infinity(&s);

@@ -188,19 +188,31 @@ fn sweeps_mark_unstable_steps() {
     assert_eq!(runs.iter().filter(|r| r.1 == "unstable").count(), 4, "{runs:?}");
     let svg = std::fs::read_to_string(dir.path().join("one/sweep.svg")).unwrap();
     assert_well_formed_svg(&svg);
-    assert!(svg.contains(">UN<"), "the unstable band is labelled");
+    assert!(svg.contains("\nUN\n</text>"), "the unstable band is labelled");
 
     let o = stickslip(
         &[
-            "sweep", &scene, "--param", "fixed.dt", "--values", "0.5,1", "--param", "plate.v", "--values", "0.5,1",
-            "--replicas", "1", "--out", "map",
+            "sweep",
+            &scene,
+            "--param",
+            "fixed.dt",
+            "--values",
+            "0.5,1",
+            "--param",
+            "plate.v",
+            "--values",
+            "0.5,1",
+            "--replicas",
+            "1",
+            "--out",
+            "map",
         ],
         dir.path(),
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let svg = std::fs::read_to_string(dir.path().join("map/sweep.svg")).unwrap();
     assert_well_formed_svg(&svg);
-    assert_eq!(svg.matches(">UN<").count(), 2, "two unstable cells");
+    assert_eq!(svg.matches("\nUN\n</text>").count(), 2, "two unstable cells");
 }
 
 /// `compare` calls a step unstable exactly when its runs are: the letter's step, not the

@@ -45,9 +45,9 @@ pub mod slips;
 
 use serde::{Deserialize, Serialize};
 
+use super::Segment;
 use super::{Observer, Sample};
 use crate::scene::Scene;
-use super::Segment;
 use buffer::Decimator;
 use numerics::{Numerics, NumericsDetector};
 use slips::SlipCounter;
