@@ -83,7 +83,8 @@ impl Sweep {
         let header = Header::new(StudyKind::Sweep, self.0.arguments(), &self.0.base, self.0.len(), None);
         let seeds = self.0.seeds();
         let opened = py.detach(|| Journal::open::<Summary>(&out, &header, &seeds)).map_err(bad_input)?;
-        let done = opened.done.iter().map(|d| d.as_ref().map(|s| serde_json::to_string(s).expect("a summary serializes")));
+        let done =
+            opened.done.iter().map(|d| d.as_ref().map(|s| serde_json::to_string(s).expect("a summary serializes")));
         Ok(SweepJournal { done: done.collect(), journal: opened.journal, seeds })
     }
 

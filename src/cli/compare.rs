@@ -65,7 +65,10 @@ pub(crate) fn quoted(argv: &[String]) -> String {
             format!("'{}'", a.replace('\'', r"'\''"))
         }
     };
-    std::iter::once("stickslip".to_string()).chain(argv.iter().skip(1).cloned().map(quote)).collect::<Vec<_>>().join(" ")
+    std::iter::once("stickslip".to_string())
+        .chain(argv.iter().skip(1).cloned().map(quote))
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 pub(crate) fn compare(args: &CompareArgs) -> ExitCode {

@@ -23,7 +23,10 @@ pub(crate) fn resume(dir: &Path, checkpoint_every: Option<f64>) -> Option<ExitCo
     if checkpoint_every.is_some() {
         return Some(fail(
             EXIT_BAD_INPUT,
-            format!("--checkpoint-every: {} is a study's journal; a study resumes run by run, without checkpoints", path.display()),
+            format!(
+                "--checkpoint-every: {} is a study's journal; a study resumes run by run, without checkpoints",
+                path.display()
+            ),
         ));
     }
     Some(match rerun(dir, &header) {

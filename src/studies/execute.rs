@@ -37,7 +37,7 @@ pub enum Interrupted {
     #[error("{source}; the study stopped with {done} of {total} runs done")]
     Journal {
         #[source]
-        source: JournalError,
+        source: Box<JournalError>,
         done: usize,
         total: usize,
     },
@@ -99,7 +99,7 @@ where
     }
     let finished = results.iter().filter(|r| matches!(r, Some(Ok(_)))).count();
     if let Some(source) = failed_write.into_inner().unwrap_or_else(|p| p.into_inner()) {
-        return Err(Interrupted::Journal { source, done: finished, total });
+        return Err(Interrupted::Journal { source: Box::new(source), done: finished, total });
     }
     if results.iter().any(Option::is_none) {
         return Err(Interrupted::Stopped { done: finished, total });

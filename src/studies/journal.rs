@@ -408,13 +408,18 @@ mod tests {
         other_scene.fingerprint = "0123456789abcdef".into();
         let mut other_version = h.clone();
         other_version.version = "0.0.0".into();
-        for (other, what) in
-            [(header("--replicas 4"), "another study"), (other_scene, "another scene"), (other_version, "stickslip 0.0.0")]
-        {
+        for (other, what) in [
+            (header("--replicas 4"), "another study"),
+            (other_scene, "another scene"),
+            (other_version, "stickslip 0.0.0"),
+        ] {
             let e = open(d.path(), &other).unwrap_err().to_string();
             assert!(e.contains(what) && !e.contains('\n'), "{e}");
         }
-        assert!(matches!(Journal::open::<String>(d.path(), &h, &[10, 99, 12]), Err(JournalError::Damaged { line: 2, .. })));
+        assert!(matches!(
+            Journal::open::<String>(d.path(), &h, &[10, 99, 12]),
+            Err(JournalError::Damaged { line: 2, .. })
+        ));
         // A damaged line that is not the last.
         let text = String::from_utf8(before.clone()).unwrap();
         std::fs::write(&path, text.replace("\"b\"", "\"b") + "{\"run\":0,\"seed\":10,\"result\":\"a\"}\n").unwrap();

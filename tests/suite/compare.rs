@@ -11,7 +11,7 @@ const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
 /// 20 weak junctions (so the rupture force is compared too), linear law, the letter's plate.
 /// At dt = 4 the plate step grows by ~34 per step (every junction attached), so 75 steps
 /// take it past the engine's divergence threshold of 1e100.
-const TINY: &str = r#"
+pub(super) const TINY: &str = r#"
 [junctions]
 n = 20
 bond = "weak"

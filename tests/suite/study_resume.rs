@@ -13,33 +13,12 @@ use std::time::{Duration, Instant};
 
 use stickslip::studies::seeds::mix;
 
+use super::compare::TINY;
+
 const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
 
 /// The fig2 scene, short: about 0.1 s a run.
 const SHORT: [&str; 4] = ["--set", "run.t_end=300", "--set", "run.t_warmup=50"];
-
-/// 20 weak junctions, linear law: the compare tests' tiny scene.
-const TINY: &str = r#"
-[junctions]
-n = 20
-bond = "weak"
-force_law = "linear"
-initial = "stationary"
-[plate]
-mass = 75.0
-eta = 75.0
-k = 150.0
-v = 0.5
-[run]
-engine = "exact"
-t_end = 300.0
-t_warmup = 50.0
-seed = 3
-[fixed]
-dt = 0.5
-[output]
-sample_dt = 1.0
-"#;
 
 /// A study: its arguments (without `--out`), its number of runs, and the files compared.
 struct Study {
@@ -116,7 +95,11 @@ fn table(dir: &Path, name: &str) -> String {
     text.lines()
         .map(|l| {
             let cells: Vec<&str> = l.split(',').collect();
-            (0..cells.len()).filter(|&i| !header[i].ends_with("_seconds")).map(|i| cells[i]).collect::<Vec<_>>().join(",")
+            (0..cells.len())
+                .filter(|&i| !header[i].ends_with("_seconds"))
+                .map(|i| cells[i])
+                .collect::<Vec<_>>()
+                .join(",")
         })
         .collect::<Vec<_>>()
         .join("\n")
