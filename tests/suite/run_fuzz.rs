@@ -152,14 +152,7 @@ fn check(scene_file: &str, sets: &[String]) -> Result<(), TestCaseError> {
 
 proptest! {
     // 256 cases by default (each may run a scene); PROPTEST_CASES for a longer hunt.
-    #![proptest_config(ProptestConfig {
-        cases: std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(256),
-        failure_persistence: None,
-        rng_seed: proptest::test_runner::RngSeed::Fixed(
-            std::env::var("PROPTEST_RNG_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(20261125),
-        ),
-        ..ProptestConfig::default()
-    })]
+    #![proptest_config(crate::scene_fuzz::fuzz_config(256, 20261125))]
 
     #[test]
     fn random_overrides_validate_and_run_cleanly(

@@ -180,19 +180,22 @@ fn assignment() -> impl Strategy<Value = String> {
     ]
 }
 
+/// `cases` cases (or `PROPTEST_CASES`) from the fixed seed `seed` (or `PROPTEST_RNG_SEED`):
+/// CI runs the same cases every time. Failures are shrunk and printed, not persisted.
+pub(crate) fn fuzz_config(cases: u32, seed: u64) -> ProptestConfig {
+    let env = |name: &str| std::env::var(name).ok().and_then(|s| s.parse().ok());
+    ProptestConfig {
+        cases: env("PROPTEST_CASES").map_or(cases, |c: u64| c as u32),
+        failure_persistence: None,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(env("PROPTEST_RNG_SEED").unwrap_or(seed)),
+        ..ProptestConfig::default()
+    }
+}
+
 proptest! {
     // 2048 cases each by default; PROPTEST_CASES=100000 (and another PROPTEST_RNG_SEED)
-    // for a long hunt. Failures are
-    // shrunk and printed; add them to `regressions` below rather than to a file.
-    #![proptest_config(ProptestConfig {
-        cases: std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(2048),
-        failure_persistence: None,
-        // A fixed seed: CI runs the same cases every time (PROPTEST_RNG_SEED=N for others).
-        rng_seed: proptest::test_runner::RngSeed::Fixed(
-            std::env::var("PROPTEST_RNG_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(20261121),
-        ),
-        ..ProptestConfig::default()
-    })]
+    // for a long hunt. Add failures to `regressions` below rather than to a file.
+    #![proptest_config(fuzz_config(2048, 20261121))]
 
     #[test]
     fn arbitrary_text_never_panics(text in ".{0,200}") {
