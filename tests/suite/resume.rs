@@ -218,7 +218,8 @@ fn kill_and_resume(case: &Case, kills: usize) {
             let stdout = String::from_utf8_lossy(&out.stdout);
             assert!(stdout.starts_with("resumed from the checkpoint at t = "), "{stdout}");
         }
-        let mut expected = vec!["summary.json", "trace.csv"];
+        // trace.svg: drawn by default with trace.csv.
+        let mut expected = vec!["summary.json", "trace.csv", "trace.svg"];
         if case.sets.contains(&"output.events=true") {
             expected.insert(0, "events.csv");
         }
