@@ -33,7 +33,7 @@ pub struct Part {
     pub per_junction: f64,
 }
 
-/// Which method of which engine advances the scene (docs/runs.md, "Memory").
+/// Which method of which engine advances the scene (docs/runs.md, "Memory per junction").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
     Fixed,

@@ -2,7 +2,8 @@
 //! junction for its engine, bond kind and force law, plus buffers), the expected number of
 //! steps or events, and the size of each output file; and the checks that refuse a run the
 //! machine cannot hold ([`check`]). `stickslip validate` prints the estimates; `run`,
-//! `sweep` and `compare` check them first (docs/runs.md, "Memory and disk").
+//! `sweep` and `compare` check them first (docs/runs.md, "Memory and disk: estimated
+//! before a run starts").
 
 pub mod check;
 pub mod memory;

@@ -92,8 +92,10 @@ fn statvfs_free(path: &Path) -> Option<u64> {
         }
         s.assume_init()
     };
+    // A file system without block accounting (`/proc`, some FUSE mounts) reports no blocks:
+    // its free space is unknown, not zero.
     #[allow(clippy::unnecessary_cast)] // the field types differ between platforms
-    Some((s.f_bavail as u64).saturating_mul(s.f_frsize as u64))
+    (s.f_blocks > 0).then(|| (s.f_bavail as u64).saturating_mul(s.f_frsize as u64))
 }
 
 #[cfg(not(unix))]
