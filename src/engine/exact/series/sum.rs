@@ -1,7 +1,7 @@
 //! The tilted law's total bond force `S(y) = sum_i f^x(y - c_i)` (plate at `y`, junction `i`
 //! anchored at `c_i`, extension `x_i = y - c_i`) as a truncated series about a base point
 //! `y0`, updated in O(p) flops per attached or detached junction and re-based in
-//! O(bins p^2), independent of the number `N` of junctions (issue 10). Measured costs:
+//! O(bins p^2), independent of the number `N` of junctions. Measured costs:
 //! docs/performance.md, "Tilted law: the bond-force series".
 //!
 //! **Split.** `f^x(x) = kappa x + phi(x)`, `phi(x) = -kappa l0 x h(x)`,
@@ -117,7 +117,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::force::Tilted;
+use crate::physics::Tilted;
 
 /// Length of the fixed coefficient arrays: orders `p <= PMAX - 1`.
 pub const PMAX: usize = 32;
