@@ -1,7 +1,7 @@
 //! Low-velocity creep with weak bonds (`scenarios/creep.toml`): what the exact engine costs
 //! against the fixed-step engine over the same simulated time, and the friction's growth
 //! with the logarithm of the driving velocity, against the thermally activated (Bell)
-//! theory of `stickslip::studies::compare::creep`.
+//! theory of `stickslip_testkit::creep`.
 //!
 //! ```sh
 //! cargo run --profile perf --example creep              # everything (about a minute of CPU)
@@ -17,12 +17,12 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use stickslip::output::Summary;
-use stickslip::studies::compare::creep::theory;
 use stickslip::studies::compare::thread_cpu_seconds;
 use stickslip::studies::format::sig;
 use stickslip::studies::seeds::{Role, pcg_seed};
 use stickslip::studies::stats::mean_ci95 as mean_ci;
 use stickslip::{Scene, run_scene};
+use stickslip_testkit::creep::theory;
 
 struct Args {
     replicas: usize,

@@ -2,11 +2,24 @@
 //! (the Filippov–Klafter–Urbakh bond model), simulated by an exact event-driven kinetic
 //! Monte Carlo engine and by the letter's fixed-step scheme.
 //!
-//! Layout: [`scene`] is the problem (validated parameters), [`physics`] the model's pure
-//! functions, [`engine`] the methods that advance a scene, [`runner`] the loop that drives
-//! an engine along the output grid and feeds the [`observe`]rs and [`output`] writers;
-//! [`studies`] run many scenes (sweeps, work-precision comparisons) and [`plot`] draws
-//! their figures.
+//! Code map (every module):
+//!
+//! - [`scene`]: the problem: a scene file, its validation into typed parameters, and the one
+//!   table of force laws and bond kinds (`scene::laws`);
+//! - [`physics`]: the model's pure functions: force laws, bond kinds, formation rate, plate;
+//! - [`engine`]: the methods that advance a scene: [`engine::fixed`] (the letter's
+//!   fixed-step scheme) and [`engine::exact`] (event-driven kinetic Monte Carlo: the linear
+//!   engine with its closed-form propagator, the series engine with its bond-force series,
+//!   the direct engine);
+//! - [`ode`]: the adaptive integrators the exact engines use (DOP853, Rosenbrock);
+//! - [`rng`]: the named, portable random generators (Park–Miller, PCG);
+//! - [`runner`]: the loop that drives an engine along the output grid and feeds the
+//!   [`observe`]rs (statistics, regime detector) and the [`output`] writers (CSV,
+//!   `summary.json`, checkpoints);
+//! - [`stability`]: where each fixed-step plate integrator is stable;
+//! - [`studies`]: many scenes at once: sweeps, work-precision comparisons;
+//! - [`plot`]: the figures of runs and studies (SVG);
+//! - [`cli`]: the `stickslip` command line.
 
 pub mod cli;
 pub mod engine;
@@ -16,7 +29,6 @@ pub mod ode;
 pub mod output;
 pub mod physics;
 pub mod plot;
-pub mod propagator;
 pub mod rng;
 pub mod runner;
 pub mod scene;

@@ -19,7 +19,7 @@ pub const BASELINE_BYTES: u64 = 6 << 20;
 /// Buffer of a checkpoint being written (`output::checkpoint`).
 const CHECKPOINT_BUFFER: u64 = 1 << 20;
 /// The tilted law's series engine: its anchor bins and their O(1) lookup table
-/// (`physics::series`): they cover the spread of the anchors, not `N`; typically well
+/// (`engine::exact::series::sum`): they cover the spread of the anchors, not `N`; typically well
 /// under this allowance (the lookup table alone is capped at 4 MiB).
 const SERIES_BINS: u64 = 1 << 20;
 

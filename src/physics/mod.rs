@@ -6,10 +6,11 @@ pub mod bond;
 pub mod force;
 pub mod plate;
 pub mod rates;
-pub mod series;
 
 pub use bond::{Bond, BondParams, Strong, Weak};
-pub use force::{ExactMethod, ForceLaw, LawParams, Linear, ParamError, Tilted};
+pub use force::{
+    ClosedForm, Direct, ExactMethod, ExactMethodOf, ForceLaw, ForceLawKind, LawParams, LawVisitor, Linear, LinearLaw,
+    MethodVisitor, ParamError, Series, SeriesLaw, Tilted, exact_method,
+};
 pub use plate::Plate;
 pub use rates::Formation;
-pub use series::{LocalCubic, SeriesSum, tilted_taylor};

@@ -8,8 +8,8 @@ use super::checkpoint;
 use super::error::RunError;
 use super::grid::GridPosition;
 use super::observers::{EventObservers, RunObservers};
+use super::plan::{RunPlan, RunStart, work};
 use super::progress::Progress;
-use super::run::{RunPlan, RunStart, work};
 use crate::engine::Engine;
 
 /// Outputs are flushed to the operating system at least this often (at grid stops).

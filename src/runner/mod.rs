@@ -8,7 +8,9 @@
 //! - [`observers`]: the core observers, the writers and the event observers of a run;
 //! - [`control`]: what a run does at grid stops (progress, flushes, checkpoints);
 //! - [`run`]: a run from start to end ([`run_scene`]), and its [`summarize`]d results;
-//! - [`checkpoint`]: checkpoints and [`resume`]; [`progress`]: progress on stderr;
+//! - [`plan`]: what a run is and where it starts ([`RunOptions`]);
+//! - [`checkpoint`]: writing checkpoints; [`mod@resume`]: [`resume()`], continuing from one;
+//!   [`progress`]: progress on stderr;
 //! - [`simulation`]: [`Simulation`], an engine whose type is chosen from the scene behind
 //!   one handle; [`record`](mod@record): [`record()`], everything a run reports, in memory;
 //! - [`mod@error`]: why a run failed ([`RunError`]).
@@ -24,17 +26,20 @@ pub mod drive;
 pub mod error;
 pub mod grid;
 pub mod observers;
+pub mod plan;
 pub mod progress;
 pub mod record;
+pub mod resume;
 pub mod run;
 pub mod simulation;
 
-pub use checkpoint::{ResumeError, Resumed, resume};
 pub use control::FLUSH_EVERY;
 pub use drive::{Outcome, StopFlag, Termination, check_finite, drive, drive_walk};
 pub use error::RunError;
 pub use grid::{GridPosition, OutputGrid, Stop, Walk};
 pub use observers::{CoreObservers, EventObservers, core_observers};
+pub use plan::RunOptions;
 pub use record::{Recording, record};
-pub use run::{RunOptions, run_scene, run_scene_with, summarize};
+pub use resume::{ResumeError, Resumed, resume};
+pub use run::{run_scene, run_scene_with, summarize};
 pub use simulation::{Observed, Simulation, StateError};

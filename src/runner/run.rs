@@ -7,10 +7,11 @@ use std::time::Instant;
 
 use super::checkpoint;
 use super::control::Housekeeping;
-use super::drive::{StopFlag, Termination, drive_walk};
+use super::drive::{Termination, drive_walk};
 use super::error::{RunError, output_error};
 use super::grid::{GridPosition, OutputGrid};
 use super::observers::{CoreObservers, EventObservers, RunObservers, Writers, core_observers};
+use super::plan::{RunOptions, RunPlan, RunStart, work};
 use super::progress;
 use crate::engine::{Engine, EngineError, EngineVisitor, with_engine};
 use crate::observe::Nothing;
@@ -18,22 +19,6 @@ use crate::observe::stats::RuptureForces;
 use crate::output::Summary;
 use crate::output::atomic::write_whole;
 use crate::scene::{BondKind, Scene};
-
-/// How a run is carried out, beyond its scene. The default (no checkpoints, no progress,
-/// no stop flag) is [`run_scene`]'s.
-#[derive(Clone, Debug, Default)]
-pub struct RunOptions {
-    /// Write a checkpoint at output-grid stops, at most every this many seconds of wall
-    /// time (> 0). Needs an output directory.
-    pub checkpoint_every: Option<f64>,
-    /// Show progress on stderr when stderr is a terminal and the run lasts more than
-    /// [`progress::SHOW_AFTER`].
-    pub progress: bool,
-    /// Stop at the next grid stop once this flag is set: the run returns
-    /// [`RunError::Stopped`], after writing a checkpoint into the output directory (if it
-    /// has one) from which `stickslip resume` continues it.
-    pub stop: Option<StopFlag>,
-}
 
 /// Runs a scene to its end. With `out = Some(dir)` (an existing, writable directory) the
 /// files the scene asks for and `summary.json` are written there, each whole or not at all.
@@ -48,29 +33,6 @@ pub fn run_scene_with(scene: &Scene, out: Option<&Path>, opts: &RunOptions) -> R
         checkpoint::remove_stale(dir)?;
     }
     with_engine(scene, FreshRun(RunPlan { scene, out, opts }))?
-}
-
-/// What a run is: its scene, where it writes, and how it is carried out.
-#[derive(Clone, Copy)]
-pub(super) struct RunPlan<'a> {
-    pub scene: &'a Scene,
-    pub out: Option<&'a Path>,
-    pub opts: &'a RunOptions,
-}
-
-/// Where a run starts: `t = 0`, or a checkpoint.
-pub(super) struct RunStart {
-    pub position: GridPosition,
-    pub core: CoreObservers,
-    pub writers: Writers,
-    /// Rupture-force statistics so far (weak bonds; `None` starts them afresh).
-    pub ruptures: Option<RuptureForces>,
-    /// Wall time spent before this process.
-    pub wall_seconds: f64,
-    /// Checkpoints written before this process.
-    pub checkpoints: u64,
-    /// Time of the checkpoint the run was resumed from.
-    pub checkpoint_t: Option<f64>,
 }
 
 /// A run from `t = 0`, once the engine type is known.
@@ -117,15 +79,6 @@ pub(super) fn run_from<E: Engine>(engine: E, plan: &RunPlan, mut start: RunStart
             None => run_engine(engine, plan, Nothing, start),
             Some(ev) => run_engine(engine, plan, ev, start),
         }
-    }
-}
-
-/// The engine's work counter: steps (fixed engine) or events (exact engine).
-pub(super) fn work(engine: &impl Engine) -> (u64, &'static str) {
-    let c = engine.counters();
-    match (c.steps, c.events) {
-        (Some(s), _) => (s, "steps"),
-        (None, e) => (e.unwrap_or(0), "events"),
     }
 }
 
@@ -252,7 +205,7 @@ pub fn summarize<E: Engine>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::runner::{Resumed, resume};
+    use crate::runner::{Resumed, StopFlag, resume};
     use crate::test_scenes::fig1_with;
 
     fn summary_without_wall_time(s: &Summary) -> serde_json::Value {

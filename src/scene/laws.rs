@@ -1,21 +1,17 @@
-//! The one table of force laws and bond kinds: the scene's name of each, and the type that
-//! implements it ([`ForceLaw`], [`Bond`]). The fixed engine, the exact engine, validation
-//! and the stability analysis all go through [`with_force_law`] and [`with_bond`], so adding
-//! a law is one file in `src/physics/force/` and one line below (docs/engines.md, "Adding a
-//! force law"). Also the one place where physics values are built from a scene.
+//! A scene's force law and bond kind, built: [`with_force_law`] (the law table is in
+//! `physics::force`, beside the laws: adding a law is one file there and one line of that
+//! table, docs/engines.md, "Adding a force law") and the table of bond kinds below
+//! ([`with_bond`]). The fixed engine, the exact engine, validation and the stability analysis
+//! all go through them. Also the one place where physics values are built from a scene.
 
 use serde::{Deserialize, Serialize};
 
 use super::params::{JunctionParams, Scene};
 use crate::physics::{
     Bond, BondParams, ExactMethod, ForceLaw, Formation, LawParams, Linear, ParamError, Plate, Strong, Tilted, Weak,
+    exact_method,
 };
-
-/// Something to do with a force law once its type is known.
-pub trait LawVisitor {
-    type Output;
-    fn visit<L: ForceLaw>(self, law: L) -> Self::Output;
-}
+pub use crate::physics::{ForceLawKind, LawVisitor};
 
 /// Something to do with a bond kind once its type is known.
 pub trait BondVisitor {
@@ -23,9 +19,9 @@ pub trait BondVisitor {
     fn visit<B: Bond>(self, bond: B) -> Self::Output;
 }
 
-/// Generates the scene's name enum (serde names: the variant in kebab case, which a test
-/// checks against the type's `NAME`), its `ALL` list and `name()`, and the dispatch function
-/// that builds the type named by the scene and hands it to a visitor.
+/// Generates the scene's name enum of bond kinds (serde names: the variant in kebab case,
+/// which a test checks against the type's `NAME`), its `ALL` list and `name()`, and the
+/// dispatch function that builds the type named by the scene and hands it to a visitor.
 macro_rules! table {
     (
         $(#[$meta:meta])*
@@ -61,21 +57,17 @@ macro_rules! table {
 }
 
 table! {
-    /// Junction force law (docs/model.md, "Equations", item 3).
-    enum ForceLawKind, field force_law, ForceLaw::new(law_params), fn with_force_law<LawVisitor>;
-    /// The letter's eq. 3: a spring of rest length `l0` spanning the gap `l0`.
-    Tilted => Tilted,
-    /// Hookean shear spring `f^x = kappa x`.
-    Linear => Linear,
-}
-
-table! {
     /// Bond kind (docs/model.md, "Equations", item 6).
     enum BondKind, field bond, Bond::new(bond_params), fn with_bond<BondVisitor>;
     /// `k_off = k0`, independent of force.
     Strong => Strong,
     /// `k_off = k0 exp(beta f dx)`.
     Weak => Weak,
+}
+
+/// Builds the scene's force law and hands it to `visitor` (`physics::force::with_law`).
+pub fn with_force_law<V: LawVisitor>(j: &JunctionParams, visitor: V) -> Result<V::Output, ParamError> {
+    crate::physics::force::with_law(j.force_law, &law_params(j), visitor)
 }
 
 /// The numbers a force law is built from.
@@ -108,7 +100,7 @@ impl LawVisitor for Info {
     fn visit<L: ForceLaw>(self, law: L) -> LawInfo {
         LawInfo {
             name: L::NAME,
-            exact: L::EXACT,
+            exact: exact_method::<L>(),
             thinning_slope: law.thinning_slope(),
             stiffness: law.stiffness_range(),
             stiffness_note: L::STIFFNESS_NOTE,
@@ -199,8 +191,6 @@ mod tests {
         for k in BondKind::ALL {
             assert_eq!(serde_json::to_value(k).unwrap(), serde_json::Value::from(k.name()));
         }
-        assert_eq!(ForceLawKind::ALL.map(ForceLawKind::name), ["tilted", "linear"]);
-        assert_eq!(BondKind::ALL.map(BondKind::name), ["strong", "weak"]);
     }
 
     /// The two laws' descriptions: both bounded by `kappa`, the methods of docs/engines.md.

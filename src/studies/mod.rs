@@ -2,7 +2,7 @@
 //!
 //! - [`sweep`]: scene fields swept over values, with replicas (`stickslip sweep`).
 //! - [`compare`]: error against run time of the fixed-step and exact engines
-//!   (`stickslip compare`), and the creep theory it is checked against.
+//!   (`stickslip compare`).
 //! - [`seeds`]: how each run's seed is derived from the scene's seed (one mixer for all).
 //! - [`stats`]: statistics across replicas (means, spreads, Student-t intervals).
 //! - [`format`]: numbers as text for reports.

@@ -9,9 +9,12 @@
 //! - [`runs`]: runs that keep what a test reads ([`events_of`], [`samples_of`], [`steps`],
 //!   [`verdict_of`]), through the
 //!   library's [`stickslip::runner::Simulation`] handle, with no engine visitor;
+//! - [`creep`]: the Bell theory of low-velocity creep that `examples/creep.rs` and
+//!   `tests/suite/creep.rs` compare the exact engine with;
 //! - [`direct`]: the kit's one engine visitor, [`Direct`]: work on the concrete engine, the
 //!   reference of the handle's cost.
 
+pub mod creep;
 pub mod direct;
 pub mod kinds;
 pub mod runs;

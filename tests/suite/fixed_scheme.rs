@@ -7,10 +7,11 @@ use stickslip::Scene;
 use stickslip::engine::{Engine, EngineError, EngineVisitor, fixed};
 use stickslip::observe::stats::WindowStats;
 use stickslip::observe::{EventKind, JunctionEvent, Nothing, Observer, Recorder, Sample, Segment};
-use stickslip::physics::{Bond, ForceLaw, Formation, Linear, Strong, Tilted, Weak};
+use stickslip::physics::{Bond, ForceLaw, Formation, LawVisitor, Strong, Weak};
 use stickslip::rng::{self, ParkMiller, UniformSource};
 use stickslip::runner::{Observed, Simulation};
-use stickslip::scene::{BondKind, FlipRule, ForceLawKind, Initial, IntegratorKind, Reattach, RngKind};
+use stickslip::scene::laws::with_force_law;
+use stickslip::scene::{BondKind, FlipRule, Initial, IntegratorKind, Reattach, RngKind};
 use stickslip_testkit::{BONDS, LAWS, Trace, fixed_fig1 as scene, steps as record};
 
 // ---------------------------------------------------------------------------------------
@@ -83,8 +84,34 @@ fn park_miller_draws_reproduce_hand_computed_flips() {
 // An eager, unoptimised reference implementation of the scheme (docs/engines.md, "One step,
 // from `t_n` to `t_{n+1} = (n + 1) dt`").
 
+/// The scene's force law, whichever it is (built through the law table, so every law of the
+/// table is covered): `f(x)`, `f^x(x)` and whether `f^x = kappa x` (`ForceLaw::IS_LINEAR`).
+struct LawFns {
+    tension: Box<dyn Fn(f64) -> f64>,
+    force_x: Box<dyn Fn(f64) -> f64>,
+    is_linear: bool,
+}
+
+impl LawVisitor for LawFnsOf {
+    type Output = LawFns;
+    fn visit<L: ForceLaw>(self, law: L) -> LawFns {
+        LawFns {
+            tension: Box::new(move |x| law.tension(x)),
+            force_x: Box::new(move |x| law.force_x(x)),
+            is_linear: L::IS_LINEAR,
+        }
+    }
+}
+
+struct LawFnsOf;
+
+fn law_fns(s: &Scene) -> LawFns {
+    with_force_law(&s.junctions, LawFnsOf).unwrap()
+}
+
 struct Reference {
     s: Scene,
+    law: LawFns,
     rng: Box<dyn UniformSource>,
     q: Vec<bool>,
     x: Vec<f64>,
@@ -107,19 +134,13 @@ impl Reference {
                 Initial::Stationary => rng.uniform() < j.kon0 / (j.kon0 + j.k0),
             })
             .collect();
-        Reference { s: s.clone(), rng, q, x: vec![0.0; j.n], plate_x: 0.0, plate_v: 0.0, n: 0 }
+        Reference { s: s.clone(), law: law_fns(s), rng, q, x: vec![0.0; j.n], plate_x: 0.0, plate_v: 0.0, n: 0 }
     }
     fn tension(&self, x: f64) -> f64 {
-        match self.s.junctions.force_law {
-            ForceLawKind::Linear => Linear::from_scene(&self.s).tension(x),
-            ForceLawKind::Tilted => Tilted::from_scene(&self.s).tension(x),
-        }
+        (self.law.tension)(x)
     }
     fn force_x(&self, x: f64) -> f64 {
-        match self.s.junctions.force_law {
-            ForceLawKind::Linear => Linear::from_scene(&self.s).force_x(x),
-            ForceLawKind::Tilted => Tilted::from_scene(&self.s).force_x(x),
-        }
+        (self.law.force_x)(x)
     }
     fn k_off(&self, x: f64) -> f64 {
         match self.s.junctions.bond {
@@ -127,13 +148,14 @@ impl Reference {
             BondKind::Weak => Weak::from_scene(&self.s).k_off(self.tension(x)),
         }
     }
-    /// `F_b` with every attached junction at `x_i + shift`. For the linear law the engine's
-    /// documented closed form `kappa * sum_i q_i x_i` is used when `shift = 0`.
+    /// `F_b` with every attached junction at `x_i + shift`. For a law with `f^x = kappa x`
+    /// the engine's documented closed form `f^x(sum_i q_i x_i)` is used.
     fn bond_force(&self, shift: f64) -> f64 {
         let attached = self.q.iter().zip(&self.x).filter(|(q, _)| **q).map(|(_, x)| x + shift);
-        match self.s.junctions.force_law {
-            ForceLawKind::Linear => self.s.junctions.kappa * attached.fold(0.0, |a, x| a + x),
-            ForceLawKind::Tilted => attached.fold(0.0, |a, x| a + self.force_x(x)),
+        if self.law.is_linear {
+            self.force_x(attached.fold(0.0, |a, x| a + x))
+        } else {
+            attached.fold(0.0, |a, x| a + self.force_x(x))
         }
     }
     fn sample(&self) -> Sample {
@@ -271,9 +293,8 @@ fn engine_matches_an_eager_reference_bit_for_bit() {
             let s = small(&combo, seed);
             // Velocity Verlet with the linear law uses the closed form
             // F_b' = kappa (sum_i q_i x_i + N_att dX), the reference sums kappa (x_i + dX): round-off apart.
-            let exact = !(s.junctions.force_law == ForceLawKind::Linear
-                && s.fixed.integrator == IntegratorKind::VelocityVerlet
-                && s.plate.mass > 0.0);
+            let exact =
+                !(law_fns(&s).is_linear && s.fixed.integrator == IntegratorKind::VelocityVerlet && s.plate.mass > 0.0);
             let got = record(&s, steps);
             assert!(got.error.is_none(), "{combo:?}: {:?}", got.error);
             let mut r = Reference::new(&s);

@@ -1,7 +1,11 @@
-//! A force law defined outside the crate, in this one file, runs on both engines through
-//! their public generic entry points (`FixedEngine::new`, `ExactDirect::new`): what
-//! docs/engines.md, "Adding a force law" promises. Checks:
+//! A force law defined outside the crate runs on both engines through their public generic
+//! entry points (`FixedEngine::new`, `ExactDirect::new`): what docs/engines.md, "Adding a
+//! force law" promises. Checks:
 //!
+//! - the worked example's file is `law_extension/saturating.rs` word for word, and its table
+//!   line is the crate's law table plus one line of the same form; an ignored test
+//!   (`a_newcomer_adds_the_worked_example`) takes those two steps on a copy of the crate and
+//!   runs a `force_law = "saturating"` scene on both engines through the command line;
 //! - `Saturating` (`f^x = kappa l0 tanh(x / l0)`, the worked example) passes the crate's law
 //!   checks (`physics::force::check_law`) and tends to the linear law as `l0 -> inf`;
 //! - `Hooke`, a copy of the linear law written here, gives on the fixed engine bit for bit the
@@ -22,44 +26,16 @@ use stickslip::engine::Engine;
 use stickslip::engine::exact::ExactDirect;
 use stickslip::engine::fixed::{FixedEngine, LinearFlip};
 use stickslip::observe::{EventKind, Nothing, Recorder, Sample};
-use stickslip::physics::force::check_law;
-use stickslip::physics::{Bond, ForceLaw, LawParams, Linear, ParamError, Strong, Weak};
+use stickslip::physics::force::{check_kappa, check_law};
+use stickslip::physics::{Bond, Direct, ForceLaw, LawParams, Linear, ParamError, Strong, Weak};
 use stickslip::rng::ParkMiller;
 use stickslip_testkit::fig1_with;
 
-/// The worked example of docs/engines.md: a junction that yields, `f^x = kappa l0 tanh(x/l0)`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-struct Saturating {
-    kappa: f64,
-    l0: f64,
-}
+/// The worked example of docs/engines.md, "Adding a force law": the file a newcomer writes,
+/// word for word (`the_worked_example_is_this_file` checks it against the doc).
+mod saturating;
 
-impl ForceLaw for Saturating {
-    const NAME: &'static str = "saturating";
-    const STIFFNESS_NOTE: &'static str = "a yielding junction's stiffness never exceeds kappa";
-
-    fn new(p: &LawParams) -> Result<Self, ParamError> {
-        Ok(Saturating { kappa: p.kappa, l0: p.l0 })
-    }
-    fn tension(&self, x: f64) -> f64 {
-        self.force_x(x).abs()
-    }
-    fn force_x(&self, x: f64) -> f64 {
-        self.kappa * self.l0 * (x / self.l0).tanh()
-    }
-    /// `kappa / cosh^2(x/l0)`.
-    fn stiffness_x(&self, x: f64) -> f64 {
-        let c = (x / self.l0).cosh();
-        self.kappa / (c * c)
-    }
-    /// `|tanh u| <= |u|`.
-    fn thinning_slope(&self) -> f64 {
-        self.kappa
-    }
-    fn stiffness_range(&self) -> (f64, f64) {
-        (0.0, self.kappa)
-    }
-}
+use saturating::Saturating;
 
 /// The linear law, written outside the crate.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -71,6 +47,7 @@ impl ForceLaw for Hooke {
     const NAME: &'static str = "hooke";
     const IS_LINEAR: bool = true;
     const STIFFNESS_NOTE: &'static str = "each junction adds kappa";
+    type Exact = Direct;
 
     fn new(p: &LawParams) -> Result<Self, ParamError> {
         Ok(Hooke { kappa: p.kappa })
@@ -280,5 +257,124 @@ fn events_report_the_outside_laws_tension() {
     assert!(ruptures.len() > 50, "too few ruptures to test anything");
     for r in ruptures {
         assert_eq!(r.tension, law.tension(r.extension), "{r:?}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The worked example of docs/engines.md, step by step.
+
+/// The repository root.
+fn root() -> std::path::PathBuf {
+    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn read(rel: &str) -> String {
+    std::fs::read_to_string(root().join(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
+/// The `n`-th fenced rust block of docs/engines.md after `marker`.
+fn doc_block(marker: &str, n: usize) -> String {
+    let doc = read("docs/engines.md");
+    let mut at = doc.find(marker).unwrap_or_else(|| panic!("docs/engines.md: no {marker:?}"));
+    let mut block = String::new();
+    for _ in 0..=n {
+        let start = doc[at..].find("```rust\n").expect("a rust block") + at + "```rust\n".len();
+        let end = doc[start..].find("```\n").expect("its end") + start;
+        block = doc[start..end].to_string();
+        at = end + 4;
+    }
+    block
+}
+
+const STEPS: &str = "### Adding a force law";
+
+/// Step 1, the law's file: the doc's block is `law_extension/saturating.rs`, which the tests
+/// of this module compile and run.
+#[test]
+fn the_worked_example_is_this_file() {
+    assert_eq!(doc_block(STEPS, 0), read("tests/suite/law_extension/saturating.rs"));
+}
+
+/// The crate's law table (the `force_laws!` invocation of src/physics/force/mod.rs).
+fn crate_table() -> String {
+    let src = read("src/physics/force/mod.rs");
+    let start = src.find("\nforce_laws! {\n").expect("the law table") + 1;
+    let end = src[start..].find("\n}\n").expect("its end") + start + 3;
+    src[start..end].to_string()
+}
+
+/// Step 2, the table line: the doc's table is the crate's with the new line (and its doc
+/// comment) added before the closing brace, in the table's form `Variant => file::Type,`.
+fn table_with_the_new_line() -> (String, String) {
+    let table = crate_table();
+    let doc = doc_block(STEPS, 1);
+    let added: Vec<&str> = doc.lines().filter(|l| !table.lines().any(|t| t == *l)).collect();
+    assert_eq!(added.len(), 2, "the doc's table adds {added:?} to the crate's");
+    assert_eq!(added[1].trim(), "Saturating => saturating::Saturating,   // the new line");
+    let line = added[1].split("//").next().unwrap().trim_end().to_string();
+    let expected = table.replacen("\n}", &format!("\n{}\n{line}\n}}", added[0]), 1);
+    let doc_without_comment = doc.replace("   // the new line", "");
+    assert_eq!(doc_without_comment, expected, "the doc's table is not the crate's plus one line");
+    (expected, doc_without_comment)
+}
+
+#[test]
+fn the_worked_example_adds_one_line_to_the_crates_table() {
+    table_with_the_new_line();
+}
+
+/// Copies what `cargo` needs to build the crate (no `target/`, no `.git`).
+fn copy_crate(from: &std::path::Path, to: &std::path::Path) {
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        if name == "target" || name.starts_with('.') {
+            continue;
+        }
+        let (src, dst) = (entry.path(), to.join(&*name));
+        if entry.file_type().unwrap().is_dir() {
+            std::fs::create_dir_all(&dst).unwrap();
+            copy_crate(&src, &dst);
+        } else {
+            std::fs::copy(&src, &dst).unwrap();
+        }
+    }
+}
+
+/// The two steps of the worked example on a copy of the crate, then a `saturating` scene
+/// on both engines through `stickslip validate` and `stickslip run`. Builds the copy (some
+/// minutes on two cores): `cargo test --profile quick --test suite
+/// law_extension::a_newcomer -- --ignored`.
+#[test]
+#[ignore]
+fn a_newcomer_adds_the_worked_example() {
+    let dir = tempfile::tempdir().unwrap();
+    let copy = dir.path();
+    copy_crate(&root(), copy);
+    // The new file (named in two parts: it exists only in the copy).
+    std::fs::write(copy.join("src/physics/force").join("saturating.rs"), doc_block(STEPS, 0)).unwrap();
+    let (table, _) = table_with_the_new_line();
+    let force = copy.join("src/physics/force/mod.rs");
+    let src = std::fs::read_to_string(&force).unwrap().replacen(&crate_table(), &table, 1);
+    std::fs::write(&force, src).unwrap();
+    let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| copy.join("target"), Into::into);
+    for engine in ["fixed", "exact"] {
+        let out = copy.join(format!("out-{engine}"));
+        std::fs::create_dir_all(&out).unwrap();
+        let status = std::process::Command::new(env!("CARGO"))
+            .current_dir(copy)
+            .env("CARGO_TARGET_DIR", &target)
+            .args(["run", "--quiet", "--profile", "quick", "--offline", "--", "run", "scenarios/fig1.toml"])
+            .args(["--set", "junctions.force_law=saturating", "--set", &format!("run.engine={engine}")])
+            .args(["--set", "run.t_end=40", "--out"])
+            .arg(&out)
+            .status()
+            .unwrap();
+        assert!(status.success(), "{engine}: stickslip run failed");
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+        let ruptures = summary.pointer("/counters/ruptures").and_then(|v| v.as_u64());
+        assert!(ruptures.is_some_and(|r| r > 10), "{engine}: {summary}");
     }
 }

@@ -10,8 +10,8 @@ use crate::rosenbrock_support;
 
 use proptest::prelude::*;
 use rosenbrock_support::{CubicPlate, Explicit, LinPlate, Mixed, VanDerPol};
+use stickslip::engine::exact::linear::propagator::LinearPlate;
 use stickslip::ode::{Dop853, OdeError, Rosenbrock, RosenbrockConfig, StiffSystem};
-use stickslip::propagator::LinearPlate;
 
 /// Closed form of `LinPlate` from `(x0, v0)` at time `t` (`M = 0`: `v0` ignored).
 fn exact(p: &LinPlate, x0: f64, v0: f64, t: f64) -> [f64; 2] {

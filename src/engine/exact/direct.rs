@@ -1,5 +1,5 @@
 //! The direct exact engine, for any force law (the O(N) reference for the tilted law,
-//! `exact.tilted = "direct"`, and the engine of every law whose `ForceLaw::EXACT` is `Direct`).
+//! `exact.tilted = "direct"`, and the engine of every law whose `ForceLaw::Exact` is `Direct`).
 //!
 //! The bond force `F_b(y) = sum_att f^x(y - c_i)` is in general nonlinear in the plate position, so
 //! between events the plate is integrated by the adaptive DOP853 method ([`crate::ode`])
@@ -25,9 +25,10 @@ use serde::{Deserialize, Serialize};
 
 use super::bags::{Bags, Detached};
 use super::clocks::{ArrayQueue, Channels};
+use super::core::{REBASE, emit, reattached_extension};
 use super::frame::Frame;
 use crate::engine::{Counters, Engine, EngineError};
-use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
+use crate::observe::{EventKind, Observer, Sample, Segment};
 use crate::ode::{Dop853, Dop853Config, OdeError, OdeSystem};
 use crate::physics::{Bond, ForceLaw, Formation, Plate};
 use crate::rng::{Pcg64, UniformSource, pcg};
@@ -290,16 +291,9 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
         self.channels.set_rates(self.tau, rates, fired, &mut self.rng);
     }
 
+    #[inline]
     fn emit<O: Observer>(&self, obs: &mut O, kind: EventKind, id: u32, x: f64) {
-        if O::EVENTS {
-            obs.event(&JunctionEvent {
-                t: self.frame.time(self.tau),
-                junction: id,
-                kind,
-                extension: x,
-                tension: self.law.tension(x),
-            });
-        }
+        emit(obs, self.frame.time(self.tau), kind, id, x, |x| self.law.tension(x));
     }
 
     fn rupture_slot<O: Observer>(&mut self, slot: usize, obs: &mut O) {
@@ -318,10 +312,7 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
     fn form_one<O: Observer>(&mut self, obs: &mut O) {
         let slot = self.rng.random_range(0..self.bags.n_detached());
         let d = self.bags.take_detached(slot);
-        let x = match self.reattach {
-            Reattach::Residual => d.x * (-self.lambda * (self.tau - d.t)).exp(),
-            Reattach::Unstretched => 0.0,
-        };
+        let x = reattached_extension(self.reattach, self.lambda, &d, self.tau);
         self.bags.attach(self.state[Y] - x, d.id);
         self.counters.formations += 1;
         self.emit(obs, EventKind::Formation, d.id, x);
@@ -350,10 +341,7 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
     }
 
     fn maybe_rebase<O: Observer>(&mut self, obs: &mut O) {
-        let (ya, ta) = (self.state[Y].abs(), self.tau.abs());
-        let hard = ya > 1.0737418e9 || ta > 4.2949673e9;
-        let soft = (ya > 4096.0 || ta > 1048576.0) && self.events_since_rebase >= (self.n as u64 / 4).max(1);
-        if !(hard || soft) {
+        if !REBASE.due(self.state[Y], self.tau, self.events_since_rebase, self.n, false) {
             return;
         }
         self.rebase();

@@ -4,8 +4,9 @@
 //! changing rates, with no time step; the plate moves in closed form between events
 //! (`linear` law) or, for the `tilted` law, by an L-stable integrator on a truncated series
 //! of the bond force ([`series`]) or, for any law and as the tilted law's O(N) reference, by
-//! DOP853 on the direct sum ([`direct`]), each with a stated tolerance. The law's
-//! [`ExactMethod`] picks the method (see `docs/engines.md`).
+//! DOP853 on the direct sum ([`direct`]), each with a stated tolerance. The law's type picks
+//! the method ([`ForceLaw::Exact`]; a law gets the closed form or the series only by
+//! implementing [`LinearLaw`] or [`SeriesLaw`]; see `docs/engines.md`).
 //!
 //! Why no junction needs its own clock: every rate of the model is either shared by all
 //! junctions of a state (strong rupture `k0`, formation `kon0 g(v)`) or, for weak bonds,
@@ -16,6 +17,7 @@
 
 pub mod bags;
 pub mod clocks;
+pub mod core;
 pub mod direct;
 pub mod frame;
 pub mod linear;
@@ -26,7 +28,9 @@ pub mod series;
 pub mod sumtree;
 
 use super::{EngineError, EngineVisitor};
-use crate::physics::{Bond, ExactMethod, ForceLaw};
+use crate::physics::{
+    Bond, ExactMethod, ExactMethodOf, ForceLaw, Linear, LinearLaw, MethodVisitor, SeriesLaw, exact_method,
+};
 use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};
 use crate::scene::{Scene, TiltedMethod};
 
@@ -51,31 +55,36 @@ pub fn weak_linear<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<WeakRupture, Q
 
 /// [`strong_linear`] with plate motion `M` ([`Kinematic`] for `plate.kinematic`).
 pub fn strong_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> ExactLinear<StrongRupture, Q, M> {
-    ExactLinear::new(scene, |rng| StrongRupture::new(scene.junctions.k0, rng))
+    ExactLinear::new(scene, &Linear::from_scene(scene), |rng| StrongRupture::new(scene.junctions.k0, rng))
 }
 
 /// [`weak_linear`] with plate motion `M` ([`Kinematic`] for `plate.kinematic`): the rupture
 /// envelope's exponent is `beta dx c` with the linear law's thinning slope `c = kappa`.
 pub fn weak_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> ExactLinear<WeakRupture, Q, M> {
     let j = &scene.junctions;
-    ExactLinear::new(scene, |_| WeakRupture::new(j.k0, j.beta_dx() * j.kappa, j.n))
+    ExactLinear::new(scene, &Linear::from_scene(scene), |_| WeakRupture::new(j.k0, j.beta_dx() * j.kappa, j.n))
 }
 
-/// The method the exact engine uses for law `L` in `scene`: the law's [`ForceLaw::EXACT`],
-/// except that `exact.tilted = "direct"` turns a dynamic plate's series method into the
-/// direct one (a kinematic plate keeps the series method).
+/// The method the exact engine uses for law `L` in `scene`: the law's own
+/// ([`ForceLaw::Exact`]), except that `exact.tilted = "direct"` turns a dynamic plate's
+/// series method into the direct one (a kinematic plate keeps the series method).
 pub fn method<L: ForceLaw>(scene: &Scene) -> ExactMethod {
-    match L::EXACT {
-        ExactMethod::Series if scene.exact.tilted == TiltedMethod::Direct && !scene.plate.kinematic => {
-            ExactMethod::Direct
-        }
+    match exact_method::<L>() {
+        ExactMethod::Series if direct_instead_of_series(scene) => ExactMethod::Direct,
         m => m,
     }
 }
 
+/// `exact.tilted = "direct"` on a dynamic plate.
+fn direct_instead_of_series(scene: &Scene) -> bool {
+    scene.exact.tilted == TiltedMethod::Direct && !scene.plate.kinematic
+}
+
 /// Builds the exact engine for `scene`, specialised to its force law and bond kind (both
-/// from `scene::laws`) by the law's [`ExactMethod`]: closed form ([`ExactLinear`]), the series
-/// engine ([`series`]), or the direct sum ([`ExactDirect`], which has no kinematic plate).
+/// from `scene::laws`) by the law's method ([`ForceLaw::Exact`]): closed form
+/// ([`ExactLinear`], built from the law's [`LinearLaw::slope`]), the series engine
+/// ([`series`], from the law's [`SeriesLaw::tilted_form`]), or the direct sum
+/// ([`ExactDirect`], any law; it has no kinematic plate).
 pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output, EngineError> {
     with_force_law(&scene.junctions, WithLaw { scene, visitor })?
 }
@@ -88,17 +97,44 @@ struct WithLaw<'a, V> {
 impl<V: EngineVisitor> LawVisitor for WithLaw<'_, V> {
     type Output = Result<V::Output, EngineError>;
     fn visit<L: ForceLaw>(self, law: L) -> Self::Output {
+        <L::Exact as ExactMethodOf<L>>::visit(law, self)
+    }
+}
+
+impl<L: ForceLaw, V: EngineVisitor> MethodVisitor<L> for WithLaw<'_, V> {
+    type Output = Result<V::Output, EngineError>;
+
+    fn closed_form(self, law: L) -> Self::Output
+    where
+        L: LinearLaw,
+    {
         let Self { scene, visitor } = self;
-        let kinematic = scene.plate.kinematic;
-        match method::<L>(scene) {
-            ExactMethod::ClosedForm => with_bond(&scene.junctions, ClosedForm { scene, law, visitor })?,
-            ExactMethod::Series => series::dispatch(scene, visitor),
-            ExactMethod::Direct if kinematic => Err(EngineError::Unsupported {
+        with_bond(&scene.junctions, ClosedForm { scene, law, visitor })?
+    }
+
+    fn series(self, law: L) -> Self::Output
+    where
+        L: SeriesLaw,
+    {
+        if direct_instead_of_series(self.scene) {
+            return self.direct(law);
+        }
+        let Self { scene, visitor } = self;
+        with_bond(&scene.junctions, series::Build { scene, law: law.tilted_form(), visitor })?
+    }
+
+    fn direct(self, law: L) -> Self::Output
+    where
+        L: ForceLaw,
+    {
+        let Self { scene, visitor } = self;
+        if scene.plate.kinematic {
+            return Err(EngineError::Unsupported {
                 engine: "exact",
                 reason: "the direct method integrates the plate equation, so it cannot run plate.kinematic = true",
-            }),
-            ExactMethod::Direct => with_bond(&scene.junctions, Direct { scene, law, visitor })?,
+            });
         }
+        with_bond(&scene.junctions, Direct { scene, law, visitor })?
     }
 }
 
@@ -108,7 +144,7 @@ struct ClosedForm<'a, L, V> {
     visitor: V,
 }
 
-impl<L: ForceLaw, V: EngineVisitor> BondVisitor for ClosedForm<'_, L, V> {
+impl<L: LinearLaw, V: EngineVisitor> BondVisitor for ClosedForm<'_, L, V> {
     type Output = Result<V::Output, EngineError>;
     /// Weak bonds: the rupture envelope `k0 exp(a |x|)`, `a = s c` from the bond's force
     /// sensitivity `s = beta dx` and the law's thinning slope `c = kappa`.
@@ -119,10 +155,10 @@ impl<L: ForceLaw, V: EngineVisitor> BondVisitor for ClosedForm<'_, L, V> {
         let weak = |_: &mut _| WeakRupture::try_new(k0, a, n);
         let strong = |rng: &mut _| Ok(StrongRupture::new(k0, rng));
         Ok(match (B::IS_WEAK, scene.plate.kinematic) {
-            (true, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::try_new(scene, weak)?),
-            (true, false) => visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::try_new(scene, weak)?),
-            (false, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::try_new(scene, strong)?),
-            (false, false) => visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::try_new(scene, strong)?),
+            (true, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::try_new(scene, &law, weak)?),
+            (true, false) => visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::try_new(scene, &law, weak)?),
+            (false, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::try_new(scene, &law, strong)?),
+            (false, false) => visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::try_new(scene, &law, strong)?),
         })
     }
 }

@@ -16,7 +16,7 @@
 
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
-use crate::propagator::Trajectory;
+use crate::engine::exact::linear::propagator::Trajectory;
 
 /// The plate's position along the current piece, as the rupture models need it.
 pub trait PlatePath {

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{ExactMethod, ForceLaw, LawParams, ParamError, check_kappa};
+use super::{ClosedForm, ForceLaw, LawParams, LinearLaw, ParamError, check_kappa};
 
 /// Hookean shear spring: `f^x = kappa x`, `f = kappa |x|`. The only law whose bond force is
 /// linear in the plate position, so the exact engine moves the plate in closed form.
@@ -14,8 +14,8 @@ pub struct Linear {
 impl ForceLaw for Linear {
     const NAME: &'static str = "linear";
     const IS_LINEAR: bool = true;
-    const EXACT: ExactMethod = ExactMethod::ClosedForm;
     const STIFFNESS_NOTE: &'static str = "each junction adds kappa";
+    type Exact = ClosedForm;
 
     fn new(p: &LawParams) -> Result<Linear, ParamError> {
         Ok(Linear { kappa: check_kappa(p)? })
@@ -39,6 +39,13 @@ impl ForceLaw for Linear {
     /// `d f^x/dx = kappa` everywhere.
     fn stiffness_range(&self) -> (f64, f64) {
         (self.kappa, self.kappa)
+    }
+}
+
+impl LinearLaw for Linear {
+    #[inline]
+    fn slope(&self) -> f64 {
+        self.kappa
     }
 }
 

@@ -1,30 +1,70 @@
 //! Junction force laws (docs/model.md, "Equations", item 3): one file per law, each a type
-//! implementing [`ForceLaw`]. Everything the engines, the validation and the stability
-//! analysis need to know about a law is in its impl; `scene::laws` maps the scene's
-//! `junctions.force_law` name to the type (docs/engines.md, "Adding a force law").
+//! implementing [`ForceLaw`], and the one table of laws below ([`force_laws!`]): adding a law
+//! is its file plus its line in the table (docs/engines.md, "Adding a force law").
+//!
+//! A law states how the exact engine moves the plate under it ([`ForceLaw::Exact`]): the
+//! direct method works for every law; the closed form and the series only for a law that
+//! implements what they need ([`LinearLaw`], [`SeriesLaw`]), so a law can never be run with
+//! another law's physics. [`MethodVisitor`] hands the law to the engine's code for its method
+//! with that capability in its type (physics names the methods; the engines implement them).
 
-mod linear;
-mod tilted;
+mod method;
 
-pub use linear::Linear;
-pub use tilted::Tilted;
+pub use method::{
+    ClosedForm, Direct, ExactMethod, ExactMethodOf, LinearLaw, MethodVisitor, Series, SeriesLaw, exact_method,
+};
 
-use serde::Serialize;
 use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
 
-/// How the exact engine moves the plate between events under a law. The engine chooses
-/// its method from this constant once per run (`engine::exact::dispatch`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ExactMethod {
-    /// `F_b` is `kappa sum_i x_i`, linear in the plate position: closed-form plate motion
-    /// (`ExactLinear`). Only for a law with `f^x(x) = kappa x`.
-    ClosedForm,
-    /// A truncated Taylor series of `F_b` updated in O(1) per event (`ExactSeries`, written
-    /// for the tilted law's series), unless the scene asks for `exact.tilted = "direct"`.
-    Series,
-    /// Direct summation of `F_b` over the attached junctions, O(N) per evaluation, under
-    /// the adaptive DOP853 integrator (`ExactDirect<L, B>`): works for every law.
-    Direct,
+/// Something to do with a force law once its type is known.
+pub trait LawVisitor {
+    type Output;
+    fn visit<L: ForceLaw>(self, law: L) -> Self::Output;
+}
+
+/// The table of force laws: for each, `Variant => file::Type` (the variant, in kebab case, is
+/// the scene's name `junctions.force_law`; a unit test checks it is the type's `NAME`).
+/// Generates the law modules and their re-exports, the scene's name enum [`ForceLawKind`]
+/// (`ALL`, `name()`) and [`with_law`], which builds the type a name stands for and hands it
+/// to a visitor.
+macro_rules! force_laws {
+    ($( $(#[$vmeta:meta])* $Variant:ident => $file:ident::$Type:ident, )+) => {
+        $( mod $file; pub use $file::$Type; )+
+
+        /// Junction force law, as a scene names it (docs/model.md, "Equations", item 3).
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+        #[serde(rename_all = "kebab-case")]
+        pub enum ForceLawKind {
+            $( $(#[$vmeta])* $Variant, )+
+        }
+
+        impl ForceLawKind {
+            /// Every law, in the table's order.
+            pub const ALL: [ForceLawKind; [$(stringify!($Variant)),+].len()] = [$(ForceLawKind::$Variant),+];
+            /// The scene's name of this law.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(ForceLawKind::$Variant => <$Type as ForceLaw>::NAME,)+
+                }
+            }
+        }
+
+        /// Builds the law `kind` names from `p` and hands it to `visitor`; the type is fixed
+        /// from here on, so everything the visitor runs is specialised to it.
+        pub fn with_law<V: LawVisitor>(kind: ForceLawKind, p: &LawParams, visitor: V) -> Result<V::Output, ParamError> {
+            match kind {
+                $(ForceLawKind::$Variant => Ok(visitor.visit(<$Type as ForceLaw>::new(p)?)),)+
+            }
+        }
+    };
+}
+
+force_laws! {
+    /// The letter's eq. 3: a spring of rest length `l0` spanning the gap `l0`.
+    Tilted => tilted::Tilted,
+    /// Hookean shear spring `f^x = kappa x`.
+    Linear => linear::Linear,
 }
 
 /// The scene's junction numbers a law is built from: plain numbers, so physics never reads
@@ -60,8 +100,9 @@ pub trait ForceLaw: Copy + Send + Sync + std::fmt::Debug + Serialize + Deseriali
     /// `true` when `f^x(x) = kappa x` exactly, so `sum_i f^x(x_i) = f^x(sum_i x_i)`: the fixed
     /// engine then sums extensions instead of forces.
     const IS_LINEAR: bool = false;
-    /// How the exact engine runs this law.
-    const EXACT: ExactMethod = ExactMethod::Direct;
+    /// How the exact engine moves the plate under this law: [`Direct`] (any law),
+    /// [`ClosedForm`] (only a [`LinearLaw`]) or [`Series`] (only a [`SeriesLaw`]).
+    type Exact: ExactMethodOf<Self>;
     /// Why `hi` of [`ForceLaw::stiffness_range`] bounds a junction's stiffness, in words
     /// (`stickslip stability` prints it).
     const STIFFNESS_NOTE: &'static str;
@@ -116,7 +157,7 @@ pub fn check_law<L: ForceLaw>(law: &L, xs: &[f64]) -> Result<(), String> {
 
 /// `kappa >= 0` and finite: the check both current laws make (validation has already made
 /// it for scenes; a law built by hand goes through it too).
-pub(crate) fn check_kappa(p: &LawParams) -> Result<f64, ParamError> {
+pub fn check_kappa(p: &LawParams) -> Result<f64, ParamError> {
     if p.kappa.is_finite() && p.kappa >= 0.0 {
         Ok(p.kappa)
     } else {

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{ExactMethod, ForceLaw, LawParams, ParamError, check_kappa};
+use super::{ForceLaw, LawParams, ParamError, Series, SeriesLaw, check_kappa};
 
 /// The letter's eq. 3: a spring of rest length `l0` across a gap `l0`, tilted by `x`:
 /// `l = sqrt(x^2 + l0^2)`, `f = kappa (l - l0)`, `f^x = f x / l`.
@@ -23,8 +23,8 @@ impl Tilted {
 
 impl ForceLaw for Tilted {
     const NAME: &'static str = "tilted";
-    const EXACT: ExactMethod = ExactMethod::Series;
     const STIFFNESS_NOTE: &'static str = "the tilted law's junction stiffness never exceeds kappa";
+    type Exact = Series;
 
     fn new(p: &LawParams) -> Result<Tilted, ParamError> {
         let kappa = check_kappa(p)?;
@@ -61,6 +61,13 @@ impl ForceLaw for Tilted {
     /// `kappa (1 - (l0/l)^3)` lies in `[0, kappa)`.
     fn stiffness_range(&self) -> (f64, f64) {
         (0.0, self.kappa)
+    }
+}
+
+impl SeriesLaw for Tilted {
+    #[inline]
+    fn tilted_form(&self) -> Tilted {
+        *self
     }
 }
 

@@ -38,11 +38,10 @@
 //!
 //! Layout: this file plans, runs and aggregates (data only); [`fit`] the bias model,
 //! [`report`] `compare.csv` and `compare.md`, [`files`] writes them with `compare.svg`
-//! ([`crate::plot::compare`]); [`creep`] is the Bell theory the creep study compares with.
+//! ([`crate::plot::compare`]).
 //!
 //! [`PlateLimit::radius_all`]: crate::stability::PlateLimit::radius_all
 
-pub mod creep;
 pub mod files;
 pub mod fit;
 pub mod report;

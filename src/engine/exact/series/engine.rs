@@ -8,23 +8,16 @@ use super::kinetics::Kinetics;
 use super::motion::{Motion, Step, StepCtx};
 use crate::engine::exact::bags::{Bags, Detached, prefetch};
 use crate::engine::exact::clocks::{ArrayQueue, Channels};
+use crate::engine::exact::core::{REBASE, emit, reattached_extension};
 use crate::engine::exact::frame::Frame;
 use crate::engine::{Counters, Engine, EngineError};
-use crate::observe::{EventKind, JunctionEvent, Observer, Sample};
+use crate::observe::{EventKind, Observer, Sample};
 use crate::physics::{ForceLaw, Formation, Plate, Tilted};
 use crate::rng::{Pcg64, UniformSource, pcg};
 use crate::scene::{EngineKind, Reattach, Scene};
 
 const FORMATION: usize = 0;
 const RUPTURE: usize = 1;
-
-/// Soft re-basing limits (as in the linear engine): re-base once enough events have passed
-/// to pay for the O(N) shift.
-const SOFT_Y: f64 = 4096.0;
-const SOFT_TAU: f64 = 1048576.0;
-/// Hard limits: re-base whatever the cost.
-const HARD_Y: f64 = 1.0737418e9;
-const HARD_TAU: f64 = 4.2949673e9;
 
 /// Exact engine for the tilted law with the bond force kept as a [`SeriesSum`]: rupture
 /// kinetics `K`, plate motion `P`.
@@ -70,13 +63,13 @@ fn yes() -> bool {
 }
 
 impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
-    /// The engine at `t = 0`; `kinetics` and `motion` are built by the caller.
-    pub fn new(scene: &Scene, kinetics: K, motion: P) -> Result<Self, EngineError> {
+    /// The engine at `t = 0` for `scene` under the tilted-form law `law`; `kinetics` and
+    /// `motion` are built by the caller.
+    pub fn new(scene: &Scene, law: Tilted, kinetics: K, motion: P) -> Result<Self, EngineError> {
         let j = &scene.junctions;
         let mut rng = pcg(scene.run.seed);
         let bags = Bags::initial(j, &mut rng)?;
         let plate = Plate::from_scene(scene);
-        let law = Tilted::from_scene(scene);
         let series = SeriesSum::new(law, scene.exact.rtol);
         let mut e = ExactSeries {
             n: j.n,
@@ -135,7 +128,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
     ///
     /// Between re-basings the series' bound grows: the residue of junctions counted through
     /// the bins at the last re-base and removed since, and the round-off allowance
-    /// (`physics::series`, module doc), both relative to a count of attached junctions that
+    /// ([`super::sum`], module doc), both relative to a count of attached junctions that
     /// may have fallen. In a stick phase the plate may not move far enough to re-base for a
     /// long time, so the series is refreshed in place (a re-base at its own base point,
     /// [`ExactSeries::refresh_series`], which resets both): at a removal that takes the
@@ -189,16 +182,9 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
         }
     }
 
+    #[inline]
     fn emit<O: Observer>(&self, obs: &mut O, kind: EventKind, id: u32, x: f64) {
-        if O::EVENTS {
-            obs.event(&JunctionEvent {
-                t: self.frame.time(self.tau),
-                junction: id,
-                kind,
-                extension: x,
-                tension: self.law.tension(x),
-            });
-        }
+        emit(obs, self.frame.time(self.tau), kind, id, x, |x| self.law.tension(x));
     }
 
     fn rupture_slot<O: Observer>(&mut self, slot: usize, obs: &mut O) {
@@ -222,10 +208,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
         }
         let slot = self.rng.random_range(0..self.bags.n_detached());
         let d = self.bags.take_detached(slot);
-        let x = match self.reattach {
-            Reattach::Residual => d.x * (-self.lambda * (self.tau - d.t)).exp(),
-            Reattach::Unstretched => 0.0,
-        };
+        let x = reattached_extension(self.reattach, self.lambda, &d, self.tau);
         let y = self.y();
         let c = y - x;
         let bin = self.series.add(c);
@@ -240,10 +223,8 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
     }
 
     fn maybe_rebase<O: Observer>(&mut self, obs: &mut O) {
-        let (ya, ta) = (self.y().abs(), self.tau.abs());
-        let hard = ya > HARD_Y || ta > HARD_TAU || self.kinetics.needs_rebase(self.y());
-        let soft = (ya > SOFT_Y || ta > SOFT_TAU) && self.events_since_rebase >= (self.n as u64 / 4).max(1);
-        if hard || soft {
+        let y = self.y();
+        if REBASE.due(y, self.tau, self.events_since_rebase, self.n, self.kinetics.needs_rebase(y)) {
             self.rebase(obs);
         }
     }
@@ -442,9 +423,9 @@ impl<K: Kinetics, P: Motion> Engine for ExactSeries<K, P> {
 #[cfg(test)]
 mod tests {
     use super::ExactSeries;
-    use crate::engine::exact::series::{Kinematic, StrongKinetics};
+    use crate::engine::exact::series::{DrivenPlate, StrongKinetics};
     use crate::observe::Nothing;
-    use crate::physics::ForceLaw;
+    use crate::physics::{ForceLaw, Tilted};
     use crate::test_scenes::fig1_with;
 
     /// A stick phase: every junction is counted through the bins at a re-base, then all but
@@ -462,7 +443,9 @@ mod tests {
             "junctions.initial=attached",
             "plate.kinematic=true",
         ]);
-        let mut e = ExactSeries::new(&s, StrongKinetics { k0: s.junctions.k0 }, Kinematic::new(0.0)).unwrap();
+        let mut e =
+            ExactSeries::new(&s, Tilted::from_scene(&s), StrongKinetics { k0: s.junctions.k0 }, DrivenPlate::new(0.0))
+                .unwrap();
         let base = e.series.base();
         e.series.rebase(base);
         let rebases0 = e.counters.series_rebases.unwrap();

@@ -4,7 +4,7 @@
 //! The junctions act on the plate only through `S(y) = sum_att f^x(y - c_i)`, kept as a
 //! truncated Taylor series about a base point ([`SeriesSum`]: O(p) per attach/rupture, a
 //! rigorous remainder bound). Between events the plate moves by the L-stable
-//! [`Rosenbrock`](crate::ode::Rosenbrock) method ([`Dynamic`]) or exactly as `y = V tau` ([`Kinematic`]); strong
+//! [`Rosenbrock`](crate::ode::Rosenbrock) method ([`RosenbrockPlate`]) or exactly as `y = V tau` ([`DrivenPlate`]); strong
 //! bonds rupture on a channel clock, weak bonds by thinning over each plate step against
 //! the linear law's envelope ([`WeakKinetics`]). The series remainder and the integrator's
 //! tolerance are the engine's approximations; both are reported in `summary.json`
@@ -15,40 +15,45 @@
 mod engine;
 pub mod kinetics;
 pub mod motion;
+pub mod sum;
 
 pub(crate) use crate::ode::{RosenbrockConfig, RosenbrockN, StiffSystem};
-pub(crate) use crate::physics::SeriesSum;
 pub use engine::ExactSeries;
 pub use kinetics::{Kinetics, StrongKinetics, WeakKinetics};
-pub use motion::{Dynamic, Kinematic, Motion};
+pub use motion::{DrivenPlate, Motion, RosenbrockPlate};
+pub use sum::{LocalCubic, SeriesSum, tilted_taylor};
 
 use crate::engine::{EngineError, EngineVisitor};
-use crate::scene::{BondKind, Scene};
+use crate::physics::{Bond, Tilted};
+use crate::scene::Scene;
+use crate::scene::laws::BondVisitor;
 
-/// Builds the series engine for a tilted-law `scene`, specialised to its bond kind and
-/// plate motion (kinematic or dynamic), and hands it to `visitor`.
-pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output, EngineError> {
-    let j = &scene.junctions;
-    let e = &scene.exact;
-    let plate = crate::physics::Plate::from_scene(scene);
-    match (j.bond, scene.plate.kinematic) {
-        (BondKind::Strong, false) => Ok(visitor.visit(ExactSeries::new(
-            scene,
-            StrongKinetics { k0: j.k0 },
-            Dynamic::new(plate, j.kappa * j.n as f64, e.rtol, e.atol)?,
-        )?)),
-        (BondKind::Strong, true) => {
-            Ok(visitor.visit(ExactSeries::new(scene, StrongKinetics { k0: j.k0 }, Kinematic::new(plate.v))?))
-        }
-        (BondKind::Weak, false) => Ok(visitor.visit(ExactSeries::new(
-            scene,
-            WeakKinetics::try_new(j.k0, j.beta_dx(), j.kappa, j.n)?,
-            Dynamic::new(plate, j.kappa * j.n as f64, e.rtol, e.atol)?,
-        )?)),
-        (BondKind::Weak, true) => Ok(visitor.visit(ExactSeries::new(
-            scene,
-            WeakKinetics::try_new(j.k0, j.beta_dx(), j.kappa, j.n)?,
-            Kinematic::new(plate.v),
-        )?)),
+/// Builds the series engine for the law `law` (a law's [`SeriesLaw::tilted_form`](crate::physics::SeriesLaw::tilted_form)) on
+/// `scene`, specialised to the bond kind it visits and to the plate motion (kinematic or
+/// dynamic), and hands it to `visitor`.
+pub(super) struct Build<'a, V> {
+    pub scene: &'a Scene,
+    pub law: Tilted,
+    pub visitor: V,
+}
+
+impl<V: EngineVisitor> BondVisitor for Build<'_, V> {
+    type Output = Result<V::Output, EngineError>;
+    /// Weak bonds thin against the envelope of slope `kappa` (the tilted law's thinning slope).
+    fn visit<B: Bond>(self, bond: B) -> Self::Output {
+        let Self { scene, law, visitor } = self;
+        let (n, e) = (scene.junctions.n, &scene.exact);
+        let plate = crate::physics::Plate::from_scene(scene);
+        let k0 = bond.k0();
+        let dynamic = || RosenbrockPlate::new(plate, law.kappa * n as f64, e.rtol, e.atol);
+        let weak = || WeakKinetics::try_new(k0, bond.force_sensitivity(), law.kappa, n);
+        Ok(match (B::IS_WEAK, scene.plate.kinematic) {
+            (false, false) => visitor.visit(ExactSeries::new(scene, law, StrongKinetics { k0 }, dynamic()?)?),
+            (false, true) => {
+                visitor.visit(ExactSeries::new(scene, law, StrongKinetics { k0 }, DrivenPlate::new(plate.v))?)
+            }
+            (true, false) => visitor.visit(ExactSeries::new(scene, law, weak()?, dynamic()?)?),
+            (true, true) => visitor.visit(ExactSeries::new(scene, law, weak()?, DrivenPlate::new(plate.v))?),
+        })
     }
 }

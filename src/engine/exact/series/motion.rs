@@ -1,14 +1,14 @@
 //! Plate motions of the series engine, chosen once per run.
 //!
-//! - [`Dynamic`]: the plate equation `M y'' + eta y' + S(y) + K lag = 0` (or `eta y' = ...`
+//! - [`RosenbrockPlate`]: the plate equation `M y'' + eta y' + S(y) + K lag = 0` (or `eta y' = ...`
 //!   when `M = 0`) with `S` the junction force from the [`SeriesSum`], integrated by the
 //!   L-stable Rosenbrock method ([`RosenbrockN`] on 2 variables, or 1 when `M = 0`) with the
 //!   analytic Jacobian. Stable at any stiffness: the step follows the accuracy, not `M/eta`
 //!   or `sqrt(M/K)`. The segment statistics are not integrated: `L = int (lag - lag0)` and
 //!   `L2 = int (lag - lag0)^2` are exact integrals of each step's dense-output cubic
 //!   ([`RosenbrockN::dense_integrals`]), and `B = int S` follows from the plate equation's
-//!   force balance ([`Dynamic::segment`]).
-//! - [`Kinematic`]: `y = V tau` exactly, no ODE and no integrator; the statistics come from
+//!   force balance ([`RosenbrockPlate::segment`]).
+//! - [`DrivenPlate`]: `y = V tau` exactly, no ODE and no integrator; the statistics come from
 //!   [`SeriesSum::integral`] (`int S dy`) and an 8-point Gauss–Legendre rule for
 //!   `int (S - S0)^2`.
 //!
@@ -18,12 +18,13 @@
 
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
+use super::LocalCubic;
 use super::{RosenbrockConfig, RosenbrockN, SeriesSum, StiffSystem};
 use crate::engine::exact::direct::ode_error;
 use crate::engine::exact::frame::Frame;
 use crate::engine::{Counters, EngineError};
 use crate::observe::Segment;
-use crate::physics::{LocalCubic, Plate};
+use crate::physics::Plate;
 
 /// One plate step `[s0, s1]` and proven bounds of `y` over it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -95,7 +96,7 @@ pub trait Motion: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send 
 }
 
 /// The bond force as the plate's right-hand side sees it: the series, or its local cubic
-/// (chosen once per step, [`Dynamic::step`]).
+/// (chosen once per step, [`RosenbrockPlate::step`]).
 trait BondForce {
     fn force(&self, y: f64) -> f64;
     fn force_and_stiffness(&self, y: f64) -> (f64, f64);
@@ -232,7 +233,7 @@ const LOOSE_AFTER: u32 = 20;
 
 /// The dynamic plate: Rosenbrock on `[u, W]` (`[u]` when `M = 0`), `u = X - V t` the lag,
 /// `W = tau_w (Xd - V)`; the piece's statistics from the dense output and the force balance
-/// ([`Dynamic::segment`]).
+/// ([`RosenbrockPlate::segment`]).
 ///
 /// The velocity is held in length units, scaled by its own time scale
 /// `tau_w = min(M / eta, sqrt(M / (K + kappa N)))`: an error `dw` in the velocity moves the
@@ -241,7 +242,7 @@ const LOOSE_AFTER: u32 = 20;
 /// is a tolerance on the position. Without the scaling a stiff plate (M/eta = 1e-11)
 /// would resolve every event's velocity transient, invisible in the position, to `atol`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct Dynamic {
+pub struct RosenbrockPlate {
     plate: Plate,
     /// `M > 0`: the state is `[u, W]`; else `[u]`.
     dynamic: bool,
@@ -271,9 +272,9 @@ fn on() -> bool {
     true
 }
 
-impl Dynamic {
+impl RosenbrockPlate {
     /// `kappa_n = kappa N`, the junctions' largest stiffness (`d f^x / dx <= kappa`).
-    pub fn new(plate: Plate, kappa_n: f64, rtol: f64, atol: f64) -> Result<Dynamic, EngineError> {
+    pub fn new(plate: Plate, kappa_n: f64, rtol: f64, atol: f64) -> Result<RosenbrockPlate, EngineError> {
         let dynamic = plate.mass != 0.0;
         let dim = if dynamic { 2 } else { 1 };
         let k = plate.k + kappa_n;
@@ -291,7 +292,7 @@ impl Dynamic {
         if dynamic {
             state[1] = -tau_w * plate.v;
         }
-        Ok(Dynamic {
+        Ok(RosenbrockPlate {
             plate,
             dynamic,
             tau_w,
@@ -385,7 +386,7 @@ impl Reach {
     }
 }
 
-impl Motion for Dynamic {
+impl Motion for RosenbrockPlate {
     const KINEMATIC: bool = false;
     #[inline]
     fn y(&self, tau: f64) -> f64 {
@@ -560,7 +561,7 @@ const GL8: [(f64, f64); 8] = [
 
 /// The kinematic drive: `y = V tau` in the local frame, no ODE.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct Kinematic {
+pub struct DrivenPlate {
     v: f64,
     tau0: f64,
     /// `S` at the start of the piece, and `int (S - S0) ds`, `int (S - S0)^2 ds` since.
@@ -569,13 +570,13 @@ pub struct Kinematic {
     i2: f64,
 }
 
-impl Kinematic {
-    pub fn new(v: f64) -> Kinematic {
-        Kinematic { v, tau0: 0.0, f0: 0.0, i1: 0.0, i2: 0.0 }
+impl DrivenPlate {
+    pub fn new(v: f64) -> DrivenPlate {
+        DrivenPlate { v, tau0: 0.0, f0: 0.0, i1: 0.0, i2: 0.0 }
     }
 }
 
-impl Motion for Kinematic {
+impl Motion for DrivenPlate {
     const KINEMATIC: bool = true;
     #[inline]
     fn y(&self, tau: f64) -> f64 {
@@ -675,7 +676,7 @@ mod tests {
         let mut series = SeriesSum::new(law, 1e-10);
         let frame = Frame::new(plate.v);
         let mut counters = Counters::default();
-        let mut m = Dynamic::new(plate, 0.0, 1e-10, 1e-12).unwrap();
+        let mut m = RosenbrockPlate::new(plate, 0.0, 1e-10, 1e-12).unwrap();
         m.open_piece(0.0, &series, &frame);
         let (mut tau, target) = (0.0, 2.0);
         while tau < target {
@@ -719,7 +720,7 @@ mod tests {
             let frame = Frame::new(plate.v);
             let mut counters = Counters::default();
             let kappa_n = law.kappa * anchors.len() as f64;
-            let mut m = Dynamic::new(plate, kappa_n, rtol, atol).unwrap();
+            let mut m = RosenbrockPlate::new(plate, kappa_n, rtol, atol).unwrap();
             m.open_piece(0.0, &series, &frame);
             let (mut tau, target) = (0.0, 3.0);
             let (mut quad, mut big, mut state_max) = (0.0, 0.0f64, 0.0f64);
@@ -758,7 +759,7 @@ mod tests {
         series.add(c);
         let frame = Frame::new(0.7);
         let mut counters = Counters::default();
-        let mut m = Kinematic::new(0.7);
+        let mut m = DrivenPlate::new(0.7);
         m.open_piece(0.0, &series, &frame);
         let (mut tau, target) = (0.0, 3.0);
         while tau < target {
@@ -817,7 +818,7 @@ mod tests {
         let run = |cubic: bool| {
             let mut series = base.clone();
             let mut counters = Counters::default();
-            let mut m = Dynamic::new(plate, law.kappa * 3000.0, rtol, atol).unwrap();
+            let mut m = RosenbrockPlate::new(plate, law.kappa * 3000.0, rtol, atol).unwrap();
             m.cubic = cubic;
             m.open_piece(0.0, &series, &frame);
             let (mut tau, mut used, mut series_steps, mut worst, mut state_max) = (0.0, 0, 0, 0.0f64, 0.0f64);
@@ -872,7 +873,7 @@ mod tests {
         series.rebase(0.0);
         let frame = Frame::new(plate.v);
         let mut counters = Counters::default();
-        let mut m = Dynamic::new(plate, law.kappa * 1000.0, rtol, atol).unwrap();
+        let mut m = RosenbrockPlate::new(plate, law.kappa * 1000.0, rtol, atol).unwrap();
         m.open_piece(0.0, &series, &frame);
         m.ode.set_h_proposal(0.05);
         let (mut tau, mut retaken) = (0.0, 0);

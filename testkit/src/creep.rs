@@ -1,4 +1,5 @@
-//! Low-velocity creep: the thermally activated (Bell) theory the creep study compares with.
+//! Low-velocity creep: the thermally activated (Bell) theory that `examples/creep.rs` and
+//! `tests/suite/creep.rs` compare the exact engine with.
 //!
 //! A weak junction that forms unstretched and is loaded at a constant rate `r` (force per
 //! time; `r = kappa V` when the plate slides at `V`) ruptures at rate
@@ -15,7 +16,7 @@
 //! `E[f^2] = E[f]^2 + (pi^2 / 6) f_b^2` (a Gumbel law), so the friction per junction grows
 //! as `(f_b / 2) ln V` plus a slowly varying correction.
 
-use crate::scene::Scene;
+use stickslip::Scene;
 
 /// `(E[f], E[f^2])` of the rupture force of one junction loaded at rate `r` from `f = 0`,
 /// with rupture rate `k0 exp(f / f_b)`; by quadrature of `E[f^n] = n int f^(n-1) S(f) df`.
@@ -70,43 +71,5 @@ pub fn theory(scene: &Scene) -> CreepTheory {
         rupture_force: m1,
         friction_per_junction: tension + scene.plate.eta * scene.plate.v / j.n as f64,
         lifetime,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// `E1(a)` by its power series (for small `a`).
-    fn e1(a: f64) -> f64 {
-        let gamma = 0.577_215_664_901_532_9;
-        let mut sum = 0.0;
-        let mut term = 1.0; // a^k / k!
-        for k in 1..60 {
-            term *= a / k as f64;
-            sum += if k % 2 == 1 { 1.0 } else { -1.0 } * term / k as f64;
-        }
-        -gamma - a.ln() + sum
-    }
-
-    #[test]
-    fn mean_rupture_force_is_f_b_exp_a_e1_a() {
-        for (r, k0, f_b) in [(1e-7, 1e-10, 1.0), (1e-4, 1e-10, 1.0), (0.05, 0.1, 1.0), (1e-3, 1e-6, 2.0)] {
-            let a = k0 * f_b / r;
-            let (m1, _) = bell_moments(r, k0, f_b);
-            let expected = f_b * a.exp() * e1(a);
-            assert!((m1 - expected).abs() < 1e-9 * expected, "r {r}: {m1} vs {expected}");
-        }
-    }
-
-    #[test]
-    fn second_moment_approaches_the_gumbel_law() {
-        // a = 1e-6: E[f^2] = f_b^2 e^a ((ln a + gamma)^2 + pi^2/6) + O(a ln^2 a).
-        let (r, k0) = (1e-4, 1e-10);
-        let a: f64 = k0 / r;
-        let (_, m2) = bell_moments(r, k0, 1.0);
-        let g = 0.577_215_664_901_532_9;
-        let expected = a.exp() * ((a.ln() + g).powi(2) + std::f64::consts::PI.powi(2) / 6.0);
-        assert!((m2 - expected).abs() < 1e-4 * expected, "{m2} vs {expected}");
     }
 }

@@ -3,7 +3,7 @@
 //! With `f^x = kappa x` and attached junctions moving with the plate (`x_i = y - c_i`),
 //! the bond force is `F_b = kappa (N_att y - C)`, `C = sum c_i`, so between events the plate
 //! obeys the linear ODE `M y'' + eta y' + (K + kappa N_att) y = a + b s` and moves in closed
-//! form ([`crate::propagator`]). Events:
+//! form ([`crate::engine::exact::linear::propagator`]). Events:
 //! - formation candidates at rate `kon0 N_det`, accepted with probability `g(|y'|)` at the
 //!   candidate time (thinning: exact because `g <= 1`), then a uniform detached junction;
 //! - ruptures as chosen by the [`RuptureModel`] (strong: rate `k0 N_att`; weak: thinning);
@@ -23,17 +23,18 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::bags::Bags;
-use super::clocks::{ChannelQueue, Channels};
-use super::frame::Frame;
-use super::motion::{Drive, Dynamic, PlateMotion};
-use super::pick::Pick;
-use super::rupture::RuptureModel;
+use crate::engine::exact::bags::Bags;
+use crate::engine::exact::clocks::{ChannelQueue, Channels};
+use crate::engine::exact::core::{REBASE, emit, reattached_extension};
+use crate::engine::exact::frame::Frame;
+use crate::engine::exact::linear::propagator::{Integrals, LinearPlate, Trajectory};
+use crate::engine::exact::motion::{Drive, Dynamic, PlateMotion};
+use crate::engine::exact::pick::Pick;
+use crate::engine::exact::rupture::RuptureModel;
 use crate::engine::alloc::AllocError;
 use crate::engine::{Counters, Engine, EngineError};
-use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
-use crate::physics::{Formation, Plate};
-use crate::propagator::{Integrals, LinearPlate, Trajectory};
+use crate::observe::{EventKind, Observer, Sample, Segment};
+use crate::physics::{Formation, LinearLaw, Plate};
 use crate::rng::{Pcg64, UniformSource, pcg};
 use crate::scene::{EngineKind, Reattach, Scene};
 
@@ -44,14 +45,6 @@ const RUPTURE: usize = 1;
 /// End of the current thinning horizon.
 const HORIZON: usize = 2;
 const CHANNELS: usize = 3;
-
-/// Soft re-basing limits: positions and times beyond these are moved back to the origin
-/// once enough events have passed to pay for the O(N) shift.
-const SOFT_Y: f64 = 4096.0;
-const SOFT_TAU: f64 = 1048576.0;
-/// Hard limits: re-base whatever the cost.
-const HARD_Y: f64 = 1.0737418e9;
-const HARD_TAU: f64 = 4.2949673e9;
 
 /// The current closed-form piece of the plate trajectory.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -120,18 +113,20 @@ impl PlateCache {
 }
 
 impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
-    /// The engine at `t = 0` for `scene`, with rupture kinetics made by `rupture` (after the
-    /// initial state has been drawn from the generator).
+    /// The engine at `t = 0` for `scene` under the linear law `law` (its slope is the
+    /// engine's `kappa`), with rupture kinetics made by `rupture` (after the initial state
+    /// has been drawn from the generator).
     ///
     /// Panics if the junction buffers cannot be allocated; [`ExactLinear::try_new`] reports it.
-    pub fn new(scene: &Scene, rupture: impl FnOnce(&mut Pcg64) -> R) -> Self {
-        Self::try_new(scene, |rng| Ok(rupture(rng))).unwrap_or_else(|e| panic!("{e}"))
+    pub fn new<L: LinearLaw>(scene: &Scene, law: &L, rupture: impl FnOnce(&mut Pcg64) -> R) -> Self {
+        Self::try_new(scene, law, |rng| Ok(rupture(rng))).unwrap_or_else(|e| panic!("{e}"))
     }
 
     /// [`ExactLinear::new`] with the junction buffers (bags, and the rupture model's, built by
     /// `rupture`) reserved fallibly.
-    pub fn try_new(
+    pub fn try_new<L: LinearLaw>(
         scene: &Scene,
+        law: &L,
         rupture: impl FnOnce(&mut Pcg64) -> Result<R, AllocError>,
     ) -> Result<Self, AllocError> {
         let j = &scene.junctions;
@@ -143,7 +138,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
         let mut e = ExactLinear {
             n: j.n,
             plate,
-            kappa: j.kappa,
+            kappa: law.slope(),
             lambda: j.lambda,
             reattach: j.reattach,
             formation: Formation::from_scene(scene),
@@ -290,16 +285,9 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
         self.channels.set_time(HORIZON, if R::IS_WEAK { now + plan.horizon } else { f64::INFINITY });
     }
 
+    #[inline]
     fn emit<O: Observer>(&self, obs: &mut O, kind: EventKind, id: u32, x: f64) {
-        if O::EVENTS {
-            obs.event(&JunctionEvent {
-                t: self.frame.time(self.tau),
-                junction: id,
-                kind,
-                extension: x,
-                tension: self.kappa * x.abs(),
-            });
-        }
+        emit(obs, self.frame.time(self.tau), kind, id, x, |x| self.kappa * x.abs());
     }
 
     /// Ruptures the attached junction in `slot` now.
@@ -309,7 +297,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
         let moved = (slot != last).then(|| self.bags.attached[slot].c);
         self.rupture.detached(slot, last, moved);
         let x = self.y - a.c;
-        self.bags.detached.push(super::bags::Detached { x, t: self.tau, id: a.id });
+        self.bags.detached.push(crate::engine::exact::bags::Detached { x, t: self.tau, id: a.id });
         self.counters.ruptures += 1;
         self.emit(obs, EventKind::Rupture, a.id, x);
     }
@@ -326,10 +314,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
         }
         let slot = self.next_formation.take(self.bags.n_detached(), &mut self.rng);
         let d = self.bags.take_detached(slot);
-        let x = match self.reattach {
-            Reattach::Residual => d.x * (-self.lambda * (self.tau - d.t)).exp(),
-            Reattach::Unstretched => 0.0,
-        };
+        let x = reattached_extension(self.reattach, self.lambda, &d, self.tau);
         let c = self.y - x;
         self.bags.attach(c, d.id);
         self.counters.formations += 1;
@@ -343,10 +328,8 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
     /// Re-bases the frame if positions or times have grown (amortised O(1) per event).
     #[inline]
     fn maybe_rebase<O: Observer>(&mut self, obs: &mut O) {
-        let (ya, ta) = (self.y.abs(), self.tau.abs());
-        let hard = ya > HARD_Y || ta > HARD_TAU || self.rupture.needs_rebase(self.y, self.tau);
-        let soft = (ya > SOFT_Y || ta > SOFT_TAU) && self.events_since_rebase >= (self.n as u64 / 4).max(1);
-        if !(hard || soft) {
+        let forced = self.rupture.needs_rebase(self.y, self.tau);
+        if !REBASE.due(self.y, self.tau, self.events_since_rebase, self.n, forced) {
             return;
         }
         let (dtau, dy) = (self.tau, self.y);

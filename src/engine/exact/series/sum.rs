@@ -117,7 +117,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::force::Tilted;
+use crate::physics::Tilted;
 
 /// Length of the fixed coefficient arrays: orders `p <= PMAX - 1`.
 pub const PMAX: usize = 32;

@@ -1,0 +1,153 @@
+//! `resume`: continues a killed run from its checkpoint ([`super::checkpoint`]).
+//!
+//! [`resume`] reads the checkpoint, rebuilds the engine of the same concrete type through the
+//! engine dispatch ([`with_engine`] on the checkpointed scene, then the state is decoded into
+//! that type), cuts the partial outputs back to the recorded lengths and continues the run.
+//! Everything is checked before any file is touched: a bad checkpoint changes nothing.
+
+use std::any::type_name;
+use std::path::{Path, PathBuf};
+
+use super::checkpoint::{Header, PROGRAM};
+use super::error::RunError;
+use super::observers::Writers;
+use super::plan::{RunOptions, RunPlan, RunStart};
+use super::run::run_from;
+use crate::engine::{Engine, EngineVisitor, with_engine};
+use crate::output::Summary;
+use crate::output::atomic::ReopenError;
+use crate::output::checkpoint::{self as file, CheckpointError, FILE, Loaded};
+use crate::output::csv::{CsvFile, EventWriter, TraceWriter};
+use crate::scene::BondKind;
+
+/// Why a run cannot be resumed.
+#[derive(Debug, thiserror::Error)]
+pub enum ResumeError {
+    #[error("{} is not a directory", dir.display())]
+    NotADirectory { dir: PathBuf },
+    #[error(
+        "{} holds no {FILE} and no summary.json: nothing to resume (only a run started with --checkpoint-every leaves a checkpoint)",
+        dir.display()
+    )]
+    NoCheckpoint { dir: PathBuf },
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    #[error("{}: {reason}", path.display())]
+    Incompatible { path: PathBuf, reason: String },
+    #[error("cannot resume from {}: {source}", path.display())]
+    Outputs {
+        path: PathBuf,
+        #[source]
+        source: ReopenError,
+    },
+    #[error(transparent)]
+    Run(#[from] RunError),
+}
+
+impl ResumeError {
+    /// Whether this is bad input (a missing, damaged or incompatible checkpoint or
+    /// partial output) rather than a run that failed.
+    pub fn is_bad_input(&self) -> bool {
+        !matches!(self, ResumeError::Run(_))
+    }
+}
+
+/// What `resume` did.
+#[derive(Debug)]
+pub enum Resumed {
+    /// The run had finished (its `summary.json` is there and no checkpoint is left).
+    Finished,
+    /// The run was continued from its checkpoint at simulated time `from_t` to its end.
+    Completed { from_t: f64, summary: Box<Summary> },
+}
+
+/// Continues the run whose output directory is `dir` from its checkpoint. `opts` gives
+/// the progress setting and, if set, a new checkpoint interval (else the run's own).
+pub fn resume(dir: &Path, opts: &RunOptions) -> Result<Resumed, ResumeError> {
+    if !dir.is_dir() {
+        return Err(ResumeError::NotADirectory { dir: dir.to_path_buf() });
+    }
+    let path = dir.join(FILE);
+    if !path.exists() {
+        return if dir.join("summary.json").is_file() {
+            Ok(Resumed::Finished)
+        } else {
+            Err(ResumeError::NoCheckpoint { dir: dir.to_path_buf() })
+        };
+    }
+    let loaded: Loaded<Header> = file::read(&path)?;
+    let h = &loaded.header;
+    let incompatible = |reason: String| ResumeError::Incompatible { path: path.clone(), reason };
+    if h.program != PROGRAM || h.program_version != env!("CARGO_PKG_VERSION") {
+        return Err(incompatible(format!(
+            "written by {} {}; this is {PROGRAM} {}",
+            h.program,
+            h.program_version,
+            env!("CARGO_PKG_VERSION")
+        )));
+    }
+    // The scene is validated again, as if read from a file.
+    let scene = h.scene.with_overrides(&[]).map_err(|e| incompatible(format!("its scene is not valid: {e}")))?;
+    if scene != h.scene {
+        return Err(incompatible("its scene changes when validated again".to_string()));
+    }
+    let every = opts.checkpoint_every.or(Some(h.checkpoint_every).filter(|s| s.is_finite() && *s > 0.0));
+    let opts = RunOptions { checkpoint_every: every, ..opts.clone() };
+    let visitor = ResumedRun { plan: RunPlan { scene: &scene, out: Some(dir), opts: &opts }, loaded: &loaded };
+    let summary = with_engine(&scene, visitor).map_err(RunError::from)??;
+    Ok(Resumed::Completed { from_t: loaded.header.runner.t, summary: Box::new(summary) })
+}
+
+/// A run continued from a checkpoint, once the engine type is known.
+struct ResumedRun<'a> {
+    plan: RunPlan<'a>,
+    loaded: &'a Loaded<Header>,
+}
+
+impl EngineVisitor for ResumedRun<'_> {
+    type Output = Result<Summary, ResumeError>;
+
+    fn visit<E: Engine>(self, fresh: E) -> Self::Output {
+        let (plan, loaded) = (&self.plan, self.loaded);
+        let (scene, dir) = (plan.scene, plan.out.expect("resume has a directory"));
+        let (h, r) = (&loaded.header, &loaded.header.runner);
+        let incompatible = |reason: String| ResumeError::Incompatible { path: loaded.path.clone(), reason };
+        if h.engine_type != type_name::<E>() {
+            return Err(incompatible(format!(
+                "it holds the state of engine {}, but its scene builds {}",
+                h.engine_type,
+                type_name::<E>()
+            )));
+        }
+        // The fresh engine only told us the type; the checkpoint's state replaces it.
+        drop(fresh);
+        let engine: E = loaded.engine()?;
+        let weak = scene.junctions.bond == BondKind::Weak;
+        if r.trace.is_some() != scene.output.trace
+            || r.events.is_some() != scene.output.events
+            || r.ruptures.is_some() != weak
+            || r.grid.stops_done == 0
+            || engine.time() != r.t
+        {
+            return Err(incompatible("its runner state does not match its scene and engine".to_string()));
+        }
+        // Check the partial outputs before changing anything.
+        let outputs = [(TraceWriter::NAME, &r.trace), (EventWriter::NAME, &r.events)];
+        for (name, pos) in outputs {
+            if let Some(p) = pos {
+                CsvFile::check_resume(dir, name, p)
+                    .map_err(|source| ResumeError::Outputs { path: loaded.path.clone(), source })?;
+            }
+        }
+        let start = RunStart {
+            position: r.grid,
+            core: (r.stats.clone(), r.regime.clone()),
+            writers: Writers::reopen(dir, r.trace.as_ref(), r.events.as_ref())?,
+            ruptures: r.ruptures.clone(),
+            wall_seconds: r.wall_seconds,
+            checkpoints: r.checkpoints,
+            checkpoint_t: Some(r.t),
+        };
+        Ok(run_from(engine, plan, start)?)
+    }
+}
