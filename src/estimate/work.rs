@@ -21,7 +21,9 @@ pub struct Work {
 /// `p* = k_on / s`, `r = k_on k_off / s` (exact for constant rates).
 pub fn two_state_events(n: f64, k_off: f64, k_on: f64, p0: f64, t: f64) -> f64 {
     let s = k_on + k_off;
-    if !(s > 0.0) || !(t > 0.0) {
+    // NaN counts as not positive.
+    let positive = |v: f64| v > 0.0;
+    if !positive(s) || !positive(t) {
         return 0.0;
     }
     let p_star = k_on / s;
