@@ -135,8 +135,8 @@ pub enum JournalError {
     NotAJournal { path: PathBuf, why: String },
     #[error("{path} has journal format {found}; this stickslip reads format {FORMAT}")]
     Format { path: PathBuf, found: u32 },
-    #[error("{path} was written by stickslip {found}; this is stickslip {}", env!("CARGO_PKG_VERSION"))]
-    Version { path: PathBuf, found: String },
+    #[error("{path} was written by stickslip {found}; this is stickslip {expected}")]
+    Version { path: PathBuf, found: String, expected: String },
     #[error(
         "{path} belongs to another study ({found}); this one is {expected}: nothing was changed (choose another --out, or remove the journal to start afresh)"
     )]
@@ -242,7 +242,7 @@ fn lock(file: &File, path: &Path) -> Result<(), JournalError> {
 fn check_same_study(path: &Path, found: &Header, expected: &Header) -> Result<(), JournalError> {
     let path = path.to_path_buf();
     if found.version != expected.version {
-        return Err(JournalError::Version { path, found: found.version.clone() });
+        return Err(JournalError::Version { path, found: found.version.clone(), expected: expected.version.clone() });
     }
     let describe = |h: &Header| format!("{} {}, {} runs", h.study.as_str(), h.arguments, h.runs);
     if (found.study, &found.arguments, found.runs) != (expected.study, &expected.arguments, expected.runs) {
@@ -269,9 +269,10 @@ impl Journal {
     pub fn open<T: DeserializeOwned>(dir: &Path, header: &Header, seeds: &[u64]) -> Result<Opened<T>, JournalError> {
         assert_eq!(header.runs, seeds.len(), "one seed per run");
         let path = path_in(dir);
+        // Appending: every write lands at the end, also after a cut-short line is cut off.
         let mut file = OpenOptions::new()
             .read(true)
-            .write(true)
+            .append(true)
             .create(true)
             .truncate(false)
             .open(&path)

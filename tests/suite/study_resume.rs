@@ -177,6 +177,11 @@ fn killed_and_resumed(make: fn(&Path) -> Study, seed: u64) {
         for name in study.files {
             assert_eq!(table(&out, name), table(&reference, name), "{how:?} after {k} runs: {name} differs");
         }
+        // The journal reads back whole after the resume appended to it.
+        let again = resume(&out);
+        assert!(again.status.success(), "{how:?}: {}", stderr(&again));
+        let said = String::from_utf8_lossy(&again.stdout);
+        assert!(said.contains(&format!("{0} of {0} runs were already done", study.runs)), "{said}");
     }
     assert!(interrupted >= 2, "the study finished before it could be killed");
 }
