@@ -14,6 +14,9 @@ use crate::studies::journal::{self, Header};
 /// Resumes the study in `dir` if it holds a study journal; `None` if it holds none (a
 /// single run's directory). `checkpoint_every` is refused for a study.
 pub(crate) fn resume(dir: &Path, checkpoint_every: Option<f64>) -> Option<ExitCode> {
+    if !dir.is_dir() {
+        return None; // reported as a run's resume reports it
+    }
     let header = match journal::read_header(dir) {
         Ok(Some(h)) => h,
         Ok(None) => return None,
