@@ -51,7 +51,10 @@ mod tests {
         s.serialize(&mut rmp_serde::Serializer::new(&mut plain).with_struct_map()).unwrap();
         assert_eq!(ours, plain);
         let back: S = decode(&ours).unwrap();
-        assert_eq!(back.v.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), s.v.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
+        assert_eq!(
+            back.v.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            s.v.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
         assert_eq!(back, s);
         let plain_back: S = rmp_serde::from_slice(&plain).unwrap();
         assert_eq!(plain_back, s);

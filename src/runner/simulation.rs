@@ -185,7 +185,9 @@ impl<E: Engine> ErasedEngine for E {
             Observed::Nothing => drive_walk(self, walk, &mut Nothing, stop, nothing_at_stops),
             Observed::Core(c) => drive_walk(self, walk, c, stop, nothing_at_stops),
             Observed::Recorder(r) => drive_walk(self, walk, &mut recording(r, None), stop, nothing_at_stops),
-            Observed::RecorderAndCore(r, c) => drive_walk(self, walk, &mut recording(r, Some(c)), stop, nothing_at_stops),
+            Observed::RecorderAndCore(r, c) => {
+                drive_walk(self, walk, &mut recording(r, Some(c)), stop, nothing_at_stops)
+            }
         }
     }
     fn state(&self) -> Vec<u8> {

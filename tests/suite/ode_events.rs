@@ -1,7 +1,6 @@
 //! Event location on the dense output: crossings inside a step, exactly at a step end, no
 //! false crossings, non-monotone event functions, errors.
 
-
 use std::f64::consts::LN_2;
 
 use stickslip::ode::{Dop853, OdeError};

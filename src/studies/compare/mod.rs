@@ -411,8 +411,16 @@ impl JobRecord {
 #[derive(Debug)]
 enum Outcome {
     /// `unstable`: the run's regime is `unstable`.
-    Done { values: Vec<Option<f64>>, unstable: bool, wall: f64, cpu: f64 },
-    Diverged { wall: f64, cpu: f64 },
+    Done {
+        values: Vec<Option<f64>>,
+        unstable: bool,
+        wall: f64,
+        cpu: f64,
+    },
+    Diverged {
+        wall: f64,
+        cpu: f64,
+    },
 }
 
 impl Outcome {

@@ -23,6 +23,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::engine::alloc::AllocError;
 use crate::engine::exact::bags::Bags;
 use crate::engine::exact::clocks::{ChannelQueue, Channels};
 use crate::engine::exact::core::{REBASE, emit, reattached_extension};
@@ -31,7 +32,6 @@ use crate::engine::exact::linear::propagator::{Integrals, LinearPlate, Trajector
 use crate::engine::exact::motion::{Drive, Dynamic, PlateMotion};
 use crate::engine::exact::pick::Pick;
 use crate::engine::exact::rupture::RuptureModel;
-use crate::engine::alloc::AllocError;
 use crate::engine::{Counters, Engine, EngineError};
 use crate::observe::{EventKind, Observer, Sample, Segment};
 use crate::physics::{Formation, LinearLaw, Plate};
