@@ -26,10 +26,7 @@ pub enum ResourceError {
 /// Checks that a run of `scene` fits in memory and its outputs fit on the disk of `out`.
 /// Returns the estimate.
 pub fn check_run(scene: &Scene, out: &Path, checkpoints: bool) -> Result<Estimate, ResourceError> {
-    let est = Estimate::of(scene, checkpoints);
-    if let Some(a) = available_memory().filter(|a| est.peak_bytes() > a.bytes) {
-        return Err(memory_error(&est, 1, &a));
-    }
+    let est = check_memory(scene, checkpoints)?;
     if let Some(free) = free_disk(out).filter(|&free| est.output_bytes() > free) {
         let biggest = est.files.iter().max_by_key(|f| f.bytes).expect("a run writes summary.json");
         let detail = est.files.iter().map(|f| format!("{} {}", f.name, bytes(f.bytes))).collect::<Vec<_>>();
@@ -40,6 +37,16 @@ pub fn check_run(scene: &Scene, out: &Path, checkpoints: bool) -> Result<Estimat
             free,
             path: crate::scene::error::printable(&out.display().to_string()),
         });
+    }
+    Ok(est)
+}
+
+/// Checks that a run of `scene` fits in memory (the disk is not looked at: `resume`
+/// continues outputs that are already there). Returns the estimate.
+pub fn check_memory(scene: &Scene, checkpoints: bool) -> Result<Estimate, ResourceError> {
+    let est = Estimate::of(scene, checkpoints);
+    if let Some(a) = available_memory().filter(|a| est.peak_bytes() > a.bytes) {
+        return Err(memory_error(&est, 1, &a));
     }
     Ok(est)
 }

@@ -3,7 +3,8 @@
 //! [`resume`] reads the checkpoint, rebuilds the engine of the same concrete type through the
 //! engine dispatch ([`with_engine`] on the checkpointed scene, then the state is decoded into
 //! that type), cuts the partial outputs back to the recorded lengths and continues the run.
-//! Everything is checked before any file is touched: a bad checkpoint changes nothing.
+//! Everything is checked before any file is touched: a bad checkpoint, or a run that does
+//! not fit in the memory available now, changes nothing.
 
 use std::any::type_name;
 use std::path::{Path, PathBuf};
@@ -40,6 +41,10 @@ pub enum ResumeError {
         #[source]
         source: ReopenError,
     },
+    /// The run does not fit in the memory available now (a checkpoint may be resumed on
+    /// another machine, or beside other work).
+    #[error(transparent)]
+    Resources(#[from] crate::estimate::ResourceError),
     #[error(transparent)]
     Run(#[from] RunError),
 }
@@ -91,6 +96,9 @@ pub fn resume(dir: &Path, opts: &RunOptions) -> Result<Resumed, ResumeError> {
     if scene != h.scene {
         return Err(incompatible("its scene changes when validated again".to_string()));
     }
+    // Before the engine is built and its state decoded: a run too big for the memory
+    // available now is refused in one line, and its checkpoint is left as it is.
+    crate::estimate::check::check_memory(&scene, true)?;
     let every = opts.checkpoint_every.or(Some(h.checkpoint_every).filter(|s| s.is_finite() && *s > 0.0));
     let opts = RunOptions { checkpoint_every: every, ..opts.clone() };
     let visitor = ResumedRun { plan: RunPlan { scene: &scene, out: Some(dir), opts: &opts }, loaded: &loaded };

@@ -4,12 +4,14 @@
 //! with the same seed; for the fixed engine and the exact engine (linear law with strong
 //! and weak bonds, tilted law), and for kinematic plates. Also: the progress display changes nothing, a finished run
 //! is not resumed, and bad `resume` inputs and bad `--checkpoint-every` values are refused
-//! with one line and exit code 2, with nothing changed on disk.
+//! with one line and exit code 2, with nothing changed on disk, as is a `resume` when less
+//! memory is available than the run needs.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
+use stickslip::estimate::system::MEMORY_ENV;
 use stickslip_testkit::FIG1;
 
 const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
@@ -184,6 +186,28 @@ fn assert_same_outputs(name: &str, a: &Path, b: &Path) {
     assert_eq!(summary_without_wall_time(a), summary_without_wall_time(b), "{name}: summary.json");
 }
 
+/// `resume` with less memory available than the run needs (the cap from the environment)
+/// is refused in one line naming `junctions.n` and the cap, exit code 2, and every file in
+/// `dir` is left as it was, byte for byte.
+fn refused_without_memory(name: &str, dir: &Path) {
+    let snapshot = |d: &Path| -> Vec<(String, Vec<u8>)> {
+        files(d).into_iter().map(|f| (f.clone(), std::fs::read(d.join(&f)).unwrap())).collect()
+    };
+    let before = snapshot(dir);
+    let o = Command::new(BIN)
+        .args(["resume", dir.to_str().unwrap()])
+        .env_remove("STICKSLIP_PROGRESS")
+        .env(MEMORY_ENV, (1u64 << 20).to_string())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+    assert!(o.stdout.is_empty(), "{name}");
+    assert_eq!(err.lines().count(), 1, "{name}: {err}");
+    assert!(err.contains("junctions.n = ") && err.contains("of memory") && err.contains(MEMORY_ENV), "{name}: {err}");
+    assert!(snapshot(dir) == before, "{name}: a refused resume changed the directory");
+}
+
 /// Runs `case` uninterrupted, and killed `kills` times and resumed; compares.
 fn kill_and_resume(case: &Case, kills: usize) {
     let tmp = tempfile::tempdir().unwrap();
@@ -214,6 +238,7 @@ fn kill_and_resume(case: &Case, kills: usize) {
             killed += 1;
         }
         if dir.join("checkpoint.bin").exists() {
+            refused_without_memory(case.name, &dir);
             let out = run(&resume, &[]);
             let stdout = String::from_utf8_lossy(&out.stdout);
             assert!(stdout.starts_with("resumed from the checkpoint at t = "), "{stdout}");
