@@ -8,18 +8,22 @@
 //!   table of force laws and bond kinds (`scene::laws`);
 //! - [`physics`]: the model's pure functions: force laws, bond kinds, formation rate, plate;
 //! - [`engine`]: the methods that advance a scene: [`engine::fixed`] (the letter's
-//!   fixed-step scheme) and [`engine::exact`] (event-driven kinetic Monte Carlo: the linear
-//!   engine with its closed-form propagator, the series engine with its bond-force series,
-//!   the direct engine);
+//!   fixed-step scheme, and [`engine::fixed::stability`], where each of its plate integrators
+//!   is stable) and [`engine::exact`] (event-driven kinetic Monte Carlo: one core, with the
+//!   event loop and the junctions' bookkeeping, and a kernel per method: the linear engine
+//!   with its closed-form propagator, the series engine with its bond-force series, the
+//!   direct engine);
 //! - [`ode`]: the adaptive integrators the exact engines use (DOP853, Rosenbrock);
 //! - [`rng`]: the named, portable random generators (Park–Miller, PCG);
 //! - [`runner`]: the loop that drives an engine along the output grid and feeds the
 //!   [`observe`]rs (statistics, regime detector) and the [`output`] writers (CSV,
 //!   `summary.json`, checkpoints);
-//! - [`stability`]: where each fixed-step plate integrator is stable;
+//! - [`estimate`]: memory, work and output-size estimates made before a run, and the checks
+//!   that refuse what will not fit;
 //! - [`studies`]: many scenes at once: sweeps, work-precision comparisons;
 //! - [`plot`]: the figures of runs and studies (SVG);
-//! - [`cli`]: the `stickslip` command line.
+//! - [`cli`]: the `stickslip` command line, and the text of its reports (such as the
+//!   stability table).
 
 pub mod cli;
 pub mod engine;
@@ -32,7 +36,6 @@ pub mod plot;
 pub mod rng;
 pub mod runner;
 pub mod scene;
-pub mod stability;
 pub mod studies;
 #[cfg(test)]
 mod test_scenes;

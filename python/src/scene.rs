@@ -57,7 +57,7 @@ impl Scene {
     /// The warning `stickslip run` prints before a fixed-step run whose step is beyond the
     /// plate integrator's stability limit (docs/stability.md), or `None`.
     fn stability_warning(&self) -> Option<String> {
-        stickslip::stability::warning(&self.0)
+        stickslip::cli::stability::warning(&self.0)
     }
 
     /// The complete scene file as TOML text.

@@ -9,7 +9,7 @@ mod compare;
 mod resume;
 mod run;
 mod signals;
-mod stability;
+pub mod stability;
 pub mod stdout;
 mod study;
 mod study_resume;

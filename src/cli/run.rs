@@ -74,7 +74,7 @@ pub(crate) fn run(
         Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
     // After every bad-input check: bad input prints its one error line and nothing else.
-    if let Some(w) = crate::stability::warning(&scene) {
+    if let Some(w) = super::stability::warning(&scene) {
         eprintln!("{w}");
     }
     let opts = RunOptions { checkpoint_every, progress: true, stop: None };
@@ -106,8 +106,8 @@ fn regime_text(s: &Summary) -> String {
             "regime unstable ({}: the plate step grows x{} per step with every junction attached; \
              largest stable dt {}, see `stickslip stability`)",
             n.unstable.map_or("seen", |c| c.as_str()),
-            crate::stability::num(n.growth_factor),
-            crate::stability::num(n.largest_stable_dt)
+            super::stability::num(n.growth_factor),
+            super::stability::num(n.largest_stable_dt)
         ),
         _ => format!("regime {} ({} stick-slip cycles)", s.regime.as_str(), s.stick_slip_cycles),
     }

@@ -26,7 +26,7 @@ pub(crate) fn validate(args: &SceneArgs) -> ExitCode {
         let zeta = if k_tot > 0.0 { p.eta / (2.0 * (k_tot * p.mass).sqrt()) } else { f64::INFINITY };
         let _ = writeln!(text, "# plate (no junctions attached): omega = sqrt(K/M) = {omega}, damping ratio = {zeta}");
     }
-    for line in crate::stability::analyse(&scene).validate_block(scene.run.engine) {
+    for line in super::stability::validate_block(&crate::engine::fixed::stability::analyse(&scene), scene.run.engine) {
         let _ = writeln!(text, "{line}");
     }
     let out = std::path::Path::new("out").join(&scene.name);

@@ -672,7 +672,7 @@ fn fixed_step_stiff_plates_diverge_with_an_error_or_run_below_the_limit() {
                 Err(e) => panic!("{plate:?} {integ}: {e}"),
                 Ok(_) => panic!("{plate:?} {integ}: no divergence at dt = 1"),
             }
-            let lim = stickslip::stability::analyse(&s).selected().dt_stable;
+            let lim = stickslip::engine::fixed::stability::analyse(&s).selected().dt_stable;
             let dt = 0.5 * lim;
             let s = scene(
                 FIG1,
@@ -709,12 +709,16 @@ fn computed_stability_limits_are_confirmed_by_runs() {
     ] {
         let base =
             scene(FIG1, &["junctions.kappa=0", &format!("plate.mass={mass}"), &format!("fixed.integrator={integ}")]);
-        let lim = stickslip::stability::analyse(&base).selected().dt_stable;
-        assert_eq!(lim, stickslip::stability::analyse(&base).selected().dt_unstable, "kappa = 0: one limit");
+        let lim = stickslip::engine::fixed::stability::analyse(&base).selected().dt_stable;
+        assert_eq!(
+            lim,
+            stickslip::engine::fixed::stability::analyse(&base).selected().dt_unstable,
+            "kappa = 0: one limit"
+        );
         let (k, eta, v) = (150.0f64, 75.0, 0.5);
         let scale = if mass > 0.0 { v / (k / mass).sqrt() } else { 0.0 } + eta * v / k;
         let over = base.with_overrides(&[format!("fixed.dt={}", 1.02 * lim)]).unwrap();
-        let rho = stickslip::stability::analyse(&over).selected().radius_none;
+        let rho = stickslip::engine::fixed::stability::analyse(&over).selected().radius_none;
         assert!(rho > 1.0);
         let steps = (2.0 * (1e102 / scale).ln() / rho.ln()).ceil();
         for (factor, stable) in [(0.98, true), (1.02, false)] {

@@ -352,8 +352,9 @@ fn copy_crate(from: &std::path::Path, to: &std::path::Path) {
 }
 
 /// The two steps of the worked example on a copy of the crate, then a `saturating` scene
-/// on both engines through `stickslip validate` and `stickslip run`. Builds the copy (some
-/// minutes on two cores): `cargo test --profile quick --test suite
+/// through `stickslip validate`, `stickslip stability` and `stickslip run` on both engines.
+/// Builds the copy (some minutes on two cores; in `CARGO_TARGET_DIR` if set, sharing its
+/// built dependencies): `cargo test --profile quick --test suite
 /// law_extension::a_newcomer -- --ignored`.
 #[test]
 #[ignore]
@@ -368,22 +369,31 @@ fn a_newcomer_adds_the_worked_example() {
     let src = std::fs::read_to_string(&force).unwrap().replacen(&crate_table(), &table, 1);
     std::fs::write(&force, src).unwrap();
     let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| copy.join("target"), Into::into);
-    for engine in ["fixed", "exact"] {
-        let out = copy.join(format!("out-{engine}"));
-        std::fs::create_dir_all(&out).unwrap();
-        let status = std::process::Command::new(env!("CARGO"))
+    let stickslip = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO"))
             .current_dir(copy)
             .env("CARGO_TARGET_DIR", &target)
-            .args(["run", "--quiet", "--profile", "quick", "--offline", "--", "run", "scenarios/fig1.toml"])
-            .args(["--set", "junctions.force_law=saturating", "--set", &format!("run.engine={engine}")])
-            .args(["--set", "run.t_end=40", "--out"])
-            .arg(&out)
-            .status()
+            .args(["run", "--quiet", "--profile", "quick", "--offline", "--"])
+            .args(args)
+            .output()
             .unwrap();
-        assert!(status.success(), "{engine}: stickslip run failed");
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(out.status.success(), "stickslip {args:?} failed: {}{text}", String::from_utf8_lossy(&out.stderr));
+        text
+    };
+    let law = ["--set", "junctions.force_law=saturating"];
+    let validated = stickslip(&[&["validate", "scenarios/fig1.toml"][..], &law].concat());
+    assert!(validated.contains("saturating"), "validate does not name the law: {validated}");
+    let table = stickslip(&[&["stability", "scenarios/fig1.toml"][..], &law].concat());
+    assert!(table.contains("a yielding junction's stiffness never exceeds kappa"), "{table}");
+    for engine in ["fixed", "exact"] {
+        let out = copy.join(format!("out-{engine}"));
+        let engine_set = format!("run.engine={engine}");
+        let args = [&["run", "scenarios/fig1.toml"][..], &law, &["--set", &engine_set, "--set", "run.t_end=40"]];
+        stickslip(&[&args.concat()[..], &["--out", out.to_str().unwrap()]].concat());
         let summary: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-        let ruptures = summary.pointer("/counters/ruptures").and_then(|v| v.as_u64());
+        let ruptures = summary["ruptures"].as_u64();
         assert!(ruptures.is_some_and(|r| r > 10), "{engine}: {summary}");
     }
 }

@@ -19,10 +19,10 @@ fn check(text: &str, overrides: &[String]) -> Result<(), TestCaseError> {
                 again.err().map(|e| e.to_string())
             );
             // What `validate` and `stability` print from a valid scene never panics either.
-            let a = stickslip::stability::analyse(&scene);
-            prop_assert!(!a.table(&scene.name).is_empty());
-            prop_assert!(!a.validate_block(scene.run.engine).is_empty());
-            let _ = stickslip::stability::warning(&scene);
+            let a = stickslip::engine::fixed::stability::analyse(&scene);
+            prop_assert!(!stickslip::cli::stability::table(&a, &scene.name).is_empty());
+            prop_assert!(!stickslip::cli::stability::validate_block(&a, scene.run.engine).is_empty());
+            let _ = stickslip::cli::stability::warning(&scene);
             prop_assert_eq!(again.unwrap(), scene);
         }
         Err(e) => {

@@ -6,11 +6,11 @@
 use std::path::Path;
 use std::process::Command;
 
+use stickslip::engine::fixed::stability::analyse;
 use stickslip::observe::regime::Regime;
 use stickslip::observe::regime::numerics::Cause;
 use stickslip::output::Summary;
 use stickslip::run_scene;
-use stickslip::stability::analyse;
 use stickslip_testkit::fig1_with;
 
 use crate::common::svg::assert_well_formed_svg;

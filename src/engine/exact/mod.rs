@@ -34,9 +34,10 @@ use crate::physics::{
 use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};
 use crate::scene::{Scene, TiltedMethod};
 
+pub use self::core::{Core, Exact, Kernel};
 pub use clocks::{ArrayQueue, ChannelQueue, PqQueue};
-pub use direct::ExactDirect;
-pub use linear::ExactLinear;
+pub use direct::{DirectKernel, ExactDirect};
+pub use linear::{ExactLinear, LinearKernel};
 pub use motion::{Dynamic, Kinematic, PlateMotion};
 pub use rupture::{StrongRupture, WeakRupture};
 

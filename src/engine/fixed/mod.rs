@@ -3,11 +3,13 @@
 //!
 //! - [`dispatch`] resolves the scene's options into type parameters once per run;
 //! - [`engine`] holds the state and the step;
-//! - [`flip`] the flip rules, [`integrator`] the plate integrators.
+//! - [`flip`] the flip rules, [`integrator`] the plate integrators, [`stability`] their
+//!   stability limits at a scene's parameters (`stickslip stability`).
 
 pub mod engine;
 pub mod flip;
 pub mod integrator;
+pub mod stability;
 
 pub use engine::{DIVERGENCE_LIMIT, FixedEngine};
 pub use flip::FlipTest;

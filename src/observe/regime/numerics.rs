@@ -5,7 +5,7 @@
 //!
 //! A run is **unstable** when its plate step amplifies the plate's oscillation:
 //!
-//! - **predicted**: the stability analysis ([`crate::stability::analyse`]) puts the scene's
+//! - **predicted**: the stability analysis ([`crate::engine::fixed::stability::analyse`]) puts the scene's
 //!   `dt` at or beyond the limit of its integrator for the most favourable attached count
 //!   (verdict `at the limit` or `unstable`: nothing damps the oscillation) and its growth
 //!   factor per step exceeds 1 for some attached count; or
@@ -23,8 +23,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::engine::fixed::stability::{self, AT_LIMIT, Verdict};
 use crate::scene::{EngineKind, Scene};
-use crate::stability::{self, AT_LIMIT, Verdict};
 
 /// Steps a period-2 oscillation must stay locked (its alternating component of one sign).
 /// A noise-driven, decaying period-2 mode changes its sign every few dozen steps

@@ -34,13 +34,13 @@
 //! [`crate::observe::regime::numerics`]: predicted by the stability analysis or seen as a
 //! locked period-2 oscillation) is reported as `unstable`, with its numbers and the plate
 //! growth factor with every junction attached ([`PlateLimit::radius_all`] of
-//! [`crate::stability::analyse`]).
+//! [`crate::engine::fixed::stability::analyse`]).
 //!
 //! Layout: this file plans, runs and aggregates (data only); [`fit`] the bias model,
 //! [`report`] `compare.csv` and `compare.md`, [`files`] writes them with `compare.svg`
 //! ([`crate::plot::compare`]).
 //!
-//! [`PlateLimit::radius_all`]: crate::stability::PlateLimit::radius_all
+//! [`PlateLimit::radius_all`]: crate::engine::fixed::stability::PlateLimit::radius_all
 
 pub mod files;
 pub mod fit;
@@ -157,7 +157,7 @@ pub struct Plan {
     pub exact_counts: Vec<usize>,
     pub observables: Vec<Observable>,
     /// Per step of `dts`: the plate update's growth factor per step with every junction
-    /// attached ([`crate::stability::PlateLimit::radius_all`] of the fixed-step scene).
+    /// attached ([`crate::engine::fixed::stability::PlateLimit::radius_all`] of the fixed-step scene).
     pub plate_growth: Vec<f64>,
     jobs: Vec<Job>,
 }
@@ -213,7 +213,7 @@ impl Plan {
             let set_dt = format!("fixed.dt={}", ryu::Buffer::new().format(dt));
             let fixed = quiet(scene, &["run.engine=fixed".into(), "run.seed=1".into(), set_dt])
                 .map_err(|e| PlanError(format!("--dts: {dt}: {e}")))?;
-            plate_growth.push(crate::stability::analyse(&fixed).selected().radius_all);
+            plate_growth.push(crate::engine::fixed::stability::analyse(&fixed).selected().radius_all);
             let seeds: Vec<u64> = match fixed.fixed.rng {
                 RngKind::Pcg => (0..replicas).map(|r| seeds::pcg_seed(base, Role::Fixed, j as u64, r as u64)).collect(),
                 RngKind::ParkMiller => {

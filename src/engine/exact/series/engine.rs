@@ -1,4 +1,6 @@
-//! The series engine: event loop, junction bookkeeping, frame re-basing.
+//! The series engine's part of the exact core ([`crate::engine::exact::core`]): the bond
+//! force kept as a [`SeriesSum`] with its error tracked, the plate stepped by its [`Motion`],
+//! weak bonds thinned inside each step.
 
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
@@ -6,52 +8,39 @@ use serde::{Deserialize, Serialize};
 use super::SeriesSum;
 use super::kinetics::Kinetics;
 use super::motion::{Motion, Step, StepCtx};
-use crate::engine::exact::bags::{Bags, Detached, prefetch};
-use crate::engine::exact::clocks::{ArrayQueue, Channels};
-use crate::engine::exact::core::{REBASE, emit, reattached_extension};
-use crate::engine::exact::frame::Frame;
-use crate::engine::{Counters, Engine, EngineError};
-use crate::observe::{EventKind, Observer, Sample};
-use crate::physics::{ForceLaw, Formation, Plate, Tilted};
-use crate::rng::{Pcg64, UniformSource, pcg};
-use crate::scene::{EngineKind, Reattach, Scene};
-
-const FORMATION: usize = 0;
-const RUPTURE: usize = 1;
+use crate::engine::EngineError;
+use crate::engine::exact::bags::{Attached, prefetch};
+use crate::engine::exact::clocks::ArrayQueue;
+use crate::engine::exact::core::{Core, Exact, FORMATION, Kernel, Moved, Target};
+use crate::observe::Observer;
+use crate::physics::{ForceLaw, Tilted};
+use crate::rng::UniformSource;
+use crate::scene::Scene;
 
 /// Exact engine for the tilted law with the bond force kept as a [`SeriesSum`]: rupture
 /// kinetics `K`, plate motion `P`.
+pub type ExactSeries<K, P> = Exact<SeriesKernel<K, P>>;
+
+/// The series engine's part: the law, the bond-force series and its error bound, the
+/// rupture kinetics `K`, the plate motion `P`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(bound = "")]
-pub struct ExactSeries<K: Kinetics, P: Motion> {
-    n: usize,
-    plate: Plate,
+pub struct SeriesKernel<K: Kinetics, P: Motion> {
     law: Tilted,
-    lambda: f64,
-    reattach: Reattach,
-    formation: Formation,
-    frame: Frame,
-    /// Local time.
-    tau: f64,
-    /// The junctions; each attached one carries its `SeriesSum` handle (`Attached::bin`).
-    bags: Bags,
+    /// The attached junctions' bond force; each carries its handle (`Attached::bin`).
     series: SeriesSum,
     kinetics: K,
     motion: P,
-    channels: Channels<ArrayQueue>,
-    rng: Pcg64,
-    counters: Counters,
-    events_since_rebase: u64,
     /// `exact.rtol`: the series' stated tolerance, relative to `kappa l0 max(N_att, 1)`.
     rtol: f64,
     /// The relative error bound just after the engine last refreshed the series (see
-    /// [`ExactSeries::track_error`]); a refresh is taken only when the bound has doubled since.
+    /// [`SeriesKernel::track_error`]); a refresh is taken only when the bound has doubled since.
     error_floor: f64,
     /// The series changed (attach, rupture, shift) since its error bound was last recorded.
     /// Not serialised: a resumed run records it again at its first plate step.
     #[serde(skip, default = "yes")]
     error_stale: bool,
-    /// The series' relative error bound as last recorded by [`ExactSeries::track_error`]; a
+    /// The series' relative error bound as last recorded by [`SeriesKernel::track_error`]; a
     /// step that evaluated the local cubic records it plus the cubic's remainder. Not
     /// serialised: recorded again at a resumed run's first plate step (`error_stale`).
     #[serde(skip)]
@@ -66,61 +55,28 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
     /// The engine at `t = 0` for `scene` under the tilted-form law `law`; `kinetics` and
     /// `motion` are built by the caller.
     pub fn new(scene: &Scene, law: Tilted, kinetics: K, motion: P) -> Result<Self, EngineError> {
-        let j = &scene.junctions;
-        let mut rng = pcg(scene.run.seed);
-        let bags = Bags::initial(j, &mut rng)?;
-        let plate = Plate::from_scene(scene);
-        let series = SeriesSum::new(law, scene.exact.rtol);
-        let mut e = ExactSeries {
-            n: j.n,
-            plate,
+        let mut core = Core::new(scene, 2)?;
+        core.counters.series_rebases = Some(0);
+        core.counters.series_error = Some(0.0);
+        if !P::KINEMATIC {
+            core.counters.ode_steps = Some(0);
+            core.counters.ode_rejected = Some(0);
+        }
+        let kernel = SeriesKernel {
             law,
-            lambda: j.lambda,
-            reattach: j.reattach,
-            formation: Formation::from_scene(scene),
-            frame: Frame::new(plate.v),
-            tau: 0.0,
-            bags,
-            series,
+            series: SeriesSum::new(law, scene.exact.rtol),
             kinetics,
             motion,
-            channels: Channels::new(2),
-            rng,
-            counters: Counters {
-                events: Some(0),
-                candidates: Some(0),
-                rebases: Some(0),
-                series_rebases: Some(0),
-                series_error: Some(0.0),
-                ..Default::default()
-            },
-            events_since_rebase: 0,
             rtol: scene.exact.rtol,
             error_floor: 0.0,
             error_stale: true,
             last_rel: 0.0,
         };
-        if !P::KINEMATIC {
-            e.counters.ode_steps = Some(0);
-            e.counters.ode_rejected = Some(0);
-        }
-        for slot in 0..e.bags.n_attached() {
-            let c = e.bags.attached[slot].c;
-            e.bags.attached[slot].bin = e.series.add(c);
-            // Every initial junction is unstretched (x = 0): its rate cannot overflow.
-            e.kinetics.attached(slot, c, 0.0);
-        }
-        e.track_error();
-        e.motion.open_piece(0.0, &e.series, &e.frame);
-        e.refresh_clocks(None);
-        Ok(e)
+        Ok(Exact::start(core, kernel))
     }
+}
 
-    #[inline]
-    fn y(&self) -> f64 {
-        self.motion.y(self.tau)
-    }
-
+impl<K: Kinetics, P: Motion> SeriesKernel<K, P> {
     /// Records the largest relative bound of the series' error, `error_bound / (kappa l0
     /// max(N_att, 1))`. The bound is a function of the series' state only, so it is
     /// recomputed only when that changed (`error_stale`, or a re-basing of the series inside
@@ -131,138 +87,32 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
     /// ([`super::sum`], module doc), both relative to a count of attached junctions that
     /// may have fallen. In a stick phase the plate may not move far enough to re-base for a
     /// long time, so the series is refreshed in place (a re-base at its own base point,
-    /// [`ExactSeries::refresh_series`], which resets both): at a removal that takes the
+    /// [`SeriesKernel::refresh_series`], which resets both): at a removal that takes the
     /// residue count above the attached count (so the truncation part stays `<= rtol/2`;
     /// amortised, once each time the count halves), and here, once the whole bound passes
     /// `rtol / 2`, unless that did not halve it the last time.
     /// Returns the bound recorded (before a refresh); `last_rel` is the bound after it.
     #[inline]
-    fn track_error(&mut self) -> f64 {
+    fn track_error(&mut self, core: &mut Core<ArrayQueue>) -> f64 {
         self.error_stale = false;
         let scale = self.series.scale();
         let rel = self.series.error_bound() / scale;
         self.last_rel = rel;
         if rel > 0.5 * self.rtol && rel > 2.0 * self.error_floor {
-            self.refresh_series();
+            self.refresh_series(core);
             self.error_floor = self.series.error_bound() / scale;
             self.last_rel = self.error_floor;
         }
-        self.record_error(rel);
+        record_error(core, rel);
         rel
-    }
-
-    /// `series_error = max(series_error, rel)`.
-    #[inline]
-    fn record_error(&mut self, rel: f64) {
-        let e = self.counters.series_error.get_or_insert(0.0);
-        if rel > *e {
-            *e = rel;
-        }
     }
 
     /// Re-bases the series at its own base point: the residue and the round-off allowance
     /// start again from zero. O(bins p^2).
-    fn refresh_series(&mut self) {
+    fn refresh_series(&mut self, core: &mut Core<ArrayQueue>) {
         let base = self.series.base();
         self.series.rebase(base);
-        *self.counters.series_rebases.get_or_insert(0) += 1;
-    }
-
-    fn refresh_clocks(&mut self, fired: Option<usize>) {
-        let rates =
-            [self.formation.kon0 * self.bags.n_detached() as f64, self.kinetics.channel_rate(self.bags.n_attached())];
-        self.channels.set_rates(self.tau, rates, fired, &mut self.rng);
-    }
-
-    /// Reports the piece up to now.
-    fn close_piece<O: Observer>(&mut self, obs: &mut O) {
-        if let Some(mut s) = self.motion.segment(self.tau, &self.frame, &self.plate, &self.series) {
-            s.attached = self.bags.n_attached() as u64;
-            obs.segment(&s);
-        }
-    }
-
-    #[inline]
-    fn emit<O: Observer>(&self, obs: &mut O, kind: EventKind, id: u32, x: f64) {
-        emit(obs, self.frame.time(self.tau), kind, id, x, |x| self.law.tension(x));
-    }
-
-    fn rupture_slot<O: Observer>(&mut self, slot: usize, obs: &mut O) {
-        let last = self.bags.n_attached() - 1;
-        let a = self.bags.take_attached(slot);
-        self.series.remove(a.c, a.bin);
-        if self.series.residue() > self.series.len() as u64 {
-            self.refresh_series();
-        }
-        self.error_stale = true;
-        self.kinetics.detached(slot, last);
-        let x = self.y() - a.c;
-        self.bags.detached.push(Detached { x, t: self.tau, id: a.id });
-        self.counters.ruptures += 1;
-        self.emit(obs, EventKind::Rupture, a.id, x);
-    }
-
-    fn form_one<O: Observer>(&mut self, obs: &mut O) {
-        if self.kinetics.needs_rebase(self.y()) {
-            self.rebase(obs);
-        }
-        let slot = self.rng.random_range(0..self.bags.n_detached());
-        let d = self.bags.take_detached(slot);
-        let x = reattached_extension(self.reattach, self.lambda, &d, self.tau);
-        let y = self.y();
-        let c = y - x;
-        let bin = self.series.add(c);
-        self.bags.attach_in_bin(c, d.id, bin);
-        self.error_stale = true;
-        self.counters.formations += 1;
-        self.emit(obs, EventKind::Formation, d.id, x);
-        let slot = self.bags.n_attached() - 1;
-        if !self.kinetics.attached(slot, c, y) {
-            self.rupture_slot(slot, obs);
-        }
-    }
-
-    fn maybe_rebase<O: Observer>(&mut self, obs: &mut O) {
-        let y = self.y();
-        if REBASE.due(y, self.tau, self.events_since_rebase, self.n, self.kinetics.needs_rebase(y)) {
-            self.rebase(obs);
-        }
-    }
-
-    /// Moves the local origin to the current time and position (at a piece boundary: the
-    /// piece's own origin moves with it).
-    fn rebase<O: Observer>(&mut self, obs: &mut O) {
-        let (dtau, dy) = (self.tau, self.y());
-        self.frame.shift(dtau, dy);
-        self.bags.rebase(dtau, dy);
-        self.channels.shift(dtau);
-        self.series.shift(dy);
-        self.error_stale = true;
-        self.motion.rebase(dtau, dy);
-        self.tau = 0.0;
-        self.events_since_rebase = 0;
-        *self.counters.rebases.get_or_insert(0) += 1;
-        let mut over = self.kinetics.rebuild(&self.bags.attached);
-        over.sort_unstable_by(|a, b| b.cmp(a));
-        for slot in over {
-            self.rupture_slot(slot, obs);
-        }
-    }
-
-    fn after_event<O: Observer>(&mut self, fired: Option<usize>, obs: &mut O) {
-        self.events_since_rebase += 1;
-        *self.counters.events.get_or_insert(0) = self.counters.ruptures + self.counters.formations;
-        self.maybe_rebase(obs);
-        self.motion.open_piece(self.tau, &self.series, &self.frame);
-        self.refresh_clocks(fired);
-    }
-
-    fn check(&self) -> Result<(), EngineError> {
-        let y = self.y();
-        if !y.is_finite() {
-            return Err(EngineError::NonFinite { t: self.time(), quantity: "X", value: y });
-        }
-        Ok(())
+        *core.counters.series_rebases.get_or_insert(0) += 1;
     }
 
     /// Strong bonds: the plate step draws no random numbers, so the junction the due event
@@ -272,21 +122,21 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
     /// after the thinning's uniform when `g < 1`, so both candidates), and the run's
     /// stream is untouched.
     #[inline]
-    fn prefetch_pick(&self, ch: usize) {
+    fn prefetch_pick(core: &Core<ArrayQueue>, ch: usize) {
         match ch {
             FORMATION => {
-                let n = self.bags.n_detached();
+                let n = core.bags.n_detached();
                 if n > 0 {
-                    let mut rng = self.rng.clone();
-                    prefetch(&self.bags.detached[rng.clone().random_range(0..n)]);
+                    let mut rng = core.rng.clone();
+                    prefetch(&core.bags.detached[rng.clone().random_range(0..n)]);
                     rng.uniform();
-                    prefetch(&self.bags.detached[rng.random_range(0..n)]);
+                    prefetch(&core.bags.detached[rng.random_range(0..n)]);
                 }
             }
             _ => {
-                let n = self.bags.n_attached();
+                let n = core.bags.n_attached();
                 if n > 0 {
-                    prefetch(&self.bags.attached[self.rng.clone().random_range(0..n)]);
+                    prefetch(&core.bags.attached[core.rng.clone().random_range(0..n)]);
                 }
             }
         }
@@ -295,135 +145,183 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
     /// One plate step towards `target`; weak bonds thin their rupture candidates over it.
     /// Returns the slot that ruptured inside the step, if one did (the state is then at
     /// the rupture time).
-    fn plate_step(&mut self, target: f64) -> Result<Option<usize>, EngineError> {
-        let rebases = self.counters.series_rebases;
+    fn plate_step(&mut self, core: &mut Core<ArrayQueue>, target: f64) -> Result<Option<usize>, EngineError> {
+        let rebases = core.counters.series_rebases;
         let mut ctx = StepCtx {
             series: &mut self.series,
-            frame: &self.frame,
-            counters: &mut self.counters,
+            frame: &core.frame,
+            counters: &mut core.counters,
             max_spread: self.kinetics.max_spread(),
         };
-        let step: Step = self.motion.step(&mut ctx, self.tau, target)?;
+        let step: Step = self.motion.step(&mut ctx, core.tau, target)?;
         let mut hit = None;
         if K::IS_WEAK {
             let mut cands = 0;
             let motion = &mut self.motion;
             hit = self.kinetics.thin(
-                &mut self.rng,
+                &mut core.rng,
                 (step.s0, step.s1),
                 (step.y_lo, step.y_hi),
-                &self.bags.attached,
+                &core.bags.attached,
                 &self.law,
                 |s| motion.y_at(s),
                 &mut cands,
             )?;
-            *self.counters.candidates.get_or_insert(0) += cands;
+            *core.counters.candidates.get_or_insert(0) += cands;
         }
         let end = hit.map_or(step.s1, |(s, _)| s);
         self.motion.finish(&step, end, &self.series)?;
-        self.tau = end;
-        self.motion.sync_counters(&mut self.counters);
+        core.tau = end;
+        self.motion.sync_counters(&mut core.counters);
         // The series' bound over the step: as it was when the step took its cubic.
-        let series_rel = if self.error_stale || self.counters.series_rebases != rebases {
-            self.track_error()
+        let series_rel = if self.error_stale || core.counters.series_rebases != rebases {
+            self.track_error(core)
         } else {
             self.last_rel
         };
         if step.cubic_error > 0.0 {
-            self.record_error(series_rel + step.cubic_error);
+            record_error(core, series_rel + step.cubic_error);
         }
         Ok(hit.map(|(_, slot)| slot))
     }
 }
 
-impl<K: Kinetics, P: Motion> Engine for ExactSeries<K, P> {
-    const KIND: EngineKind = EngineKind::Exact;
-    const WEAK_BONDS: bool = K::IS_WEAK;
+/// `series_error = max(series_error, rel)`.
+#[inline]
+fn record_error(core: &mut Core<ArrayQueue>, rel: f64) {
+    let e = core.counters.series_error.get_or_insert(0.0);
+    if rel > *e {
+        *e = rel;
+    }
+}
 
-    fn time(&self) -> f64 {
-        self.frame.time(self.tau)
+impl<K: Kinetics, P: Motion> Kernel for SeriesKernel<K, P> {
+    type Queue = ArrayQueue;
+    const IS_WEAK: bool = K::IS_WEAK;
+    const KINEMATIC: bool = P::KINEMATIC;
+
+    fn start(&mut self, core: &mut Core<ArrayQueue>) {
+        for slot in 0..core.bags.n_attached() {
+            let c = core.bags.attached[slot].c;
+            core.bags.attached[slot].bin = self.series.add(c);
+            // Every initial junction is unstretched (x = 0): its rate cannot overflow.
+            self.kinetics.attached(slot, c, 0.0);
+        }
+        self.track_error(core);
+        self.motion.open_piece(0.0, &self.series, &core.frame);
     }
 
-    fn time_step(&self) -> Option<f64> {
-        None
+    #[inline]
+    fn y(&self, core: &Core<ArrayQueue>) -> f64 {
+        self.motion.y(core.tau)
     }
 
-    fn advance<O: Observer>(&mut self, t_stop: f64, obs: &mut O) -> Result<(), EngineError> {
-        loop {
-            // In the local frame, which a re-basing inside this loop moves.
-            let tau_stop = self.frame.local(t_stop).max(self.tau);
-            let (ch, t_next) = self.channels.first();
-            let target = t_next.min(tau_stop);
-            // A NaN time is never due (it would stop the loop, not spin it).
-            let due = t_next <= tau_stop;
-            if self.tau < target {
-                if !K::IS_WEAK && due {
-                    self.prefetch_pick(ch);
-                }
-                if let Some(slot) = self.plate_step(target)? {
-                    self.check()?;
-                    self.close_piece(obs);
-                    self.rupture_slot(slot, obs);
-                    self.after_event(None, obs);
-                    continue;
-                }
-                if self.tau < target {
-                    continue;
-                }
+    #[inline]
+    fn velocity(&self, core: &Core<ArrayQueue>) -> f64 {
+        self.motion.velocity(&self.series, &core.frame, core.tau)
+    }
+
+    #[inline]
+    fn lag(&self, core: &Core<ArrayQueue>) -> f64 {
+        self.motion.lag(core.tau, &core.frame)
+    }
+
+    fn bond_force(&self, core: &Core<ArrayQueue>) -> f64 {
+        self.series.force(self.y(core))
+    }
+
+    /// Plate steps towards `target` (weak bonds: thinned; a rupture inside a step ends it).
+    #[inline]
+    fn step<O: Observer>(
+        &mut self,
+        core: &mut Core<ArrayQueue>,
+        to: Target,
+        _obs: &mut O,
+    ) -> Result<Moved, EngineError> {
+        let target = to.tau;
+        if core.tau < target {
+            if !K::IS_WEAK && to.due {
+                Self::prefetch_pick(core, to.ch);
             }
-            self.check()?;
-            if !due {
-                self.close_piece(obs);
-                self.maybe_rebase(obs);
-                self.motion.open_piece(self.tau, &self.series, &self.frame);
-                return Ok(());
+            if let Some(slot) = self.plate_step(core, target)? {
+                core.finite("X", self.y(core))?;
+                return Ok(Moved::Ruptured(slot));
             }
-            *self.counters.candidates.get_or_insert(0) += 1;
-            match ch {
-                FORMATION => {
-                    let g = self.formation.g(self.motion.velocity(&self.series, &self.frame, self.tau));
-                    if g >= 1.0 || self.rng.uniform() < g {
-                        self.close_piece(obs);
-                        self.form_one(obs);
-                        self.after_event(Some(FORMATION), obs);
-                    } else {
-                        self.channels.redraw(FORMATION, self.tau, &mut self.rng);
-                    }
-                }
-                _ => {
-                    self.close_piece(obs);
-                    let slot = self.rng.random_range(0..self.bags.n_attached());
-                    self.rupture_slot(slot, obs);
-                    self.after_event(Some(RUPTURE), obs);
-                }
+            if core.tau < target {
+                return Ok(Moved::Short);
             }
         }
+        core.finite("X", self.y(core))?;
+        Ok(Moved::There)
     }
 
-    fn sample(&self) -> Sample {
-        let y = self.y();
-        let fb = self.series.force(y);
-        let friction = if P::KINEMATIC { fb } else { -self.plate.k * self.motion.lag(self.tau, &self.frame) };
-        Sample {
-            t: self.time(),
-            x: self.frame.position(y),
-            v: self.motion.velocity(&self.series, &self.frame, self.tau),
-            friction,
-            bond_force: fb,
-            attached: self.bags.n_attached() as u64,
-            n: self.n as u64,
+    /// Reports the piece up to now (the plate is there already).
+    #[inline]
+    fn close<O: Observer>(&mut self, core: &mut Core<ArrayQueue>, _t: f64, obs: &mut O) -> Result<(), EngineError> {
+        if let Some(mut s) = self.motion.segment(core.tau, &core.frame, &core.plate, &self.series) {
+            s.attached = core.bags.n_attached() as u64;
+            obs.segment(&s);
         }
+        Ok(())
     }
 
-    fn counters(&self) -> Counters {
-        self.counters.clone()
+    #[inline]
+    fn open_piece(&mut self, core: &mut Core<ArrayQueue>) {
+        self.motion.open_piece(core.tau, &self.series, &core.frame);
+    }
+
+    #[inline]
+    fn shifted(&mut self, _core: &Core<ArrayQueue>, dtau: f64, dy: f64) {
+        self.series.shift(dy);
+        self.error_stale = true;
+        self.motion.rebase(dtau, dy);
+    }
+
+    #[inline]
+    fn tension(&self, x: f64) -> f64 {
+        self.law.tension(x)
+    }
+
+    #[inline]
+    fn rupture_plan(&mut self, core: &Core<ArrayQueue>) -> (f64, f64) {
+        (self.kinetics.channel_rate(core.bags.n_attached()), f64::INFINITY)
+    }
+
+    #[inline]
+    fn bin(&mut self, _core: &mut Core<ArrayQueue>, c: f64) -> u32 {
+        self.error_stale = true;
+        self.series.add(c)
+    }
+
+    #[inline]
+    fn attached(&mut self, slot: usize, c: f64, _x: f64, y: f64) -> bool {
+        self.kinetics.attached(slot, c, y)
+    }
+
+    #[inline]
+    fn detached(&mut self, core: &mut Core<ArrayQueue>, slot: usize, last: usize, a: &Attached) {
+        self.series.remove(a.c, a.bin);
+        if self.series.residue() > self.series.len() as u64 {
+            self.refresh_series(core);
+        }
+        self.error_stale = true;
+        self.kinetics.detached(slot, last);
+    }
+
+    #[inline]
+    fn forced_rebase(&self, core: &Core<ArrayQueue>) -> bool {
+        self.kinetics.needs_rebase(self.y(core))
+    }
+
+    fn rebuild(&mut self, attached: &[Attached]) -> Vec<usize> {
+        self.kinetics.rebuild(attached)
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::ExactSeries;
-    use crate::engine::exact::series::{DrivenPlate, StrongKinetics};
+    use crate::engine::exact::core::junctions::rupture;
+    use crate::engine::exact::series::{DrivenPlate, ExactSeries, StrongKinetics};
     use crate::observe::Nothing;
     use crate::physics::{ForceLaw, Tilted};
     use crate::test_scenes::fig1_with;
@@ -446,25 +344,26 @@ mod tests {
         let mut e =
             ExactSeries::new(&s, Tilted::from_scene(&s), StrongKinetics { k0: s.junctions.k0 }, DrivenPlate::new(0.0))
                 .unwrap();
-        let base = e.series.base();
-        e.series.rebase(base);
-        let rebases0 = e.counters.series_rebases.unwrap();
-        let (kl0, rtol) = (e.law.kappa * e.law.l0, e.rtol);
+        let (core, k) = (&mut e.core, &mut e.kernel);
+        let base = k.series.base();
+        k.series.rebase(base);
+        let rebases0 = core.counters.series_rebases.unwrap();
+        let (kl0, rtol) = (k.law.kappa * k.law.l0, k.rtol);
         // Spread the anchors over several bins, as a moving plate would have.
         let y = 0.05;
-        while e.bags.n_attached() > 1 {
-            e.rupture_slot(e.bags.n_attached() - 1, &mut Nothing);
-            let n = e.bags.n_attached();
-            assert!(e.series.residue() <= n as u64, "residue {} above {n} attached", e.series.residue());
-            let rel = e.series.error_bound() / (kl0 * n.max(1) as f64);
+        while core.bags.n_attached() > 1 {
+            rupture(core, k, core.bags.n_attached() - 1, &mut Nothing);
+            let n = core.bags.n_attached();
+            assert!(k.series.residue() <= n as u64, "residue {} above {n} attached", k.series.residue());
+            let rel = k.series.error_bound() / (kl0 * n.max(1) as f64);
             assert!(rel <= 0.5 * rtol * (1.0 + 1e-3), "relative bound {rel} at {n} attached, rtol {rtol}");
             if n % 97 == 0 {
-                let direct: f64 = e.bags.attached[..n].iter().map(|a| e.law.force_x(y - a.c)).sum();
-                let err = (e.series.force(y) - direct).abs();
-                assert!(err <= e.series.error_bound() + 1e-12 * kl0, "series off by {err} at {n} attached");
+                let direct: f64 = core.bags.attached[..n].iter().map(|a| k.law.force_x(y - a.c)).sum();
+                let err = (k.series.force(y) - direct).abs();
+                assert!(err <= k.series.error_bound() + 1e-12 * kl0, "series off by {err} at {n} attached");
             }
         }
-        let refreshes = e.counters.series_rebases.unwrap() - rebases0;
+        let refreshes = core.counters.series_rebases.unwrap() - rebases0;
         assert!((10..=14).contains(&refreshes), "{refreshes} refreshes for 4095 ruptures from 4096");
     }
 }

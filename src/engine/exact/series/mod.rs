@@ -10,7 +10,8 @@
 //! tolerance are the engine's approximations; both are reported in `summary.json`
 //! (docs/engines.md, "Plate between events (tilted law): a series and a stiff integrator").
 //!
-//! Layout: `engine` (event loop, bookkeeping), `motion` (the plate), `kinetics` (ruptures).
+//! Layout: `engine` (the kernel of the exact core: the series, its error bound, the plate
+//! step with thinning), `motion` (the plate), `kinetics` (ruptures), `sum` (the series).
 
 mod engine;
 pub mod kinetics;
@@ -18,7 +19,7 @@ pub mod motion;
 pub mod sum;
 
 pub(crate) use crate::ode::{RosenbrockConfig, RosenbrockN, StiffSystem};
-pub use engine::ExactSeries;
+pub use engine::{ExactSeries, SeriesKernel};
 pub use kinetics::{Kinetics, StrongKinetics, WeakKinetics};
 pub use motion::{DrivenPlate, Motion, RosenbrockPlate};
 pub use sum::{LocalCubic, SeriesSum, tilted_taylor};

@@ -1,12 +1,8 @@
-//! The parts every exact engine ([`ExactLinear`](super::ExactLinear),
-//! [`ExactSeries`](super::series::ExactSeries), [`ExactDirect`](super::ExactDirect)) shares,
-//! written once: the frame's re-base policy ([`REBASE`]), re-attachment
-//! ([`reattached_extension`]) and event emission ([`emit`]). Each is `#[inline]` and
-//! generic, so an engine compiles to what it would be with the code written into it. The
-//! junctions ([`Bags`](super::bags::Bags)), the channel clocks ([`super::clocks`]) and the
-//! frame ([`super::frame`]) are shared types of their own.
+//! Small rules every exact engine follows: when the frame is re-based ([`REBASE`]), the
+//! extension of a re-formed junction ([`reattached_extension`]) and how an event is
+//! reported ([`emit`]).
 
-use super::bags::Detached;
+use super::super::bags::Detached;
 use crate::observe::{EventKind, JunctionEvent, Observer};
 use crate::scene::Reattach;
 
