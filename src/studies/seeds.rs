@@ -184,9 +184,8 @@ mod tests {
 
     #[test]
     fn derived_seeds_are_those_of_the_documented_results() {
-        // Computed with the two mixers this module replaced (`studies/seeds.rs::mix` and
-        // `compare/seeds.rs::splitmix64`, commit 5737812): the published sweeps and studies
-        // keep their seeds. docs/figures/fig2-sweep/sweep.json lists seeds[13][3].
+        // Computed with the two mixers this module replaced (the sweep's `mix` and the
+        // comparison's `splitmix64`): the published sweeps and studies keep their seeds. docs/figures/fig2-sweep/sweep.json lists seeds[13][3].
         let fig2 = derive_all(1, 14, 4, |_| SeedRange::Full);
         assert_eq!(fig2[13][3], 4_231_203_880_505_546_300);
         assert_eq!(SeedRange::ParkMiller.map(hash(5, 2, 1)), 1_761_769_255);
