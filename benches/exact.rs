@@ -1,5 +1,5 @@
-//! Exact engine throughput: events per second at N = 1e3, 1e5, 1e6 for strong and weak
-//! bonds (linear law and the letter's tilted law), and the event-queue comparison
+//! Exact engine throughput: events per second at N = 1e3, 1e5, 1e6 (and 1e7 for the linear
+//! law) for strong and weak bonds (linear law and the letter's tilted law), and the event-queue comparison
 //! (hand-written scan vs the `priority-queue` crate). Run: `cargo bench --bench exact`
 //! (`-- linear` or `-- tilted` for one law).
 
@@ -89,7 +89,7 @@ fn bench_scene(c: &mut Criterion, group: &str, n: usize, scene: &stickslip::Scen
 }
 
 fn sizes(c: &mut Criterion) {
-    for n in [1_000, 100_000, 1_000_000] {
+    for n in [1_000, 100_000, 1_000_000, 10_000_000] {
         let s = scaled_linear(n, "strong");
         bench_engine(c, "exact/strong-linear", n, || strong_linear::<ArrayQueue>(&s));
         let s = scaled_linear(n, "weak");

@@ -201,7 +201,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
             return self.close_kinematic(tau1, obs);
         }
         let h = (tau1 - self.piece.tau0).max(0.0);
-        let (y1, v1, ints) = self.piece.traj.at_with_integrals(h, self.plate.v);
+        let (y1, v1, ints) = self.piece.traj.at_maybe_integrals(h, self.plate.v, O::SEGMENTS);
         self.report_piece(tau1, y1, v1, ints, obs);
         (y1, v1)
     }
@@ -419,7 +419,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Engine for ExactLinear<R,
                 FORMATION => {
                     // The state (and, if accepted, the piece's integrals) at the candidate.
                     let h = t_next - self.piece.tau0;
-                    let (y, v, ints) = self.piece.traj.at_with_integrals(h, self.plate.v);
+                    let (y, v, ints) = self.piece.traj.at_maybe_integrals(h, self.plate.v, O::SEGMENTS);
                     let g = self.formation.g(v);
                     if g >= 1.0 || self.rng.uniform() < g {
                         self.report_piece(t_next, y, v, ints, obs);
