@@ -11,8 +11,8 @@
 //!
 //! Rows per `N` (1e3, 1e6, 1e7), all in events per second (criterion's throughput):
 //! `peer/rebop-two-state/N`, `peer/strong-linear/N` and `peer/weak-linear/N`
-//! (`testkit::scaled_linear`, the scene of `benches/exact.rs`, warm-up to `t = 20`, then
-//! `1e6 / N` time units per iteration, about 1e5 events). After each `N` the bench prints the
+//! (`testkit::scaled_linear`, the scene of `benches/exact.rs`, one engine per row warmed up
+//! to `t = 20`, then `1e6 / N` time units per iteration, about 1e5 events). After each `N` the bench prints the
 //! median events per second of each row over its samples, and the engine's ratio to the
 //! peer.
 //!
@@ -95,11 +95,12 @@ fn rebop_row(c: &mut Criterion, n: usize, k0: f64, kon: f64) {
     let mut g = c.benchmark_group("peer");
     g.sample_size(10).measurement_time(Duration::from_secs(6)).warm_up_time(Duration::from_secs(1));
     g.throughput(Throughput::Elements(per_span));
+    // One system (and below, one engine) per row, warmed up once: the samples continue it.
+    let mut s = two_state(n, k0, kon, 2);
+    s.advance_until(WARM);
+    let mut t = WARM;
     g.bench_function(BenchmarkId::new("rebop-two-state", n), |b| {
         b.iter_custom(|iters| {
-            let mut s = two_state(n, k0, kon, 2);
-            s.advance_until(WARM);
-            let mut t = WARM;
             let start = Instant::now();
             for _ in 0..iters {
                 t += span(n);
@@ -114,7 +115,7 @@ fn rebop_row(c: &mut Criterion, n: usize, k0: f64, kon: f64) {
     g.finish();
 }
 
-fn engine_row<E: Engine>(c: &mut Criterion, name: &str, n: usize, mut make: impl FnMut() -> E) {
+fn engine_row<E: Engine>(c: &mut Criterion, name: &str, n: usize, make: impl Fn() -> E) {
     let mut pilot = make();
     pilot.advance(WARM, &mut Nothing).unwrap();
     let before = pilot.counters().events.unwrap();
@@ -125,12 +126,12 @@ fn engine_row<E: Engine>(c: &mut Criterion, name: &str, n: usize, mut make: impl
     let mut g = c.benchmark_group("peer");
     g.sample_size(10).measurement_time(Duration::from_secs(6)).warm_up_time(Duration::from_secs(1));
     g.throughput(Throughput::Elements(per_span));
+    let mut e = make();
+    e.advance(WARM, &mut Nothing).unwrap();
+    let mut t = WARM;
     g.bench_function(BenchmarkId::new(name, n), |b| {
         b.iter_custom(|iters| {
-            let mut e = make();
-            e.advance(WARM, &mut Nothing).unwrap();
             let before = e.counters().events.unwrap();
-            let mut t = WARM;
             let start = Instant::now();
             for _ in 0..iters {
                 t += span(n);

@@ -46,7 +46,7 @@ impl RebasePolicy {
 #[inline]
 pub fn reattached_extension(reattach: Reattach, lambda: f64, d: &Detached, tau: f64) -> f64 {
     match reattach {
-        Reattach::Residual => d.x * (-lambda * (tau - d.t)).exp(),
+        Reattach::Residual => d.x * super::fastexp::exp(-lambda * (tau - d.t)),
         Reattach::Unstretched => 0.0,
     }
 }

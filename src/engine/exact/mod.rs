@@ -19,6 +19,7 @@ pub mod bags;
 pub mod clocks;
 pub mod core;
 pub mod direct;
+pub mod fastexp;
 pub mod frame;
 pub mod linear;
 pub mod motion;

@@ -19,6 +19,7 @@
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
 use super::bags::Attached;
+use super::fastexp::exp;
 use super::motion::PlatePath;
 use super::pick::Pick;
 use super::sumtree::SumTree2;
@@ -172,7 +173,7 @@ impl WeakRupture {
     }
     #[inline]
     fn weights(&self, c: f64) -> [f64; 2] {
-        let e = (self.a * c).exp();
+        let e = exp(self.a * c);
         [1.0 / e, e]
     }
     /// Sets the bounds of the horizon.
@@ -180,8 +181,8 @@ impl WeakRupture {
     fn set_bounds(&mut self, y_lo: f64, y_hi: f64) {
         self.y_lo = y_lo;
         self.y_hi = y_hi;
-        self.e_hi = (self.a * y_hi).exp();
-        self.e_lo = (-self.a * y_lo).exp();
+        self.e_hi = exp(self.a * y_hi);
+        self.e_lo = exp(-self.a * y_lo);
     }
     /// `exp(a y_hi) W-` and `exp(-a y_lo) W+`.
     #[inline]
@@ -297,7 +298,7 @@ impl RuptureModel for WeakRupture {
         // junction, one exponential): exp(a(y-c)) = exp(a y) w0, exp(a(c-y)) = w1 / exp(a y).
         // All factors stay finite: |a y| <= FRAME_EXPONENT_LIMIT and |a c| <= EXPONENT_CAP.
         let w = self.tree.get(slot);
-        let ey = (self.a * y).exp();
+        let ey = exp(self.a * y);
         let r = (ey * w[0]).max(w[1] / ey);
         let b = self.e_hi * w[0] + self.e_lo * w[1];
         (rng.uniform() * b < r).then_some(slot)
@@ -309,7 +310,7 @@ impl RuptureModel for WeakRupture {
             if a * j.c.abs() > cap {
                 [0.0; 2]
             } else {
-                let e = (a * j.c).exp();
+                let e = exp(a * j.c);
                 [1.0 / e, e]
             }
         }));
