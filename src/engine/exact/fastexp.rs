@@ -101,9 +101,12 @@ const LIMIT: f64 = 708.0;
 /// `exp(z)`, within one unit in the last place (see the module documentation).
 #[inline(always)]
 pub fn exp(z: f64) -> f64 {
-    if !(z.abs() <= LIMIT) {
-        return z.exp();
-    }
+    if z.abs() <= LIMIT { table_exp(z) } else { z.exp() }
+}
+
+/// The table path of [`exp`], for `|z| <= 708`.
+#[inline(always)]
+fn table_exp(z: f64) -> f64 {
     let kd = z * INV_LN2_64 + SHIFT - SHIFT;
     let r = (z - kd * LN2_64_HI) - kd * LN2_64_LO;
     let k = kd as i64;
