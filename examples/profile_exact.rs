@@ -7,6 +7,7 @@
 //! cargo build --profile perf --example profile_exact
 //! target/perf/examples/profile_exact strong 1000000 100          # engine alone
 //! target/perf/examples/profile_exact weak 1000000 50 --stats     # with the run's statistics
+//! /usr/bin/time -v target/perf/examples/profile_exact strong 100000000 1   # N = 1e8 (about 4 GB)
 //! valgrind --tool=callgrind target/perf/examples/profile_exact strong 1000000 10
 //! ```
 
@@ -18,9 +19,12 @@ use stickslip_testkit::scaled_linear;
 
 const USAGE: &str = "usage: profile_exact strong|weak N SPAN [--stats]";
 
-/// Warm-up to `t = 20`, then `span` more: `(events, seconds)` of the second part.
+/// Warm-up to `t = 20`, then `span` more: `(events, seconds)` of the second part. Prints
+/// the warm-up's wall time.
 fn time<E: Engine, O: Observer>(mut engine: E, obs: &mut O, span: f64) -> (u64, f64) {
+    let warm = std::time::Instant::now();
     engine.advance(20.0, obs).expect("warm-up runs");
+    eprintln!("warm-up to t = 20: {:.2} s", warm.elapsed().as_secs_f64());
     let before = engine.counters().events.expect("the exact engine counts events");
     let start = std::time::Instant::now();
     engine.advance(20.0 + span, obs).expect("the run finishes");
@@ -45,11 +49,29 @@ fn main() {
     };
     let stats = args.iter().any(|a| a == "--stats");
     let scene = scaled_linear(n, bond);
+    // Set-up: the engine built (junction buffers and the initial state drawn).
+    let setup = std::time::Instant::now();
     let (events, seconds) = match (bond, stats) {
-        ("strong", false) => time(strong_linear::<ArrayQueue>(&scene), &mut Nothing, span),
-        ("strong", true) => time(strong_linear::<ArrayQueue>(&scene), &mut core_observers(&scene), span),
-        (_, false) => time(weak_linear::<ArrayQueue>(&scene), &mut Nothing, span),
-        (_, true) => time(weak_linear::<ArrayQueue>(&scene), &mut core_observers(&scene), span),
+        ("strong", false) => {
+            let e = strong_linear::<ArrayQueue>(&scene);
+            eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
+            time(e, &mut Nothing, span)
+        }
+        ("strong", true) => {
+            let e = strong_linear::<ArrayQueue>(&scene);
+            eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
+            time(e, &mut core_observers(&scene), span)
+        }
+        (_, false) => {
+            let e = weak_linear::<ArrayQueue>(&scene);
+            eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
+            time(e, &mut Nothing, span)
+        }
+        (_, true) => {
+            let e = weak_linear::<ArrayQueue>(&scene);
+            eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
+            time(e, &mut core_observers(&scene), span)
+        }
     };
     println!("{bond} N = {n}: {events} events in {seconds:.3} s = {:.3} M events/s", events as f64 / seconds / 1e6);
 }

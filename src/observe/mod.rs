@@ -98,6 +98,10 @@ pub trait Observer {
     /// Whether this observer wants [`JunctionEvent`]s. Engines test this constant, so the
     /// event path costs nothing when it is `false`.
     const EVENTS: bool = false;
+    /// Whether this observer reads [`Segment`]s. Engines may skip computing a segment's
+    /// time integrals when it is `false` (and still call [`Observer::segment`], with
+    /// integrals that are not meaningful).
+    const SEGMENTS: bool = true;
     /// A junction ruptured or formed. Only called when `EVENTS` is true.
     #[inline]
     fn event(&mut self, _e: &JunctionEvent) {}
@@ -111,10 +115,13 @@ pub trait Observer {
 /// Observes nothing.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Nothing;
-impl Observer for Nothing {}
+impl Observer for Nothing {
+    const SEGMENTS: bool = false;
+}
 
 impl<A: Observer, B: Observer> Observer for (A, B) {
     const EVENTS: bool = A::EVENTS || B::EVENTS;
+    const SEGMENTS: bool = A::SEGMENTS || B::SEGMENTS;
     #[inline]
     fn event(&mut self, e: &JunctionEvent) {
         if A::EVENTS {
@@ -137,6 +144,7 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
 
 impl<A: Observer> Observer for Option<A> {
     const EVENTS: bool = A::EVENTS;
+    const SEGMENTS: bool = A::SEGMENTS;
     #[inline]
     fn event(&mut self, e: &JunctionEvent) {
         if let Some(a) = self {
@@ -158,6 +166,7 @@ impl<A: Observer> Observer for Option<A> {
 
 impl<A: Observer + ?Sized> Observer for &mut A {
     const EVENTS: bool = A::EVENTS;
+    const SEGMENTS: bool = A::SEGMENTS;
     #[inline]
     fn event(&mut self, e: &JunctionEvent) {
         (**self).event(e)

@@ -77,9 +77,10 @@ impl<Q: ChannelQueue> Channels<Q> {
     }
     /// Sets the rates of channels `0..R` at `now`. Pending times are rescaled; channel
     /// `fired`, and any channel coming back from rate 0, draws a fresh exponential.
-    #[inline]
+    /// Always inlined: it runs after every event, and a call costs a tenth of it.
+    #[inline(always)]
     pub fn set_rates<const R: usize>(&mut self, now: f64, rates: [f64; R], fired: Option<usize>, rng: &mut Pcg64) {
-        let clocks = &mut self.clocks[..R];
+        let clocks: &mut [Clock; R] = (&mut self.clocks[..R]).try_into().expect("R channels");
         for (ch, (clock, rate)) in clocks.iter_mut().zip(rates).enumerate() {
             let fresh = if fired == Some(ch) {
                 clock.rate = rate;

@@ -73,17 +73,35 @@ impl SumTree2 {
     pub fn get(&self, slot: usize) -> [f64; 2] {
         self.lines[self.first_bottom + slot / ARITY].0[slot % ARITY]
     }
+    /// The line of `node`, unchecked.
+    ///
+    /// # Safety
+    /// `node < self.lines.len()`.
+    #[inline(always)]
+    unsafe fn line(&self, node: usize) -> &Line {
+        debug_assert!(node < self.lines.len());
+        // SAFETY: the caller's contract.
+        unsafe { self.lines.get_unchecked(node) }
+    }
     /// Sets the weights of `slot` and updates its ancestors.
     #[inline]
     pub fn set(&mut self, slot: usize, w: [f64; 2]) {
         assert!(slot < self.cap, "SumTree2::set: slot {slot} beyond capacity {}", self.cap);
         let mut node = self.first_bottom + slot / ARITY;
         self.lines[node].0[slot % ARITY] = w;
+        // Every ancestor of a node below the end is below it too (parents have smaller
+        // indices), so after the checked write above the walk needs no checks (a tenth of
+        // a weak-bond event's instructions went to them).
+        let lines = self.lines.as_mut_ptr();
         while node > 0 {
-            let sum = self.lines[node].sum();
             let child = (node - 1) % ARITY;
-            node = (node - 1) / ARITY;
-            self.lines[node].0[child] = sum;
+            let parent = (node - 1) / ARITY;
+            // SAFETY: parent < node < lines.len(), both inside the buffer.
+            unsafe {
+                let sum = (*lines.add(node)).sum();
+                (*lines.add(parent)).0[child] = sum;
+            }
+            node = parent;
         }
     }
     /// Sum of all weights, per component.
@@ -97,18 +115,28 @@ impl SumTree2 {
     /// at or beyond the total by round-off lands on the last non-empty child).
     #[inline]
     pub fn find(&self, k: usize, mut u: f64) -> usize {
+        // Every child of a node above the bottom level is in the tree (true by construction;
+        // checked once here so that a tree read from a damaged checkpoint cannot make the
+        // unchecked reads below leave the buffer).
+        assert!(ARITY * self.first_bottom < self.lines.len(), "SumTree2: inconsistent shape");
         let mut node = 0;
         loop {
             // The next line is one of this node's four children (256 contiguous bytes):
             // requesting all four now starts the next miss before this node's choice is
             // known (whole runs at N = 1e6 with weak bonds: 14% faster, docs/performance.md).
             let first = ARITY * node + 1;
-            if first < self.lines.len() {
-                for g in &self.lines[first..first + ARITY] {
-                    super::pick::prefetch(g);
+            if node < self.first_bottom {
+                // SAFETY: a node above the bottom level has its four children in the tree.
+                unsafe {
+                    for i in 0..ARITY {
+                        super::pick::prefetch(self.line(first + i));
+                    }
                 }
             }
-            let c = &self.lines[node].0;
+            // SAFETY: the descent starts at the root and goes to a child only from a node
+            // above the bottom level (checked below), whose children are in the tree (the
+            // assertion above), so `node` is always in the tree.
+            let c = unsafe { &self.line(node).0 };
             let (w0, w1, w2, w3) = (c[0][k], c[1][k], c[2][k], c[3][k]);
             // Move past child j when u reaches its sum and a later child has weight.
             let mut j = 0;

@@ -257,7 +257,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
             return Ok(true);
         }
         let h = t - self.piece.tau0;
-        let (y, v, ints) = self.piece.traj.at_with_integrals(h, core.plate.v);
+        let (y, v, ints) = self.piece.traj.at_maybe_integrals(h, core.plate.v, O::SEGMENTS);
         if core.accepts_formation(v) {
             self.report_piece(core, t, y, v, ints, obs);
             self.check(core)?;
@@ -273,7 +273,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
             self.close_kinematic(core, t, obs);
         } else {
             let h = (t - self.piece.tau0).max(0.0);
-            let (y1, v1, ints) = self.piece.traj.at_with_integrals(h, core.plate.v);
+            let (y1, v1, ints) = self.piece.traj.at_maybe_integrals(h, core.plate.v, O::SEGMENTS);
             self.report_piece(core, t, y1, v1, ints, obs);
         }
         self.check(core)

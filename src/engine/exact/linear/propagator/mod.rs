@@ -141,7 +141,13 @@ pub struct Trajectory {
     /// `f0 = a - k y0`: the forcing seen by `u = y - y0`.
     f0: f64,
     b: f64,
-    /// Branch coefficients.
+}
+
+/// A trajectory's coefficients in its plate's branch, derived from `(v0, f0, b)` when an
+/// evaluation leaves the Taylor range ([`Trajectory::coefs`]): the engine's events are so
+/// close at large N that most pieces never need them, so a restart does not compute them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Coefs {
     /// Slow + fast: `[sigma, g0, g1, c_f]` with `u = S + c_f e^{r_f tau}`,
     /// `S = sigma phi0 + g0 tau phi1 + g1 tau^2 phi2`.
     /// Clustered: `[c0, c1, e1, e2]` with `u = c0 + c1 tau + e1 u1 + e2 u2`.
@@ -213,29 +219,31 @@ fn hilbert_square(a: &[f64], h: f64, off: usize) -> f64 {
 /// bounds and table indices become constants).
 #[inline]
 fn hilbert_tail(a: &[f64], h: f64) -> f64 {
-    #[inline(always)]
-    fn fixed<const L: usize>(a: &[f64], h: f64) -> f64 {
-        let a: &[f64; L] = a.try_into().expect("length checked by the caller");
-        let mut acc = 0.0;
-        let mut i = 1;
-        while i < L {
-            let mut cross = 0.0;
-            let mut j = i + 1;
-            while j < L {
-                cross += a[j] * RECIP[i + j + 1];
-                j += 1;
-            }
-            acc += a[i] * (a[i] * RECIP[2 * i + 1] + 2.0 * cross);
-            i += 1;
-        }
-        (acc * h).max(0.0)
-    }
     match a.len() {
-        6 => fixed::<6>(a, h),
-        8 => fixed::<8>(a, h),
-        10 => fixed::<10>(a, h),
+        6 => hilbert_fixed::<6>(a.try_into().expect("length checked"), h),
+        8 => hilbert_fixed::<8>(a.try_into().expect("length checked"), h),
+        10 => hilbert_fixed::<10>(a.try_into().expect("length checked"), h),
         _ => hilbert_square(&a[1..], h, 1),
     }
+}
+
+/// [`hilbert_tail`] for `L` terms (`a[0]` not read), a constant length: the loops unroll,
+/// and a caller with the terms in registers keeps them there.
+#[inline(always)]
+fn hilbert_fixed<const L: usize>(a: &[f64; L], h: f64) -> f64 {
+    let mut acc = 0.0;
+    let mut i = 1;
+    while i < L {
+        let mut cross = 0.0;
+        let mut j = i + 1;
+        while j < L {
+            cross += a[j] * RECIP[i + j + 1];
+            j += 1;
+        }
+        acc += a[i] * (a[i] * RECIP[2 * i + 1] + 2.0 * cross);
+        i += 1;
+    }
+    (acc * h).max(0.0)
 }
 
 impl LinearPlate {
@@ -325,7 +333,7 @@ impl LinearPlate {
     /// For `M = 0`, `v0` is ignored (the velocity is `(a + b tau - k y)/eta`).
     #[inline]
     pub fn trajectory(&self, y0: f64, v0: f64, a: f64, b: f64) -> Trajectory {
-        let mut t = Trajectory { plate: *self, y0, v0, f0: 0.0, b, c: [0.0; 4], d: [0.0; 2] };
+        let mut t = Trajectory { plate: *self, y0, v0, f0: 0.0, b };
         t.restart(self, y0, v0, a, b);
         t
     }
@@ -341,16 +349,22 @@ impl Trajectory {
         let f0 = a - p.k * y0;
         self.plate = *p;
         self.y0 = y0;
-        self.v0 = v0;
+        // M = 0: the velocity follows from the forces, (a - k y0) / eta.
+        self.v0 = if p.branch == Branch::FirstOrder { f0 * p.inv_mu } else { v0 };
         self.f0 = f0;
         self.b = b;
+    }
+
+    /// The branch coefficients of this trajectory (the same numbers whenever asked).
+    #[inline]
+    fn coefs(&self) -> Coefs {
+        let p = &self.plate;
+        let (v0, f0, b) = (self.v0, self.f0, self.b);
         match p.branch {
             Branch::FirstOrder => {
-                let g0 = f0 * p.inv_mu;
+                let g0 = v0;
                 let g1 = b * p.inv_mu;
-                self.v0 = g0;
-                self.c = [0.0, g0, g1, 0.0];
-                self.d = [g0, 0.0];
+                Coefs { c: [0.0, g0, g1, 0.0], d: [g0, 0.0] }
             }
             Branch::Separated => {
                 // (D - r_s) u = g0 + g1 tau + (v0 - g0) e^{r_f tau}.
@@ -358,16 +372,14 @@ impl Trajectory {
                 let g0 = (f0 - p.mass * g1) * p.inv_mu;
                 let cf = -(v0 - g0) * p.m_over_sq;
                 let sigma = -cf;
-                self.c = [sigma, g0, g1, cf];
-                self.d = [p.r_s * sigma + g0, p.r_f * cf];
+                Coefs { c: [sigma, g0, g1, cf], d: [p.r_s * sigma + g0, p.r_f * cf] }
             }
             Branch::Clustered => {
                 let c1 = b * p.inv_k;
                 let c0 = (f0 - p.eta * c1) * p.inv_k;
                 let e1 = -c0;
                 let e2 = (v0 - c1) - p.m * e1;
-                self.c = [c0, c1, e1, e2];
-                self.d = [e1 * p.m + e2, e1 * p.q + e2 * p.m];
+                Coefs { c: [c0, c1, e1, e2], d: [e1 * p.m + e2, e1 * p.q + e2 * p.m] }
             }
         }
     }
@@ -449,6 +461,15 @@ impl Trajectory {
     /// arithmetic runs with and without `KEEP`, so `u, u'` agree bit for bit.
     #[inline(always)]
     fn taylor<const KEEP: bool>(&self, tau: f64, ser: &mut Series) -> (f64, f64, f64) {
+        let (u, du, i1, _) = self.taylor_head::<KEEP>(tau, ser);
+        (u, du, i1)
+    }
+
+    /// [`Trajectory::taylor`], and `Some(t_1 .. t_5)` when the sum stopped after them (the
+    /// common case at large N), in which case `ser` was not written: the caller has the
+    /// terms in registers.
+    #[inline(always)]
+    fn taylor_head<const KEEP: bool>(&self, tau: f64, ser: &mut Series) -> (f64, f64, f64, Option<[f64; 5]>) {
         let p = &self.plate;
         let inv_tau = 1.0 / tau;
         let aa = p.eta_m * tau;
@@ -470,12 +491,13 @@ impl Trajectory {
         } else {
             0.0
         };
-        if KEEP {
-            ser.set_head([0.0, t1, t2, t3, t4, t5]);
-        }
         let c1 = (aa * RECIP[6]) * t5.abs() + (bb * RECIP2[6]) * t4.abs();
         let c2 = (aa * RECIP[7]) * c1 + (bb * RECIP2[7]) * t5.abs();
-        if 4.0 * 8.0 * (c1 + c2) > TAIL * dabs {
+        let long = 4.0 * 8.0 * (c1 + c2) > TAIL * dabs;
+        if long {
+            if KEEP {
+                ser.set_head([0.0, t1, t2, t3, t4, t5]);
+            }
             let (mut tm1, mut tm2) = (t5, t4);
             let mut n = 6;
             while n + 1 < NT {
@@ -503,7 +525,7 @@ impl Trajectory {
                 tm1 = tn1;
             }
         }
-        (t1 + u, self.v0 + du * inv_tau, i1)
+        (t1 + u, self.v0 + du * inv_tau, i1, (!long).then_some([t1, t2, t3, t4, t5]))
     }
 
     /// `(u, u')` at `tau > 0` from the Taylor series.
@@ -514,18 +536,26 @@ impl Trajectory {
     }
 
     /// `(u, u', integrals)` at `h > 0` from the Taylor series.
-    #[inline]
+    #[inline(always)]
     fn taylor_with_integrals(&self, h: f64, s: f64) -> (f64, f64, Integrals) {
         let mut ser = Series::new();
-        let (u, du, i1) = self.taylor::<true>(h, &mut ser);
+        let (u, du, i1, head) = self.taylor_head::<true>(h, &mut ser);
         // w = u - s tau: only the linear term changes; t_0 = 0, so the sum starts at n = 1.
-        ser.terms_mut()[1] -= s * h;
-        let i2 = hilbert_tail(ser.terms(), h);
+        let i2 = match head {
+            // Six terms (the common case): the same sums as `hilbert_tail`, in registers.
+            Some([t1, t2, t3, t4, t5]) => hilbert_fixed::<6>(&[0.0, t1 - s * h, t2, t3, t4, t5], h),
+            None => {
+                ser.terms_mut()[1] -= s * h;
+                hilbert_tail(ser.terms(), h)
+            }
+        };
         (u, du, Integrals { i1: i1 * h, i2 })
     }
 
-    /// `(y(tau), y'(tau))` for `tau >= 0`.
-    #[inline]
+    /// `(y(tau), y'(tau))` for `tau >= 0`. Always inlined: at large N every event evaluates
+    /// the short Taylor path, and a caller that reads only `y` (a thinning candidate) drops
+    /// the velocity's sums.
+    #[inline(always)]
     pub fn at(&self, tau: f64) -> (f64, f64) {
         debug_assert!(tau >= 0.0, "Trajectory::at: tau must be >= 0");
         if tau <= 0.0 {
@@ -548,14 +578,14 @@ impl Trajectory {
     #[inline]
     fn slow_fast_at(&self, tau: f64) -> (f64, f64) {
         let p = &self.plate;
-        let [sigma, g0, g1, cf] = self.c;
+        let Coefs { c: [sigma, g0, g1, cf], d } = self.coefs();
         let (f0, f1, f2, _) = phis(p.r_s * tau);
         let mut u = sigma * f0 + tau * (g0 * f1 + g1 * tau * f2);
-        let mut up = self.d[0] * f0 + g1 * tau * f1;
+        let mut up = d[0] * f0 + g1 * tau * f1;
         if p.branch == Branch::Separated {
             let ef = (p.r_f * tau).exp();
             u += cf * ef;
-            up += self.d[1] * ef;
+            up += d[1] * ef;
         }
         (u, up)
     }
@@ -580,14 +610,17 @@ impl Trajectory {
 
     #[inline]
     fn clustered_at(&self, tau: f64, u1: f64, u2: f64) -> (f64, f64) {
-        let [c0, c1, e1, e2] = self.c;
+        let Coefs { c: [c0, c1, e1, e2], d } = self.coefs();
         let u = c0 + c1 * tau + (e1 * u1 + e2 * u2);
-        let up = c1 + (self.d[0] * u1 + self.d[1] * u2);
+        let up = c1 + (d[0] * u1 + d[1] * u2);
         (u, up)
     }
 
     /// `at(h)` and `integrals(h, s)` in one call, with identical results (the short-interval
-    /// Taylor path, where large-N engines spend their time, shares the set-up).
+    /// Taylor path, where large-N engines spend their time, shares the set-up). Inlined: a
+    /// caller that drops the integrals (an observer that takes no segments) does not
+    /// compute them.
+    #[inline(always)]
     pub fn at_with_integrals(&self, h: f64, s: f64) -> (f64, f64, Integrals) {
         if h > 0.0 && self.use_taylor(h) {
             let (u, du, ints) = self.taylor_with_integrals(h, s);
@@ -595,6 +628,19 @@ impl Trajectory {
         }
         let (y, v) = self.at(h);
         (y, v, self.integrals(h, s))
+    }
+
+    /// [`Trajectory::at_with_integrals`] when `integrals` (a constant at the call site), else
+    /// [`Trajectory::at`] with zero integrals: the same state bit for bit either way, and
+    /// nothing of the integrals computed for a caller that does not read them.
+    #[inline(always)]
+    pub fn at_maybe_integrals(&self, h: f64, s: f64, integrals: bool) -> (f64, f64, Integrals) {
+        if integrals {
+            self.at_with_integrals(h, s)
+        } else {
+            let (y, v) = self.at(h);
+            (y, v, Integrals { i1: 0.0, i2: 0.0 })
+        }
     }
 
     /// Integrals over `[0, h]` used for exact time averages:
@@ -619,7 +665,7 @@ impl Trajectory {
 
     fn slow_fast_integrals(&self, h: f64, s: f64) -> Integrals {
         let p = &self.plate;
-        let [sigma, g0, g1, cf] = self.c;
+        let Coefs { c: [sigma, g0, g1, cf], .. } = self.coefs();
         let r = p.r_s;
         let z = r * h;
         let (f0, f1, f2, f3) = phis(z);
@@ -681,12 +727,12 @@ impl Trajectory {
 
     fn clustered_integrals(&self, h: f64, s: f64) -> Integrals {
         let p = &self.plate;
-        let [c0, c1, e1, e2] = self.c;
+        let Coefs { c: [c0, c1, e1, e2], d } = self.coefs();
         let (u1, u2, e2m) = self.clustered_basis(h);
         let zh = e1 * u1 + e2 * u2;
-        let zph = self.d[0] * u1 + self.d[1] * u2;
+        let zph = d[0] * u1 + d[1] * u2;
         let dz = zh - e1;
-        let dzp = zph - self.d[0];
+        let dzp = zph - d[0];
         // int z and int tau z from the homogeneous equation (well conditioned here: rho h > 1
         // and k >= M rho^2 / 2).
         let iz = -(p.mass * dzp + p.eta * dz) * p.inv_k;
@@ -763,7 +809,7 @@ impl Trajectory {
                 let (mut zl, mut zh) = (-r, r);
                 let mut mag = r + z0p.abs() * (p.mass * p.inv_k).sqrt();
                 if p.branch == Branch::Separated {
-                    let cf = self.c[3];
+                    let cf = self.coefs().c[3];
                     let sz = z0 - cf;
                     zl = zl.max(sz.min(0.0) + cf.min(0.0));
                     zh = zh.min(sz.max(0.0) + cf.max(0.0));
@@ -825,6 +871,23 @@ mod tests {
                 assert_eq!(v, -0.25);
             } else {
                 assert_eq!(v, (2.0 - k * 0.5) / e);
+            }
+        }
+    }
+
+    /// An observer without segments gets the same plate state bit for bit, whatever the
+    /// branch (the Taylor path with its six-term integrals in registers, its longer sums,
+    /// and the closed forms).
+    #[test]
+    fn state_without_integrals_is_the_same() {
+        for &(m, eta, k) in &[(75.0, 75.0, 180.0), (1.0, 0.0, 4.0), (1e-6, 1.0, 1e3), (0.0, 2.0, 3.0), (2.0, 4.0, 2.0)]
+        {
+            let tr = LinearPlate::new(m, eta, k).trajectory(0.3, -0.7, 5.0, 1.5);
+            for &h in &[1e-12, 1e-7, 1e-5, 1e-3, 0.05, 0.7, 3.0, 40.0] {
+                let (y, v, i) = tr.at_maybe_integrals(h, 0.5, true);
+                let (y2, v2, j) = tr.at_maybe_integrals(h, 0.5, false);
+                assert_eq!((y.to_bits(), v.to_bits()), (y2.to_bits(), v2.to_bits()), "m {m} eta {eta} k {k} h {h}");
+                assert_eq!((i, j.i1, j.i2), (tr.integrals(h, 0.5), 0.0, 0.0));
             }
         }
     }

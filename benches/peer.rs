@@ -1,0 +1,180 @@
+//! The exact engine beside a peer, in one criterion run: rebop (the fastest Rust Gillespie
+//! library we know) on the junctions aggregated as a two-state system, and the linear law's
+//! exact engine on the same junction kinetics with its plate.
+//!
+//! The peer's system is `N` switches aggregated as two populations, `A` (attached) and `B`
+//! (detached), with the reactions `A -> B` at rate `k_off A` and `B -> A` at rate `k_on B`
+//! (`k_off = k0`, `k_on = kon0` of the scene): the same jump process as the engine's
+//! attached count with strong bonds and `g = 1`, without any continuous state (no plate, no
+//! extensions, no statistics). It is as cheap as an exact SSA can be: one exponential, one
+//! uniform and two integer updates per event.
+//!
+//! Rows per `N` (1e3, 1e6, 1e7), all in events per second (criterion's throughput):
+//! `peer/rebop-two-state/N`, `peer/strong-linear/N` and `peer/weak-linear/N`
+//! (`testkit::scaled_linear`, the scene of `benches/exact.rs`, one engine per row warmed up
+//! to `t = 20`, then `1e6 / N` time units per iteration, about 1e5 events). After each `N` the bench prints the
+//! median events per second of each row over its samples, and the engine's ratio to the
+//! peer.
+//!
+//! ```text
+//! cargo bench -p stickslip-peer --bench peer                 # N = 1e3, 1e6, 1e7
+//! PEER_N=1e6 cargo bench -p stickslip-peer --bench peer      # N = 1e6 only
+//! ```
+//!
+//! It lives in the workspace member `peer/` (not a default member), so rebop is built only
+//! for this command, never by the root's `cargo build` or `cargo test`.
+
+use std::cell::RefCell;
+use std::time::{Duration, Instant};
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use stickslip::engine::Engine;
+use stickslip::engine::exact::{ArrayQueue, strong_linear, weak_linear};
+use stickslip::observe::Nothing;
+use stickslip_testkit::scaled_linear;
+
+rebop::define_system! {
+    k_off k_on;
+    TwoState { A, B }
+    rupture   : A => B @ k_off
+    formation : B => A @ k_on
+}
+
+// The same system with a counter of reactions, for the pilot run that counts the events of
+// one iteration (the timed system has no counter).
+rebop::define_system! {
+    k_off k_on;
+    Counted { A, B, E }
+    rupture   : A => B + E @ k_off
+    formation : B => A + E @ k_on
+}
+
+/// Simulated time per iteration: about 1e5 events (0.1 events per junction per time unit).
+fn span(n: usize) -> f64 {
+    1e6 / n as f64
+}
+
+/// Warm-up end (the engine's steady state; the two-state system starts stationary).
+const WARM: f64 = 20.0;
+
+thread_local! {
+    /// Events per second of every timed call, per row.
+    static RATES: RefCell<Vec<(String, f64)>> = const { RefCell::new(Vec::new()) };
+}
+
+fn record(row: &str, events: f64, elapsed: Duration) {
+    RATES.with(|r| r.borrow_mut().push((row.to_string(), events / elapsed.as_secs_f64())));
+}
+
+fn median_rate(row: &str) -> f64 {
+    let mut v: Vec<f64> = RATES.with(|r| r.borrow().iter().filter(|(k, _)| k == row).map(|&(_, x)| x).collect());
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() { f64::NAN } else { v[v.len() / 2] }
+}
+
+/// The two-state system at stationarity: `A = N kon/(k0 + kon)`.
+fn two_state(n: usize, k0: f64, kon: f64, seed: u64) -> TwoState {
+    let mut s = TwoState::with_parameters(k0, kon);
+    s.seed(seed);
+    s.A = (n as f64 * kon / (k0 + kon)).round() as isize;
+    s.B = n as isize - s.A;
+    s
+}
+
+fn rebop_row(c: &mut Criterion, n: usize, k0: f64, kon: f64) {
+    let mut pilot = Counted::with_parameters(k0, kon);
+    pilot.seed(1);
+    pilot.A = (n as f64 * kon / (k0 + kon)).round() as isize;
+    pilot.B = n as isize - pilot.A;
+    pilot.advance_until(WARM);
+    let before = pilot.E;
+    pilot.advance_until(WARM + span(n));
+    let per_span = (pilot.E - before) as u64;
+
+    let row = format!("rebop-two-state/{n}");
+    let mut g = c.benchmark_group("peer");
+    g.sample_size(10).measurement_time(Duration::from_secs(6)).warm_up_time(Duration::from_secs(1));
+    g.throughput(Throughput::Elements(per_span));
+    // One system (and below, one engine) per row, warmed up once: the samples continue it.
+    let mut s = two_state(n, k0, kon, 2);
+    s.advance_until(WARM);
+    let mut t = WARM;
+    g.bench_function(BenchmarkId::new("rebop-two-state", n), |b| {
+        b.iter_custom(|iters| {
+            let start = Instant::now();
+            for _ in 0..iters {
+                t += span(n);
+                s.advance_until(t);
+            }
+            let elapsed = start.elapsed();
+            std::hint::black_box(s.A);
+            record(&row, (iters * per_span) as f64, elapsed);
+            elapsed
+        })
+    });
+    g.finish();
+}
+
+fn engine_row<E: Engine>(c: &mut Criterion, name: &str, n: usize, make: impl Fn() -> E) {
+    let mut pilot = make();
+    pilot.advance(WARM, &mut Nothing).unwrap();
+    let before = pilot.counters().events.unwrap();
+    pilot.advance(WARM + span(n), &mut Nothing).unwrap();
+    let per_span = pilot.counters().events.unwrap() - before;
+
+    let row = format!("{name}/{n}");
+    let mut g = c.benchmark_group("peer");
+    g.sample_size(10).measurement_time(Duration::from_secs(6)).warm_up_time(Duration::from_secs(1));
+    g.throughput(Throughput::Elements(per_span));
+    let mut e = make();
+    e.advance(WARM, &mut Nothing).unwrap();
+    let mut t = WARM;
+    g.bench_function(BenchmarkId::new(name, n), |b| {
+        b.iter_custom(|iters| {
+            let before = e.counters().events.unwrap();
+            let start = Instant::now();
+            for _ in 0..iters {
+                t += span(n);
+                e.advance(t, &mut Nothing).unwrap();
+            }
+            let elapsed = start.elapsed();
+            record(&row, (e.counters().events.unwrap() - before) as f64, elapsed);
+            elapsed
+        })
+    });
+    g.finish();
+}
+
+/// The sizes: `PEER_N` (a comma-separated list, e.g. `PEER_N=1000000`), else 1e3, 1e6, 1e7.
+fn sizes() -> Vec<usize> {
+    match std::env::var("PEER_N") {
+        Ok(s) => s.split(',').map(|x| x.trim().parse::<f64>().expect("PEER_N: numbers") as usize).collect(),
+        Err(_) => vec![1_000, 1_000_000, 10_000_000],
+    }
+}
+
+fn peer(c: &mut Criterion) {
+    for n in sizes() {
+        let strong = scaled_linear(n, "strong");
+        let weak = scaled_linear(n, "weak");
+        let (k0, kon) = (strong.junctions.k0, strong.junctions.kon0);
+        rebop_row(c, n, k0, kon);
+        engine_row(c, "strong-linear", n, || strong_linear::<ArrayQueue>(&strong));
+        engine_row(c, "weak-linear", n, || weak_linear::<ArrayQueue>(&weak));
+        let peer = median_rate(&format!("rebop-two-state/{n}"));
+        if peer.is_nan() {
+            continue; // filtered out by criterion's own filter
+        }
+        println!("\npeer N = {n}: rebop two-state {:.1} M events/s (median of its samples)", peer / 1e6);
+        for name in ["strong-linear", "weak-linear"] {
+            let own = median_rate(&format!("{name}/{n}"));
+            if !own.is_nan() {
+                println!("peer N = {n}: {name} {:.2} M events/s, {:.3}x rebop", own / 1e6, own / peer);
+            }
+        }
+        println!();
+    }
+}
+
+criterion_group!(benches, peer);
+criterion_main!(benches);

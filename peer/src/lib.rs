@@ -1,0 +1,1 @@
+//! Nothing but a home for the peer bench (`benches/peer.rs`): see `peer/Cargo.toml`.
