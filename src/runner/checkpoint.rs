@@ -191,10 +191,9 @@ mod tests {
                 "junctions.reattach=unstretched",
             ]),
         ];
-        // The flip rule is a value, not a type: the first and third scenes share a type.
         types.sort();
         types.dedup();
-        assert_eq!(types.len(), 3, "{types:?}");
+        assert_eq!(types.len(), 4, "{types:?}");
     }
 
     #[test]

@@ -24,12 +24,11 @@ use serde::{Deserialize, Serialize};
 use stickslip::Scene;
 use stickslip::engine::Engine;
 use stickslip::engine::exact::ExactDirect;
-use stickslip::engine::fixed::{FixedEngine, FlipTest};
+use stickslip::engine::fixed::{FixedEngine, LinearFlip};
 use stickslip::observe::{EventKind, Nothing, Recorder, Sample};
 use stickslip::physics::force::{check_kappa, check_law};
 use stickslip::physics::{Bond, Direct, ForceLaw, LawParams, Linear, ParamError, Strong, Weak};
 use stickslip::rng::ParkMiller;
-use stickslip::scene::FlipRule;
 use stickslip_testkit::fig1_with;
 
 /// The worked example of docs/engines.md, "Adding a force law": the file a newcomer writes,
@@ -113,18 +112,10 @@ fn fixed_engine_runs_an_outside_law_like_the_crates_own() {
             let rng = ParkMiller::new(s.run.seed).unwrap();
             let (weak, strong) = (Weak::from_scene(&s), Strong::from_scene(&s));
             match (law_is_ours, bond == "weak") {
-                (true, true) => {
-                    drive(FixedEngine::new(&s, Hooke { kappa }, weak, rng, FlipTest::new(FlipRule::Linear)), 60.0)
-                }
-                (true, false) => {
-                    drive(FixedEngine::new(&s, Hooke { kappa }, strong, rng, FlipTest::new(FlipRule::Linear)), 60.0)
-                }
-                (false, true) => {
-                    drive(FixedEngine::new(&s, Linear { kappa }, weak, rng, FlipTest::new(FlipRule::Linear)), 60.0)
-                }
-                (false, false) => {
-                    drive(FixedEngine::new(&s, Linear { kappa }, strong, rng, FlipTest::new(FlipRule::Linear)), 60.0)
-                }
+                (true, true) => drive(FixedEngine::new(&s, Hooke { kappa }, weak, rng, LinearFlip), 60.0),
+                (true, false) => drive(FixedEngine::new(&s, Hooke { kappa }, strong, rng, LinearFlip), 60.0),
+                (false, true) => drive(FixedEngine::new(&s, Linear { kappa }, weak, rng, LinearFlip), 60.0),
+                (false, false) => drive(FixedEngine::new(&s, Linear { kappa }, strong, rng, LinearFlip), 60.0),
             }
         };
         let (ours, ours_rec) = run(true);
@@ -225,7 +216,7 @@ fn pooled_attached(runs: u64, engine: &str) -> (u64, u64, f64) {
         let bond = Strong::new(&stickslip::scene::laws::bond_params(j)).unwrap();
         let last = if engine == "fixed" {
             let rng = stickslip::rng::pcg(s.run.seed);
-            let mut e = FixedEngine::new(&s, law, bond, rng, FlipTest::new(FlipRule::Linear));
+            let mut e = FixedEngine::new(&s, law, bond, rng, LinearFlip);
             e.advance(s.run.t_end, &mut Nothing).unwrap();
             e.sample()
         } else {

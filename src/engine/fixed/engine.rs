@@ -7,10 +7,12 @@
 //! bit for bit those of the eager scheme; every read of `x_i` between steps
 //! ([`FixedEngine::extension`], [`Engine::sample`]) applies the pending update on the fly.
 
+use std::marker::PhantomData;
+
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
-use super::flip::FlipTest;
+use super::flip::Flip;
 use super::integrator::{Integrator, PlateState};
 use crate::engine::alloc::{self, AllocError};
 use crate::engine::{Counters, Engine, EngineError};
@@ -22,13 +24,13 @@ use crate::scene::{EngineKind, Initial, Reattach, Scene};
 /// Magnitude beyond which the plate is declared diverged.
 pub const DIVERGENCE_LIMIT: f64 = 1e100;
 
-/// The fixed-step engine, specialised to a force law `L`, bond kind `B` and generator `R`;
-/// the flip rule is a value ([`FlipTest`]), one comparison per junction for every rule.
+/// The fixed-step engine, specialised to a force law `L`, bond kind `B`, generator `R`
+/// and flip rule `F`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct FixedEngine<L, B, R> {
+pub struct FixedEngine<L, B, R, F> {
     law: L,
     bond: B,
-    flip: FlipTest,
+    flip: PhantomData<F>,
     formation: Formation,
     plate: Plate,
     integrator: Integrator,
@@ -39,7 +41,7 @@ pub struct FixedEngine<L, B, R> {
     relax: f64,
     /// `reattach = "unstretched"`: a forming junction starts at `x_i = 0`.
     unstretched: bool,
-    /// `flip.threshold(k0 dt)`: the rupture threshold of strong bonds, the same every step.
+    /// `F::threshold(k0 dt)`: the rupture threshold of strong bonds, the same every step.
     strong_off_threshold: f64,
     /// Steps taken, `n`; the time is `t_n = n dt`.
     steps: u64,
@@ -82,7 +84,7 @@ struct Pass {
     attached_extension: f64,
 }
 
-impl<L: ForceLaw, B: Bond, R> FixedEngine<L, B, R>
+impl<L: ForceLaw, B: Bond, R, F: Flip> FixedEngine<L, B, R, F>
 where
     R: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static,
 {
@@ -94,12 +96,12 @@ where
     /// `xi_i < kon0 / (kon0 + k0)`.
     ///
     /// Panics if the junction arrays cannot be allocated; [`FixedEngine::try_new`] reports it.
-    pub fn new(scene: &Scene, law: L, bond: B, rng: R, flip: FlipTest) -> Self {
+    pub fn new(scene: &Scene, law: L, bond: B, rng: R, flip: F) -> Self {
         Self::try_new(scene, law, bond, rng, flip).unwrap_or_else(|e| panic!("{e}"))
     }
 
     /// [`FixedEngine::new`] with the junction arrays reserved fallibly.
-    pub fn try_new(scene: &Scene, law: L, bond: B, mut rng: R, flip: FlipTest) -> Result<Self, AllocError> {
+    pub fn try_new(scene: &Scene, law: L, bond: B, mut rng: R, _flip: F) -> Result<Self, AllocError> {
         let j = &scene.junctions;
         let n = j.n;
         let q: Vec<u8> = match j.initial {
@@ -118,7 +120,7 @@ where
         Ok(FixedEngine {
             law,
             bond,
-            flip,
+            flip: PhantomData,
             formation: Formation::from_scene(scene),
             plate: Plate::from_scene(scene),
             integrator: Integrator::of_scene(scene),
@@ -126,7 +128,7 @@ where
             dt,
             relax: 1.0 - j.lambda * dt,
             unstretched: j.reattach == Reattach::Unstretched,
-            strong_off_threshold: flip.threshold(j.k0 * dt),
+            strong_off_threshold: F::threshold(j.k0 * dt),
             steps: 0,
             plate_x: 0.0,
             // A kinematic plate moves at V from the start (formation sees g(V)).
@@ -174,13 +176,12 @@ where
     /// Steps 1 and 2 in one pass over the junctions, after applying the previous step's
     /// pending update (4) to each `x_i`:
     /// `xi_i ~ U(0,1)`, one per junction in index order; `k = q_i ? k_off(f(x_i)) : k_on`;
-    /// flip per the rule; re-attachment rule; `F_b = sum_i q_i f^x(x_i)` with the new `q`.
+    /// flip per `F`; re-attachment rule; `F_b = sum_i q_i f^x(x_i)` with the new `q`.
     #[inline(always)]
     fn junction_pass<O: Observer>(&mut self, t: f64, on_threshold: f64, obs: &mut O) -> Pass {
         let (dx, relax) = (self.pending_dx, self.pending_relax);
         let (law, bond, dt) = (self.law, self.bond, self.dt);
         let off_threshold = self.strong_off_threshold;
-        let flip_test = self.flip;
         let unstretched = self.unstretched;
         let rng = &mut self.rng;
         let mut sum = 0.0;
@@ -197,11 +198,11 @@ where
             let x_n = select(was, *xi + dx, *xi * relax);
             // Rates from the state at t_n; strong-bond thresholds are hoisted.
             let threshold = if B::IS_WEAK {
-                if q_old != 0 { flip_test.threshold(bond.k_off(law.tension(x_n)) * dt) } else { on_threshold }
+                if q_old != 0 { F::threshold(bond.k_off(law.tension(x_n)) * dt) } else { on_threshold }
             } else {
                 select(was, off_threshold, on_threshold)
             };
-            let flip = flip_test.flips(rng.uniform(), threshold);
+            let flip = F::flips(rng.uniform(), threshold);
             let q_new = q_old ^ u8::from(flip);
             let now = mask(q_new);
             let formed = now & !was;
@@ -279,7 +280,7 @@ where
     fn step<O: Observer>(&mut self, obs: &mut O) -> Result<(), EngineError> {
         let t = self.steps as f64 * self.dt;
         let t_next = (self.steps + 1) as f64 * self.dt;
-        let on_threshold = self.flip.threshold(self.formation.k_on(self.plate_v) * self.dt);
+        let on_threshold = F::threshold(self.formation.k_on(self.plate_v) * self.dt);
         let pass = self.junction_pass(t, on_threshold, obs);
         let state = PlateState { t, t_next, x: self.plate_x, v: self.plate_v, bond_force: pass.bond_force };
         let next = self.integrator.step(&self.plate, self.dt, state, |dx| self.bond_force_moved(dx, pass));
@@ -308,7 +309,7 @@ where
     }
 }
 
-impl<L: ForceLaw, B: Bond, R> Engine for FixedEngine<L, B, R>
+impl<L: ForceLaw, B: Bond, R, F: Flip> Engine for FixedEngine<L, B, R, F>
 where
     R: UniformSource + Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static,
 {
@@ -361,11 +362,10 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::fixed::FlipTest;
+    use crate::engine::fixed::LinearFlip;
     use crate::observe::Recorder;
     use crate::physics::{Linear, Strong};
     use crate::rng::ParkMiller;
-    use crate::scene::FlipRule;
     use crate::test_scenes as testkit;
 
     #[test]
@@ -380,9 +380,9 @@ mod tests {
     fn pending_update_is_applied_on_every_read() {
         let s = testkit::fig1_with(&["run.engine=fixed", "junctions.force_law=linear", "fixed.dt=0.5"]);
         let (law, bond) = (Linear::from_scene(&s), Strong::from_scene(&s));
-        let mut e = FixedEngine::new(&s, law, bond, ParkMiller::new(4).unwrap(), FlipTest::new(FlipRule::Linear));
+        let mut e = FixedEngine::new(&s, law, bond, ParkMiller::new(4).unwrap(), LinearFlip);
         e.advance(10.0, &mut crate::observe::Nothing).unwrap();
-        let read = |e: &FixedEngine<_, _, _>| -> Vec<(bool, f64)> {
+        let read = |e: &FixedEngine<_, _, _, _>| -> Vec<(bool, f64)> {
             (0..e.len()).map(|i| (e.is_attached(i), e.extension(i))).collect()
         };
         let before = read(&e);

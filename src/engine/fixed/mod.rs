@@ -12,22 +12,20 @@ pub mod integrator;
 pub mod stability;
 
 pub use engine::{DIVERGENCE_LIMIT, FixedEngine};
-pub use flip::FlipTest;
+pub use flip::{AsPrintedFlip, ExponentialFlip, Flip, LinearFlip};
 pub use integrator::Integrator;
 
 use super::{EngineError, EngineVisitor};
 use crate::physics::{Bond, ForceLaw};
 use crate::rng::{self, ParkMiller, UniformSource};
 use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};
-use crate::scene::{RngKind, Scene};
+use crate::scene::{FlipRule, RngKind, Scene};
 
 /// Builds the fixed-step engine for `scene` and hands it to `visitor`.
 ///
-/// Force law, bond kind (both from `scene::laws`) and generator become type parameters
-/// here, once per run, so the step loop is compiled for exactly that combination (a
-/// strong-bond scene runs no weak-bond code). The flip rule is a value ([`FlipTest`]): the
-/// per-junction test is one signed comparison for every rule, so a type per rule would
-/// buy nothing but compile time. The generator is `ParkMiller` seeded with
+/// Force law, bond kind (both from `scene::laws`), generator and flip rule become type
+/// parameters here, once per run, so the step loop is compiled for exactly that combination
+/// (a strong-bond scene runs no weak-bond code). The generator is `ParkMiller` seeded with
 /// `run.seed` (which must lie in `[1, 2^31 - 2]`) or `Pcg64` from [`rng::pcg`]`(run.seed)`.
 pub fn dispatch<V: EngineVisitor>(scene: &Scene, visitor: V) -> Result<V::Output, EngineError> {
     with_force_law(&scene.junctions, WithLaw { scene, visitor })?
@@ -80,5 +78,9 @@ fn with_rng<L: ForceLaw, B: Bond, R, V: EngineVisitor>(
 where
     R: UniformSource + Clone + std::fmt::Debug + serde::Serialize + serde::de::DeserializeOwned + Send + 'static,
 {
-    Ok(visitor.visit(FixedEngine::try_new(scene, law, bond, rng, FlipTest::new(scene.fixed.flip))?))
+    Ok(match scene.fixed.flip {
+        FlipRule::Linear => visitor.visit(FixedEngine::try_new(scene, law, bond, rng, LinearFlip)?),
+        FlipRule::Exponential => visitor.visit(FixedEngine::try_new(scene, law, bond, rng, ExponentialFlip)?),
+        FlipRule::AsPrinted => visitor.visit(FixedEngine::try_new(scene, law, bond, rng, AsPrintedFlip)?),
+    })
 }
