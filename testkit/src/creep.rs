@@ -18,6 +18,18 @@
 
 use stickslip::Scene;
 
+/// Weight of node `k` of the composite Simpson rule on `n` (even) intervals, before the
+/// factor `h/3`: 1 at the ends, 4 at odd nodes, 2 at even inner nodes.
+pub fn simpson_weight(k: usize, n: usize) -> f64 {
+    if k == 0 || k == n {
+        1.0
+    } else if k % 2 == 1 {
+        4.0
+    } else {
+        2.0
+    }
+}
+
 /// `(E[f], E[f^2])` of the rupture force of one junction loaded at rate `r` from `f = 0`,
 /// with rupture rate `k0 exp(f / f_b)`; by quadrature of `E[f^n] = n int f^(n-1) S(f) df`.
 pub fn bell_moments(r: f64, k0: f64, f_b: f64) -> (f64, f64) {
@@ -31,13 +43,7 @@ pub fn bell_moments(r: f64, k0: f64, f_b: f64) -> (f64, f64) {
     let (mut m1, mut m2) = (0.0, 0.0);
     for k in 0..=n {
         let f = k as f64 * h;
-        let w = if k == 0 || k == n {
-            1.0
-        } else if k % 2 == 1 {
-            4.0
-        } else {
-            2.0
-        };
+        let w = simpson_weight(k, n);
         let s = survival(f);
         m1 += w * s;
         m2 += w * 2.0 * f * s;

@@ -533,13 +533,7 @@ fn integral_matches_quadrature() {
     let h = (y1 - y0) / m as f64;
     let mut acc = dd(0.0);
     for i in 0..=m {
-        let wgt = if i == 0 || i == m {
-            1.0
-        } else if i % 2 == 1 {
-            4.0
-        } else {
-            2.0
-        };
+        let wgt = stickslip_testkit::creep::simpson_weight(i, m);
         let y = y0 + i as f64 * h;
         for &(c, _) in &anchors {
             acc += dd(wgt) * oracle_one(&law, y, c).0;
