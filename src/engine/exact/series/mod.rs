@@ -17,6 +17,7 @@ mod engine;
 pub mod kinetics;
 pub mod motion;
 pub mod sum;
+pub mod taylor;
 
 pub(crate) use crate::ode::{RosenbrockConfig, RosenbrockN, StiffSystem};
 pub use engine::{ExactSeries, SeriesKernel};
@@ -46,7 +47,8 @@ impl<V: EngineVisitor> BondVisitor for Build<'_, V> {
         let (n, e) = (scene.junctions.n, &scene.exact);
         let plate = crate::physics::Plate::from_scene(scene);
         let k0 = bond.k0();
-        let dynamic = || RosenbrockPlate::new(plate, law.kappa * n as f64, e.rtol, e.atol);
+        let event_rate = n as f64 * k0.max(scene.junctions.kon0);
+        let dynamic = || RosenbrockPlate::new(plate, law.kappa * n as f64, e.rtol, e.atol, event_rate);
         let weak = || WeakKinetics::try_new(k0, bond.force_sensitivity(), law.kappa, n);
         Ok(match (B::IS_WEAK, scene.plate.kinematic) {
             (false, false) => visitor.visit(ExactSeries::new(scene, law, StrongKinetics { k0 }, dynamic()?)?),

@@ -19,6 +19,7 @@
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
 use super::LocalCubic;
+use super::taylor::{ORDER, Plant, TimeSeries, Tol};
 use super::{RosenbrockConfig, RosenbrockN, SeriesSum, StiffSystem};
 use crate::engine::exact::direct::ode_error;
 use crate::engine::exact::frame::Frame;
@@ -266,15 +267,45 @@ pub struct RosenbrockPlate {
     /// the two). Not serialised.
     #[serde(skip, default = "on")]
     cubic: bool,
+    /// Steps are Taylor series in time ([`super::taylor`]) instead of RODAS4: chosen once
+    /// per run when the plate is not stiff on the time scale of the events
+    /// ([`RosenbrockPlate::new`]).
+    taylor: bool,
+    /// The last Taylor step: its series and start. Not serialised (a checkpoint is taken
+    /// between steps).
+    #[serde(skip)]
+    series_in_time: TimeSeries,
+    #[serde(skip)]
+    step_start: f64,
+    /// Taylor steps taken and retaken.
+    taylor_steps: u64,
+    taylor_retakes: u64,
 }
+
+/// The plate takes Taylor steps when its fastest rate times the mean time between events
+/// is at most this: then one step of order up to [`ORDER`] spans an event gap at the
+/// tolerances the scenes use, where RODAS4 (order 4) needs several.
+const TAYLOR_STIFFNESS: f64 = 4.0;
 
 fn on() -> bool {
     true
 }
 
 impl RosenbrockPlate {
-    /// `kappa_n = kappa N`, the junctions' largest stiffness (`d f^x / dx <= kappa`).
-    pub fn new(plate: Plate, kappa_n: f64, rtol: f64, atol: f64) -> Result<RosenbrockPlate, EngineError> {
+    /// `kappa_n = kappa N`, the junctions' largest stiffness (`d f^x / dx <= kappa`);
+    /// `event_rate = N max(k0, kon0)`, the scene's largest event rate of strong bonds (a
+    /// lower bound for weak ones). The plate takes Taylor steps when its fastest rate,
+    /// `eta/M + sqrt((K + kappa N)/M)` (or `(K + kappa N)/eta` overdamped), is at most
+    /// `TAYLOR_STIFFNESS` times `event_rate`: the events then come faster than the plate's
+    /// own time scales, and a step spans an event gap. Otherwise (a stiff plate, or no
+    /// events at all) RODAS4, which is L-stable.
+    pub fn new(
+        plate: Plate,
+        kappa_n: f64,
+        rtol: f64,
+        atol: f64,
+        event_rate: f64,
+    ) -> Result<RosenbrockPlate, EngineError> {
         let dynamic = plate.mass != 0.0;
         let dim = if dynamic { 2 } else { 1 };
         let k = plate.k + kappa_n;
@@ -287,6 +318,8 @@ impl RosenbrockPlate {
         }
         let cfg = RosenbrockConfig { rtol, atol, ..RosenbrockConfig::default() };
         let ode = RosenbrockN::with_config(dim, cfg).map_err(|e| ode_error(e, 0.0, rtol))?;
+        let fastest = if dynamic { plate.eta / plate.mass + (k / plate.mass).sqrt() } else { k / plate.eta };
+        let taylor = event_rate > 0.0 && fastest.is_finite() && fastest <= TAYLOR_STIFFNESS * event_rate;
         // At rest at X = 0: u = 0, W = tau_w (0 - V).
         let mut state = [0.0; DIM];
         if dynamic {
@@ -307,6 +340,11 @@ impl RosenbrockPlate {
             l1: 0.0,
             l2: 0.0,
             cubic: true,
+            taylor,
+            series_in_time: TimeSeries::default(),
+            step_start: 0.0,
+            taylor_steps: 0,
+            taylor_retakes: 0,
         })
     }
     /// The ODE's dimension: 2 (`[u, W]`), or 1 (`[u]`) for the overdamped plate. Derived,
@@ -368,6 +406,76 @@ impl RosenbrockPlate {
     }
 }
 
+impl RosenbrockPlate {
+    /// One Taylor step ([`super::taylor`]) from `tau` towards `target`: the series in time
+    /// from the state and the bond force's derivatives at the start, the step as long as
+    /// its last two terms allow (the whole way when they do), then bounds of `y` over it:
+    /// `y0 + [min(0, b1 h), max(0, b1 h)] +- (sum_(k>=2) |u_k| h^k + tol_u)` (`b1 = u'(0) +
+    /// V`), widened by round-off. The step is halved while those bounds leave the series'
+    /// disc (after re-basing the series at `y0` once) or, for weak bonds, are wider than
+    /// `max_spread`; halving needs no new series. The series is re-based ahead of the plate
+    /// once the plate is more than half its radius from the base (at `y0 +- radius/2`, on
+    /// the side the plate has moved to).
+    fn taylor_step(&mut self, ctx: &mut StepCtx<'_>, tau: f64, target: f64) -> Result<Step, EngineError> {
+        let (rtol, atol) = (self.ode.config().rtol, self.ode.config().atol);
+        let p = self.plate;
+        let u0 = self.state[0];
+        let w0 = if self.dynamic { self.state[1] / self.tau_w } else { 0.0 };
+        let tol = Tol { u: atol + rtol * u0.abs(), w: (atol + rtol * self.state[1].abs()) / self.tau_w };
+        let y0 = self.y_of(u0, tau);
+        // Past half the radius, the series moves half a radius ahead of the plate, in the
+        // direction it came: a plate that keeps going crosses a whole radius before the next.
+        let off = y0 - ctx.series.base();
+        if off.abs() > 0.5 * ctx.series.radius() {
+            ctx.rebase_series(y0 + 0.5 * ctx.series.radius().copysign(off));
+        }
+        let mut retakes = 0u32;
+        loop {
+            let mut force = [0.0; ORDER + 1];
+            force[..ORDER - 1].copy_from_slice(&ctx.series.derivatives_at::<{ ORDER - 1 }>(y0));
+            let plant = Plant { mass: p.mass, eta: p.eta, k: p.k, v: p.v, force: &force };
+            let full = target - tau;
+            let ts = TimeSeries::of(&plant, u0, w0, full, tol);
+            if let Some(&bad) = ts.u[..=ts.order].iter().find(|c| !c.is_finite()) {
+                return Err(EngineError::NonFinite { t: ctx.frame.time(tau), quantity: "plate series", value: bad });
+            }
+            let mut h = ts.step_within(full, tol, self.dynamic);
+            let b1 = ts.u[1] + p.v;
+            let (base, r) = (ctx.series.base(), ctx.series.radius());
+            let rebased = loop {
+                let r2 = ts.curvature_bound(h) + tol.u;
+                let (lo, hi) = (y0 + (b1 * h).min(0.0) - r2, y0 + (b1 * h).max(0.0) + r2);
+                let (lo, hi) = (lo - 4.0 * f64::EPSILON * lo.abs(), hi + 4.0 * f64::EPSILON * hi.abs());
+                let valid = lo >= base - r && hi <= base + r;
+                let tight = hi - lo <= ctx.max_spread || retakes >= LOOSE_AFTER;
+                if valid && tight {
+                    let t = if h >= full { target } else { tau + h };
+                    self.series_in_time = ts;
+                    self.step_start = tau;
+                    self.tau = t;
+                    self.taylor_steps += 1;
+                    return Ok(Step { s0: tau, s1: t, y_lo: lo, y_hi: hi, cubic_error: 0.0 });
+                }
+                retakes += 1;
+                self.taylor_retakes += 1;
+                if retakes > MAX_RETAKES || !(h > 0.0) {
+                    return Err(EngineError::StepSizeUnderflow { t: ctx.frame.time(tau), h, rtol });
+                }
+                if !valid && y0 != base {
+                    ctx.rebase_series(y0);
+                    break true;
+                }
+                let mut factor: f64 = 0.5;
+                if !tight {
+                    factor = factor.min(0.5 * ctx.max_spread / (hi - lo));
+                }
+                h *= factor;
+            };
+            debug_assert!(rebased);
+        }
+    }
+}
+
 /// The excursions `e` from its centre over which a local cubic stands for the series:
 /// `e <= room` (inside the series' disc) and `r4 e^4 <= tol` (its remainder within its
 /// share of the tolerance). Tested as written, without taking the fourth root.
@@ -415,6 +523,9 @@ impl Motion for RosenbrockPlate {
         self.ode.reset();
     }
     fn step(&mut self, ctx: &mut StepCtx<'_>, tau: f64, target: f64) -> Result<Step, EngineError> {
+        if self.taylor {
+            return self.taylor_step(ctx, tau, target);
+        }
         if ctx.recentre(self.y(tau)) {
             self.ode.reset();
         }
@@ -485,10 +596,27 @@ impl Motion for RosenbrockPlate {
     }
     #[inline]
     fn y_at(&mut self, s: f64) -> Result<f64, EngineError> {
+        if self.taylor {
+            return Ok(self.y_of(self.series_in_time.at(s - self.step_start), s));
+        }
         let u = self.ode.dense_component(0, s).map_err(|e| ode_error(e, s, 0.0))?;
         Ok(self.y_of(u, s))
     }
     fn finish(&mut self, step: &Step, s: f64, _series: &SeriesSum) -> Result<(), EngineError> {
+        if self.taylor {
+            let ts = &self.series_in_time;
+            let ds = s - self.step_start;
+            let (u, w) = ts.at_with_slope(ds);
+            self.state[0] = u;
+            if self.dynamic {
+                self.state[1] = w * self.tau_w;
+            }
+            let (i1, i2) = ts.integrals(ds, self.u0);
+            self.l1 += i1;
+            self.l2 += i2;
+            self.tau = s;
+            return Ok(());
+        }
         if s < step.s1 {
             let n = self.dim();
             self.ode.dense(s, &mut self.state[..n]).map_err(|e| ode_error(e, s, 0.0))?;
@@ -542,8 +670,8 @@ impl Motion for RosenbrockPlate {
     }
     fn sync_counters(&self, c: &mut Counters) {
         let st = self.ode.stats();
-        c.ode_steps = Some(st.accepted);
-        c.ode_rejected = Some(st.rejected);
+        c.ode_steps = Some(st.accepted + self.taylor_steps);
+        c.ode_rejected = Some(st.rejected + self.taylor_retakes);
     }
 }
 
@@ -676,7 +804,7 @@ mod tests {
         let mut series = SeriesSum::new(law, 1e-10);
         let frame = Frame::new(plate.v);
         let mut counters = Counters::default();
-        let mut m = RosenbrockPlate::new(plate, 0.0, 1e-10, 1e-12).unwrap();
+        let mut m = RosenbrockPlate::new(plate, 0.0, 1e-10, 1e-12, 0.0).unwrap();
         m.open_piece(0.0, &series, &frame);
         let (mut tau, target) = (0.0, 2.0);
         while tau < target {
@@ -720,7 +848,7 @@ mod tests {
             let frame = Frame::new(plate.v);
             let mut counters = Counters::default();
             let kappa_n = law.kappa * anchors.len() as f64;
-            let mut m = RosenbrockPlate::new(plate, kappa_n, rtol, atol).unwrap();
+            let mut m = RosenbrockPlate::new(plate, kappa_n, rtol, atol, 0.0).unwrap();
             m.open_piece(0.0, &series, &frame);
             let (mut tau, target) = (0.0, 3.0);
             let (mut quad, mut big, mut state_max) = (0.0, 0.0f64, 0.0f64);
@@ -796,6 +924,60 @@ mod tests {
         assert_eq!(seg.viscous, 0.0);
     }
 
+    /// Taylor steps against RODAS4 on the same plate and force: Fig. 1's plate (and an
+    /// overdamped one) over 150 junctions spread as a sliding contact spreads them, stepped
+    /// to event-like targets 1/30 apart to `t = 20`, across several re-bases. The lag and
+    /// velocity agree within the two integrators' summed local tolerances (each step's
+    /// `atol + rtol |state|`; the plate is damped, so local errors do not grow), the Taylor
+    /// plate takes about one step per target, and RODAS4 several.
+    #[test]
+    fn taylor_plate_matches_rodas() {
+        let law = Tilted { kappa: 0.1, l0: 1.0 };
+        let (rtol, atol) = (1e-10, 1e-12);
+        for plate in
+            [Plate { mass: 75.0, eta: 75.0, k: 150.0, v: 0.5 }, Plate { mass: 0.0, eta: 75.0, k: 150.0, v: 0.5 }]
+        {
+            let mut base = SeriesSum::new(law, rtol);
+            for i in 0..150 {
+                base.add(-6.0 + 6.0 * (i as f64 / 150.0).powi(2));
+            }
+            base.rebase(0.0);
+            let frame = Frame::new(plate.v);
+            let run = |event_rate: f64| {
+                let mut series = base.clone();
+                let mut counters = Counters::default();
+                let mut m = RosenbrockPlate::new(plate, law.kappa * 150.0, rtol, atol, event_rate).unwrap();
+                assert_eq!(m.taylor, event_rate > 0.0);
+                m.open_piece(0.0, &series, &frame);
+                let (mut tau, mut steps, mut e) = (0.0, 0u64, 0.0);
+                for target in (1..=600).map(|i| i as f64 / 30.0) {
+                    while tau < target {
+                        let step = m.step(&mut ctx(&mut series, &frame, &mut counters), tau, target).unwrap();
+                        m.finish(&step, step.s1, &series).unwrap();
+                        tau = step.s1;
+                        steps += 1;
+                        e += atol + rtol * m.state[0].abs().max(m.state[1].abs());
+                    }
+                }
+                let v = m.velocity(&series, &frame, tau);
+                (m.lag(tau, &frame), v, steps, e, counters.series_rebases.unwrap_or(0))
+            };
+            let (u_t, v_t, steps_t, e_t, rebases) = run(30.0);
+            let (u_r, v_r, steps_r, e_r, _) = run(0.0);
+            assert!(rebases >= 10, "{rebases} re-bases: the test should cross several");
+            assert!(steps_t <= 700, "{steps_t} Taylor steps for 600 targets");
+            assert!(steps_r > steps_t, "RODAS4 {steps_r} steps, Taylor {steps_t}");
+            let allowed = e_t + e_r;
+            assert!((u_t - u_r).abs() <= allowed, "M = {}: lag {u_t} vs {u_r}, allowed {allowed}", plate.mass);
+            let tau_w = if plate.mass > 0.0 { (plate.mass / (plate.k + 15.0)).sqrt().min(1.0) } else { 1.0 };
+            assert!((v_t - v_r).abs() <= allowed / tau_w, "M = {}: velocity {v_t} vs {v_r}", plate.mass);
+            println!(
+                "M = {}: u {u_t:e} {u_r:e} v {v_t:e} {v_r:e}, allowed {allowed:.2e}; steps {steps_t} vs {steps_r}",
+                plate.mass
+            );
+        }
+    }
+
     /// The local cubic against the series: an overdamped plate over 3000 junctions, stepped
     /// to event-like targets `1e-4` apart (so most steps take the cubic: its excursion
     /// `d ~ l0 (rtol/31)^(1/4) ~ 1e-3` here) and then in one long stretch (steps too long for
@@ -818,7 +1000,7 @@ mod tests {
         let run = |cubic: bool| {
             let mut series = base.clone();
             let mut counters = Counters::default();
-            let mut m = RosenbrockPlate::new(plate, law.kappa * 3000.0, rtol, atol).unwrap();
+            let mut m = RosenbrockPlate::new(plate, law.kappa * 3000.0, rtol, atol, 0.0).unwrap();
             m.cubic = cubic;
             m.open_piece(0.0, &series, &frame);
             let (mut tau, mut used, mut series_steps, mut worst, mut state_max) = (0.0, 0, 0, 0.0f64, 0.0f64);
@@ -873,7 +1055,7 @@ mod tests {
         series.rebase(0.0);
         let frame = Frame::new(plate.v);
         let mut counters = Counters::default();
-        let mut m = RosenbrockPlate::new(plate, law.kappa * 1000.0, rtol, atol).unwrap();
+        let mut m = RosenbrockPlate::new(plate, law.kappa * 1000.0, rtol, atol, 0.0).unwrap();
         m.open_piece(0.0, &series, &frame);
         m.ode.set_h_proposal(0.05);
         let (mut tau, mut retaken) = (0.0, 0);

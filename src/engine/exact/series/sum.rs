@@ -923,6 +923,33 @@ impl SeriesSum {
     }
 }
 
+impl SeriesSum {
+    /// The series' normalised derivatives at `y`, `S^(j)(y) / j!` for `j < M`: the
+    /// polynomial re-centred at `t0 = y - base` by repeated synthetic division, `out[j] =
+    /// sum_k C(k, j) A_k t0^(k-j)` (as [`SeriesSum::taylor_at`], to any order; 0 above `p`),
+    /// O(p M) flops in whole-array steps. The linear part adds `kappa (X0 + n t0)` and
+    /// `kappa n` to the first two. Within `radius()` of the base the values of the
+    /// polynomial these describe carry the series' `error_bound`.
+    pub fn derivatives_at<const M: usize>(&self, y: f64) -> [f64; M] {
+        let t0 = y - self.base;
+        let mut out = [0.0; M];
+        for k in (0..=self.p).rev() {
+            let prev = out;
+            for j in 1..M {
+                out[j] = prev[j] * t0 + prev[j - 1];
+            }
+            out[0] = prev[0] * t0 + (self.a[k] + self.al[k]);
+        }
+        if M >= 1 {
+            out[0] += self.linear(t0);
+        }
+        if M >= 2 {
+            out[1] += self.law.kappa * self.n as f64;
+        }
+        out
+    }
+}
+
 /// The rounding error of `prod = a * b` (Dekker's TwoProduct without fma).
 #[inline]
 fn two_product_err(a: f64, b: f64, prod: f64) -> f64 {

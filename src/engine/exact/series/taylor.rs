@@ -1,0 +1,341 @@
+//! The plate over one step as a Taylor series in time, for scenes that are not stiff
+//! ([`super::motion::RosenbrockPlate`] chooses it once per run; docs/engines.md, "Plate
+//! between events (tilted law)").
+//!
+//! With the lag `u = X - V t`, the step's local time `s` and the bond force's Taylor
+//! polynomial about the step's start `y0`, `S(y0 + e) = sum_j t_j e^j` (`t_j = S^(j)(y0)/j!`
+//! of the series, [`super::SeriesSum::derivatives_at`]), the plate equation
+//! `M u'' + eta (u' + V) + S(y) + K u = 0`, `y(s) = y0 + e(s)`, `e(s) = u(s) - u(0) + V s`,
+//! gives the coefficients of `u(s) = sum_k u_k s^k` one after another:
+//!
+//! - `u_(k+2) = -(eta (k+1) u_(k+1) + eta V [k = 0] + C_k + K u_k) / (M (k+1) (k+2))`;
+//! - overdamped (`M = 0`): `u_(k+1) = -(eta V [k = 0] + C_k + K u_k) / (eta (k+1))`;
+//!
+//! with `C_k = [S(y(s))]_k = sum_(j=1..k) t_j [e^j]_k` (`C_0 = t_0`), `[e^j]_k =
+//! sum_(i=1..k-j+1) b_i [e^(j-1)]_(k-i)`, `b_1 = u_1 + V`, `b_k = u_k` (`k >= 2`). Each
+//! `C_k` needs only `u_1..u_k`, so the recurrence is explicit; the powers cost O(K^3/6)
+//! flops for order `K`. The polynomial `S` is the series itself (not a further
+//! approximation of it), so the series' error bound applies unchanged; the one new
+//! approximation is the truncation in time, estimated from the last two terms (Jorba and
+//! Zou, *Experimental Mathematics* 14, 2005) and held to the integrator's tolerance.
+//!
+//! The recurrence stops at the first order `k >= MIN_ORDER` whose last two terms are
+//! within the tolerance over the whole step to the target (one step per event when the
+//! events are closer than the plate's time scales), else at `ORDER`, and the step is cut
+//! to the length those two terms allow.
+
+/// Largest order of the series in time.
+pub const ORDER: usize = 12;
+/// Smallest order used (the estimate reads two terms; fewer would trust a lucky zero).
+const MIN_ORDER: usize = 4;
+/// Safety factor on the step the last two terms allow.
+const SAFETY: f64 = 0.8;
+
+/// Tolerances of one step's truncation: `u` on the lag, `w` on the velocity `u'` (unused
+/// for the overdamped plate, whose state is the lag alone).
+#[derive(Clone, Copy, Debug)]
+pub struct Tol {
+    pub u: f64,
+    pub w: f64,
+}
+
+/// `1 / (k + 1)` and `1 / ((k + 1) (k + 2))`: the recurrence multiplies.
+const RECIP1: [f64; ORDER + 1] = {
+    let mut t = [0.0; ORDER + 1];
+    let mut k = 0;
+    while k <= ORDER {
+        t[k] = 1.0 / (k + 1) as f64;
+        k += 1;
+    }
+    t
+};
+const RECIP2: [f64; ORDER + 1] = {
+    let mut t = [0.0; ORDER + 1];
+    let mut k = 0;
+    while k <= ORDER {
+        t[k] = 1.0 / ((k + 1) * (k + 2)) as f64;
+        k += 1;
+    }
+    t
+};
+
+/// `u(s) = sum_(k <= order) u_k s^k` over one step of the plate.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TimeSeries {
+    pub u: [f64; ORDER + 1],
+    pub order: usize,
+}
+
+/// What the recurrence needs besides the state: the plate's constants and the force's
+/// Taylor coefficients `t_j` at the step's start (`j <= ORDER`).
+#[derive(Clone, Copy, Debug)]
+pub struct Plant<'a> {
+    pub mass: f64,
+    pub eta: f64,
+    pub k: f64,
+    pub v: f64,
+    pub force: &'a [f64; ORDER + 1],
+}
+
+impl TimeSeries {
+    /// The coefficients from `u(0) = u0` and `u'(0) = w0` (ignored when `M = 0`), up to the
+    /// first order `n >= MIN_ORDER` at which the last two terms are within `tol` over `h`
+    /// ([`TimeSeries::truncation`]: the step `h` to the target then needs no cut), or `ORDER`.
+    pub fn of(p: &Plant<'_>, u0: f64, w0: f64, h: f64, tol: Tol) -> TimeSeries {
+        let mut u = [0.0; ORDER + 1];
+        // e[j][k] = [e^j]_k for 1 <= j <= k.
+        let mut e = [[0.0; ORDER + 1]; ORDER + 1];
+        u[0] = u0;
+        let dynamic = p.mass != 0.0;
+        let first = if dynamic {
+            u[1] = w0;
+            e[1][1] = w0 + p.v;
+            2
+        } else {
+            1
+        };
+        let t = p.force;
+        let inv = 1.0 / if dynamic { p.mass } else { p.eta };
+        let mut order = ORDER;
+        for n in first..=ORDER {
+            // u_n from C_k, k = n - 2 (dynamic) or n - 1 (overdamped).
+            let k = n - first;
+            let mut c = t[0];
+            if k >= 1 {
+                // Row k of the powers: e[1][k] = b_k (known: k < n), then e[j][k], j >= 2.
+                if k >= 2 || !dynamic {
+                    e[1][k] = if k == 1 { u[1] + p.v } else { u[k] };
+                }
+                for j in 2..=k {
+                    let mut acc = 0.0;
+                    for i in 1..=k - j + 1 {
+                        acc += e[1][i] * e[j - 1][k - i];
+                    }
+                    e[j][k] = acc;
+                }
+                c = 0.0;
+                for j in (1..=k).rev() {
+                    c += t[j] * e[j][k];
+                }
+            }
+            let drive = if k == 0 { p.eta * p.v } else { 0.0 };
+            let kf = k as f64;
+            u[n] = if dynamic {
+                -(p.eta * (kf + 1.0) * u[k + 1] + drive + c + p.k * u[k]) * (inv * RECIP2[k])
+            } else {
+                -(drive + c + p.k * u[k]) * (inv * RECIP1[k])
+            };
+            if n >= MIN_ORDER && Self::truncation(&u, n, h, dynamic, tol) <= 1.0 {
+                order = n;
+                break;
+            }
+        }
+        TimeSeries { u, order }
+    }
+
+    /// The last two terms' size over `h` in units of the tolerance, the larger of
+    /// `(|u_(n-1)| h^(n-1) + |u_n| h^n) / tol.u` and, for the dynamic plate, their
+    /// derivative's `((n-1) |u_(n-1)| h^(n-2) + n |u_n| h^(n-1)) / tol.w`.
+    #[inline]
+    fn truncation(u: &[f64; ORDER + 1], n: usize, h: f64, dynamic: bool, tol: Tol) -> f64 {
+        let (a, b) = (u[n - 1].abs(), u[n].abs());
+        let hn1 = h.powi(n as i32 - 2);
+        let mut r = (a * h + b * h * h) * hn1 / tol.u;
+        if dynamic {
+            r = r.max(((n - 1) as f64 * a + n as f64 * b * h) * hn1 / tol.w);
+        }
+        r
+    }
+
+    /// The longest step, at most `h`, over which the last two terms stay within `tol`: if `h`
+    /// is not, each term gets half of each tolerance, `h <= (tol.u / (2 |u_i|))^(1/i)` and
+    /// `h <= (tol.w / (2 i |u_i|))^(1/(i-1))`, times a safety factor.
+    pub fn step_within(&self, h: f64, tol: Tol, dynamic: bool) -> f64 {
+        let n = self.order;
+        if Self::truncation(&self.u, n, h, dynamic, tol) <= 1.0 {
+            return h;
+        }
+        let mut hmax = h;
+        for i in [n - 1, n] {
+            let c = self.u[i].abs();
+            if c > 0.0 {
+                hmax = hmax.min(SAFETY * (0.5 * tol.u / c).powf(1.0 / i as f64));
+                if dynamic {
+                    hmax = hmax.min(SAFETY * (0.5 * tol.w / (i as f64 * c)).powf(1.0 / (i - 1) as f64));
+                }
+            }
+        }
+        hmax
+    }
+
+    /// `u(s)` (Horner).
+    #[inline]
+    pub fn at(&self, s: f64) -> f64 {
+        let mut acc = 0.0;
+        for k in (0..=self.order).rev() {
+            acc = acc * s + self.u[k];
+        }
+        acc
+    }
+
+    /// `(u(s), u'(s))` (Horner, both at once).
+    #[inline]
+    pub fn at_with_slope(&self, s: f64) -> (f64, f64) {
+        let (mut acc, mut d) = (0.0, 0.0);
+        for k in (0..=self.order).rev() {
+            d = d * s + acc;
+            acc = acc * s + self.u[k];
+        }
+        (acc, d)
+    }
+
+    /// `sum_(k>=2) |u_k| s^k`: how far `u` can stray from its tangent `u_0 + u_1 s` over `[0, s]`.
+    #[inline]
+    pub fn curvature_bound(&self, s: f64) -> f64 {
+        let mut acc = 0.0;
+        for k in (2..=self.order).rev() {
+            acc = acc * s + self.u[k].abs();
+        }
+        acc * s * s
+    }
+
+    /// `int_0^s (u - c)` and `int_0^s (u - c)^2`, exact integrals of the polynomial.
+    pub fn integrals(&self, s: f64, c: f64) -> (f64, f64) {
+        let n = self.order;
+        let mut q = self.u;
+        q[0] -= c;
+        let mut i1 = 0.0;
+        for k in (0..=n).rev() {
+            i1 = i1 * s + q[k] / (k as f64 + 1.0);
+        }
+        // (sum q_k s^k)^2 = sum_m s^m sum_(i+j=m) q_i q_j, integrated term by term.
+        let mut i2 = 0.0;
+        for m in (0..=2 * n).rev() {
+            let mut cm = 0.0;
+            for i in m.saturating_sub(n)..=m.min(n) {
+                cm += q[i] * q[m - i];
+            }
+            i2 = i2 * s + cm / (m as f64 + 1.0);
+        }
+        (i1 * s, i2 * s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A linear force `S = t0 + t1 e` makes the plate a damped oscillator: the series
+    /// must match its closed form (here integrated by a tight RK4 as the oracle).
+    fn rk4(mass: f64, eta: f64, k: f64, v: f64, t0: f64, t1: f64, u0: f64, w0: f64, h: f64) -> (f64, f64) {
+        let f = |u: f64, w: f64, s: f64| {
+            let e = u - u0 + v * s;
+            (w, -(eta * (w + v) + t0 + t1 * e + k * u) / mass)
+        };
+        let (mut u, mut w, mut s) = (u0, w0, 0.0);
+        let n = 20_000;
+        let dt = h / n as f64;
+        for _ in 0..n {
+            let (a1, b1) = f(u, w, s);
+            let (a2, b2) = f(u + 0.5 * dt * a1, w + 0.5 * dt * b1, s + 0.5 * dt);
+            let (a3, b3) = f(u + 0.5 * dt * a2, w + 0.5 * dt * b2, s + 0.5 * dt);
+            let (a4, b4) = f(u + dt * a3, w + dt * b3, s + dt);
+            u += dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+            w += dt / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4);
+            s += dt;
+        }
+        (u, w)
+    }
+
+    #[test]
+    fn damped_oscillator_matches_its_integral() {
+        let mut force = [0.0; ORDER + 1];
+        force[0] = 3.0;
+        force[1] = 15.0;
+        let p = Plant { mass: 75.0, eta: 75.0, k: 150.0, v: 0.5, force: &force };
+        let (u0, w0) = (-0.02, 0.3);
+        for h in [0.01, 0.1, 0.4] {
+            let tol = Tol { u: 1e-14, w: 1e-14 };
+            let ts = TimeSeries::of(&p, u0, w0, h, tol);
+            let h = ts.step_within(h, tol, true);
+            let (u, w) = ts.at_with_slope(h);
+            let (ur, wr) = rk4(75.0, 75.0, 150.0, 0.5, 3.0, 15.0, u0, w0, h);
+            assert!((u - ur).abs() <= 1e-12, "h {h}: u {u} vs {ur}");
+            assert!((w - wr).abs() <= 1e-11, "h {h}: w {w} vs {wr}");
+        }
+    }
+
+    /// A cubic force: the series' derivative satisfies the ODE at several points of the step.
+    #[test]
+    fn residual_of_the_plate_equation_is_small() {
+        let mut force = [0.0; ORDER + 1];
+        force[..4].copy_from_slice(&[2.0, 14.0, -3.0, 0.7]);
+        let (m, eta, k, v) = (75.0, 75.0, 150.0, 0.5);
+        let p = Plant { mass: m, eta, k, v, force: &force };
+        let (u0, w0) = (0.01, -0.2);
+        let tol = Tol { u: 1e-15, w: 1e-15 };
+        let ts = TimeSeries::of(&p, u0, w0, 0.2, tol);
+        assert_eq!(ts.order, ORDER, "no early stop at h = 0.2");
+        let h = ts.step_within(0.2, tol, true);
+        for i in 0..=4 {
+            let s = h * i as f64 / 4.0;
+            let (u, w) = ts.at_with_slope(s);
+            // u'' by differentiating twice.
+            let mut a = 0.0;
+            for kk in (2..=ts.order).rev() {
+                a = a * s + (kk * (kk - 1)) as f64 * ts.u[kk];
+            }
+            let e = u - u0 + v * s;
+            let f = force[0] + e * (force[1] + e * (force[2] + e * force[3]));
+            let r = m * a + eta * (w + v) + f + k * u;
+            assert!(r.abs() <= 1e-9, "residual {r} at s {s}");
+        }
+    }
+
+    /// Overdamped: `eta (u' + V) + S + K u = 0` with linear `S` has the closed form
+    /// `u(s) = u_inf + (u0 - u_inf) exp(-a s)` when `S` does not depend on `s` through `e`
+    /// (here `t1 = 0`).
+    #[test]
+    fn overdamped_relaxation_is_exponential() {
+        let mut force = [0.0; ORDER + 1];
+        force[0] = 1.5;
+        let (eta, k, v) = (2.0, 3.0, 0.5);
+        let p = Plant { mass: 0.0, eta, k, v, force: &force };
+        let u0 = 0.4;
+        let tol = Tol { u: 1e-15, w: f64::NAN };
+        let ts = TimeSeries::of(&p, u0, 0.0, 0.3, tol);
+        let h = ts.step_within(0.3, tol, false);
+        let a = k / eta;
+        let u_inf = -(eta * v + 1.5) / k;
+        let exact = u_inf + (u0 - u_inf) * (-a * h).exp();
+        assert!((ts.at(h) - exact).abs() <= 1e-14, "{} vs {exact}", ts.at(h));
+    }
+
+    #[test]
+    fn short_steps_stop_early() {
+        let mut force = [0.0; ORDER + 1];
+        force[..3].copy_from_slice(&[2.0, 14.0, -3.0]);
+        let p = Plant { mass: 75.0, eta: 75.0, k: 150.0, v: 0.5, force: &force };
+        let tol = Tol { u: 1e-12, w: 1e-12 };
+        let ts = TimeSeries::of(&p, 0.0, 0.1, 1e-4, tol);
+        assert!(ts.order < 8, "order {} for a short step", ts.order);
+        assert_eq!(ts.step_within(1e-4, tol, true), 1e-4);
+    }
+
+    #[test]
+    fn integrals_match_quadrature() {
+        let ts = TimeSeries { u: [0.3, -1.0, 0.5, 0.2, -0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], order: 4 };
+        let (s, c) = (0.7, 0.1);
+        let n = 10_000;
+        let (mut a, mut b) = (0.0, 0.0);
+        for i in 0..n {
+            let x = s * (i as f64 + 0.5) / n as f64;
+            let q = ts.at(x) - c;
+            a += q;
+            b += q * q;
+        }
+        let (a, b) = (a * s / n as f64, b * s / n as f64);
+        let (i1, i2) = ts.integrals(s, c);
+        assert!((i1 - a).abs() < 1e-7 && (i2 - b).abs() < 1e-7, "{i1} {a} {i2} {b}");
+    }
+}
