@@ -286,6 +286,9 @@ pub struct RosenbrockPlate {
 /// is at most this: then one step of order up to [`ORDER`] spans an event gap at the
 /// tolerances the scenes use, where RODAS4 (order 4) needs several.
 const TAYLOR_STIFFNESS: f64 = 4.0;
+/// Degree of the force's Taylor polynomial a Taylor step tries first: enough for order 9
+/// in time (dynamic plate), what a step of Fig. 1's plate between events needs at `rtol = 1e-10`.
+const LOW_DEGREE: usize = 7;
 
 fn on() -> bool {
     true
@@ -431,11 +434,18 @@ impl RosenbrockPlate {
         }
         let mut retakes = 0u32;
         loop {
-            let mut force = [0.0; ORDER + 1];
-            force[..ORDER - 1].copy_from_slice(&ctx.series.derivatives_at::<{ ORDER - 1 }>(y0));
-            let plant = Plant { mass: p.mass, eta: p.eta, k: p.k, v: p.v, force: &force };
+            // The force's first `LOW_DEGREE + 1` derivatives suffice for the orders a step
+            // between events takes; all of them only when those orders fall short.
             let full = target - tau;
-            let ts = TimeSeries::of(&plant, u0, w0, full, tol);
+            let mut force = [0.0; ORDER + 1];
+            force[..=LOW_DEGREE].copy_from_slice(&ctx.series.derivatives_at::<{ LOW_DEGREE + 1 }>(y0));
+            let plant = Plant { mass: p.mass, eta: p.eta, k: p.k, v: p.v, force: &force, degree: LOW_DEGREE };
+            let mut ts = TimeSeries::of(&plant, u0, w0, full, tol);
+            if !ts.converged {
+                force[..ORDER - 1].copy_from_slice(&ctx.series.derivatives_at::<{ ORDER - 1 }>(y0));
+                let plant = Plant { mass: p.mass, eta: p.eta, k: p.k, v: p.v, force: &force, degree: ORDER - 2 };
+                ts = TimeSeries::of(&plant, u0, w0, full, tol);
+            }
             if let Some(&bad) = ts.u[..=ts.order].iter().find(|c| !c.is_finite()) {
                 return Err(EngineError::NonFinite { t: ctx.frame.time(tau), quantity: "plate series", value: bad });
             }
