@@ -1,8 +1,11 @@
 //! The tilted law's total bond force `S(y) = sum_i f^x(y - c_i)` (plate at `y`, junction `i`
 //! anchored at `c_i`, extension `x_i = y - c_i`) as a truncated series about a base point
-//! `y0`, updated in O(p) flops per attached or detached junction and re-based in
-//! O(bins p^2), independent of the number `N` of junctions. Measured costs:
-//! docs/performance.md, "Tilted law: the bond-force series".
+//! `y0`, updated in O(p) flops per attached or detached junction. Two modes, chosen once at
+//! construction ([`SeriesSum::for_junctions`]): **bins mode** re-bases in O(bins p^2) from
+//! the anchors' binned moments, independent of the number `N` of junctions; **direct mode**
+//! (`N < DIRECT_MAX = 8000`) keeps the junctions' offsets and re-bases in O(N p) by summing
+//! their own expansions, with twice the radius (section "Direct mode" below). Measured
+//! costs: docs/performance.md, "Tilted law: the bond-force series".
 //!
 //! **Split.** `f^x(x) = kappa x + phi(x)`, `phi(x) = -kappa l0 x h(x)`,
 //! `h(x) = (x^2 + l0^2)^(-1/2)`. The linear part is kept exactly as
@@ -36,7 +39,8 @@
 //! The bound is uniform in `x0`: every junction's expansion converges with ratio `r/l0`
 //! wherever it is centred.
 //!
-//! **Two expansions of one junction.** With `|d| <= rho`:
+//! **Two expansions of one junction** (bins mode; the sections down to "Direct mode" are
+//! about bins mode). With `|d| <= rho`:
 //! - its own (direct) expansion `D_i(d) = sum_(k<=p) phi_k(y0 - c_i) d^k`, truncation error
 //!   `<= kappa l0 T_d`, `T_d = sum_(k>p) (rho/l0)^k = q_d^(p+1)/(1-q_d)`, `q_d = 1/8`;
 //! - the bins' double expansion `B_i(d)`: anchors are grouped on a fixed grid of width `w`
@@ -99,6 +103,51 @@
 //! leaving a residue of order `kappa eps |c - origin|` in the moments and in `A` until its
 //! bin empties; the engine's periodic `shift` keeps `|c - origin|` small.)
 //!
+//! **Direct mode** ([`SeriesSum::direct`]). At small `N` the anchors fall into about as many
+//! bins as there are attached junctions, so a bins re-base (O(p^2) per bin) costs more than
+//! rebuilding the series junction by junction would, and the bins' radius `l0/8` (set by
+//! their double expansion, `q = (rho + w/2)/l0 = 1/4`) makes the plate re-base every
+//! `l0/16` of travel. Direct mode keeps no bins:
+//! - *State.* The live junctions' offsets `e_i = c_i - origin` (frame-independent like the
+//!   bins' offsets: `shift` moves `origin` and `y0` only) in a dense array, with stable
+//!   handles through a handle -> position table and swap-remove (O(1)). `add` adds `D_i`
+//!   (`phi_taylor(x_i)`, `x_i = base_off - e_i = y0 - c_i`) to `A` and `x_i` to `X0`;
+//!   `remove` subtracts the same `D_i` and `x_i`, computed from the stored offset, not from
+//!   the caller's `c`. So `A = sum_i D_i` at all times: no residue, and an add/remove pair
+//!   cancels exactly in the double-double accumulators (the high parts' `TwoSum` is exact;
+//!   only the low parts' own sums round, `O(eps^2 |A|)`).
+//! - *Re-base.* `rebase(y0)` rebuilds `A = sum_i D_i(y0)`, `X0 = sum_i x_i` and the spread
+//!   `sum_i |x_i|` from the offsets, O(N p): four junctions at a time through `phi_taylor4`
+//!   (`phi_taylor` on a structure of arrays, one pass, compiled to packed SSE2 operations on
+//!   baseline x86-64; bit for bit `phi_taylor`'s values, unit test `phi_taylor4_is_phi_taylor`).
+//! - *Radius and order.* Only the junctions' own expansions are left, so `rho = l0/4`
+//!   (`q_d = rho/l0 = 1/4`: twice the bins' radius, half the re-bases) and `p` is the
+//!   smallest order with `T_d = q_d^(p+1)/(1-q_d) <= rtol/4` (`p = 17` at `rtol = 1e-10`,
+//!   as in bins mode; capped at 31).
+//! - *Truncation bound.* `|S - S_true| <= kappa l0 n T_d` and `|dS/dy - S'_true| <= kappa n
+//!   T'_(q_d)` (the coefficient bound above with `|d| <= l0/4`): at most `(rtol/4) kappa l0
+//!   n`. A junction at `x0 = 0` with the plate at the radius attains it within a factor
+//!   3 to 40 (`p = 4` to 17; test `direct_bound_is_nearly_attained`).
+//! - *Round-off.* `|D_i|_rho <= kappa l0/(1 - q_d)` and `q_d = q`, so the unit `eps kappa
+//!   l0/(1-q)`, the per-operation charge `OP_ROUNDOFF` (measured at `rho = l0/4` too: 1.13,
+//!   `direct_coefficients_roundoff`), the Horner and the linear part's allowances are those
+//!   above (the spread is `sum_i |x_i|` itself). A re-base adds the terms in plain `f64`
+//!   per lane and coefficient over blocks of `BLOCK = 8` batches, adds the four lanes
+//!   pairwise and the block total to the double-double `A` (`TwoSum`, exact to `O(eps^2)`).
+//!   By the bound `gamma_(m-1) sum |terms|` of recursive summation (`u = eps/2`), each
+//!   present junction's term carries at most `(BLOCK - 1) u + 2 u = 4.5 eps` of summation
+//!   error besides its coefficients' own, so a re-base restarts the allowance at
+//!   `REBUILD_ROUNDOFF = OP_ROUNDOFF + (BLOCK + 1)/2 = 9.5` per present junction (for the
+//!   bins, `10 p + 19`). Summing all `N` terms in plain `f64` would charge `(N/4) u` per
+//!   junction, `O(N eps)` relative; the blocks keep it independent of `N` at one
+//!   double-double addition per 32 terms. `X0` is summed in double-double per lane.
+//! - *Threshold.* [`SeriesSum::for_junctions`] takes direct mode for `N < DIRECT_MAX =
+//!   8000`: on the scaled Fig. 1 scene direct mode is the faster below about 7000 junctions
+//!   with weak bonds and about 15000 with strong bonds (a re-base costs O(N_att p) against
+//!   the bins' O(bins p^2) twice as often, and the number of bins stops growing with `N`
+//!   once they cover the anchors' spread); measured figures and the command:
+//!   docs/performance.md, "Tilted law".
+//!
 //! **Use (engine).** Keep `|y - base()| <= radius()` (call `rebase(y)` when the plate leaves
 //! it); give `remove` the anchor exactly as given to `add` (or as moved by the caller's own
 //! `shift` arithmetic) with the handle `add` returned; `integral(y0, y1)` is within
@@ -106,9 +155,10 @@
 //! `error_bound()` with `rtol kappa l0 max(len, 1)` now and then and call `rebase(base())`
 //! when it has used up its half (the stick phase of a long run, where the plate stays within
 //! the radius for many events: the residues then grow to at most `n_rb (T_b + T_d)`, and the
-//! per-operation round-off without limit). The state serialises (checkpoints) with the
-//! residue count; the per-bin matrices `G_b` are not stored at all (a re-base forms them
-//! bin by bin).
+//! per-operation round-off without limit; in direct mode only the latter, and the refresh
+//! costs O(N p)). The state serialises (checkpoints) with the residue count; the per-bin
+//! matrices `G_b` are not stored at all (a re-base forms them bin by bin). Direct mode
+//! writes its offsets and handles instead of the bins (`Wire`).
 //!
 //! **Local cubic** (`taylor_at`, `LocalCubic`): `[S, S', S''/2, S'''/6]` at a point in one
 //! Horner pass, with `r4 = sum_(k>=4) C(k,4) |A_k| rho^(k-4)` bounding `|S''''|/24` (so the
