@@ -146,7 +146,7 @@
 //!   with weak bonds and about 15000 with strong bonds (a re-base costs O(N_att p) against
 //!   the bins' O(bins p^2) twice as often, and the number of bins stops growing with `N`
 //!   once they cover the anchors' spread); measured figures and the command:
-//!   docs/performance.md, "Tilted law".
+//!   docs/performance.md, "Exact engine, tilted law".
 //!
 //! **Use (engine).** Keep `|y - base()| <= radius()` (call `rebase(y)` when the plate leaves
 //! it); give `remove` the anchor exactly as given to `add` (or as moved by the caller's own
