@@ -1,7 +1,9 @@
 //! Cost of the tilted law's bond-force series (`engine::exact::series::SeriesSum`, src/engine/exact/series/sum.rs):
 //! add + remove of one junction, `force_and_stiffness`, `integral`, and a re-base, with
 //! 1e5 anchors spread uniformly over 25 l0 (100 bins of width l0/4), default `rtol = 1e-10`
-//! (`p = 17`); the direct O(N) sum over the same anchors for scale.
+//! (`p = 17`); the direct O(N) sum over the same anchors for scale. Direct mode (the
+//! engine's below `DIRECT_MAX` junctions): add + remove and a re-base with the first 1e3 of
+//! those anchors (`series/direct/...`).
 //!
 //! `cargo bench --bench series`; medians are recorded in docs/performance.md.
 
@@ -70,6 +72,31 @@ fn series(c: &mut Criterion) {
         bn.iter(|| {
             let y = black_box(0.01);
             cs.iter().map(|&a| law.force_x(y - a)).sum::<f64>()
+        })
+    });
+    g.finish();
+
+    let mut s = SeriesSum::direct(law, 1e-10);
+    for &a in &cs[..1000] {
+        s.add(a);
+    }
+    s.rebase(0.0);
+    let mut g = c.benchmark_group("series/direct");
+    g.measurement_time(Duration::from_secs(3)).warm_up_time(Duration::from_secs(1));
+    g.bench_function("add+remove/at-plate", |bn| {
+        let mut i = 0usize;
+        bn.iter(|| {
+            i = (i + 1) & 63;
+            let c = black_box(-0.001 * i as f64);
+            let h = s.add(c);
+            s.remove(c, h);
+        })
+    });
+    g.bench_function("rebase/1e3", |bn| {
+        let mut y = 0.1;
+        bn.iter(|| {
+            y = -y;
+            s.rebase(black_box(y))
         })
     });
     g.finish();

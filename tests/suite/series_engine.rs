@@ -4,6 +4,7 @@
 
 use stickslip::Scene;
 use stickslip::engine::Counters;
+use stickslip::engine::exact::series::{DIRECT_MAX, SeriesSum};
 use stickslip::observe::EventKind;
 use stickslip::runner::Recording;
 use stickslip_testkit::{BONDS, scene};
@@ -177,6 +178,40 @@ fn strong_bonds_follow_the_direct_engine_path_by_path() {
             let run = |method: &str| record(&path_scene(n, seed, method, &["output.sample_dt=0.5"])).0;
             let (a, b) = (run("series"), run("direct"));
             assert!(a.events.len() > 10, "n = {n}: {} events", a.events.len());
+            assert_eq!(a.events.len(), b.events.len(), "n = {n} seed {seed}: event counts");
+            for (x, y) in a.events.iter().zip(&b.events) {
+                assert_eq!((x.t, x.junction, x.kind), (y.t, y.junction, y.kind), "n = {n} seed {seed}");
+                assert!(
+                    (x.extension - y.extension).abs() <= 1e-6 * (1.0 + y.extension.abs()),
+                    "n = {n} seed {seed} t = {}: extension {} vs {}",
+                    x.t,
+                    x.extension,
+                    y.extension
+                );
+            }
+            for (x, y) in a.samples.iter().zip(&b.samples) {
+                assert!((x.x - y.x).abs() <= 1e-6 * (1.0 + y.x.abs()), "t = {}: {} vs {}", x.t, x.x, y.x);
+                assert!((x.v - y.v).abs() <= 1e-6 * (1.0 + y.v.abs()), "t = {}: {} vs {}", x.t, x.v, y.v);
+            }
+        }
+    }
+}
+
+/// Direct mode at the letter's junction count: with `N = 300` (and 100) the series engine
+/// keeps its series in direct mode (`N < DIRECT_MAX`: radius `l0/4`, a re-base rebuilds
+/// the series from the junctions) and still follows the direct engine (`exact.tilted =
+/// "direct"`, DOP853 on the junctions themselves) path by path under a shared seed: the
+/// same events at the same times, extensions and plate within the integrators' and the
+/// series' tolerances (`1e-6 (1 + |X|)`, as above).
+#[test]
+fn direct_mode_series_follows_the_direct_engine_path_by_path() {
+    for n in [100, 300] {
+        let law = stickslip::physics::Tilted { kappa: 0.1, l0: 1.0 };
+        assert!(SeriesSum::for_junctions(law, 1e-10, n).is_direct() && n < DIRECT_MAX, "N = {n}: not direct mode");
+        for seed in 1..=2u64 {
+            let run = |method: &str| record(&path_scene(n, seed, method, &["output.sample_dt=0.5"])).0;
+            let (a, b) = (run("series"), run("direct"));
+            assert!(a.events.len() > 5 * n, "n = {n}: {} events", a.events.len());
             assert_eq!(a.events.len(), b.events.len(), "n = {n} seed {seed}: event counts");
             for (x, y) in a.events.iter().zip(&b.events) {
                 assert_eq!((x.t, x.junction, x.kind), (y.t, y.junction, y.kind), "n = {n} seed {seed}");

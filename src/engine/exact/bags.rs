@@ -20,7 +20,8 @@ pub struct Attached {
     pub c: f64,
     pub id: u32,
     /// The series engine's handle of the junction in its `SeriesSum` (the bin it was
-    /// counted in, [`crate::engine::exact::series::SeriesSum::add`]); 0 in the other engines. It fills
+    /// counted in, or in direct mode its slot in the offsets' table:
+    /// [`crate::engine::exact::series::SeriesSum::add`]); 0 in the other engines. It fills
     /// what would be padding (the struct stays 16 bytes), so a rupture reads it with the
     /// anchor in one random memory access.
     #[serde(default)]

@@ -64,7 +64,7 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
         }
         let kernel = SeriesKernel {
             law,
-            series: SeriesSum::new(law, scene.exact.rtol),
+            series: SeriesSum::for_junctions(law, scene.exact.rtol, scene.junctions.n),
             kinetics,
             motion,
             rtol: scene.exact.rtol,
@@ -321,49 +321,76 @@ impl<K: Kinetics, P: Motion> Kernel for SeriesKernel<K, P> {
 #[cfg(test)]
 mod tests {
     use crate::engine::exact::core::junctions::rupture;
-    use crate::engine::exact::series::{DrivenPlate, ExactSeries, StrongKinetics};
+    use crate::engine::exact::series::{DIRECT_MAX, DrivenPlate, ExactSeries, SeriesSum, StrongKinetics};
     use crate::observe::Nothing;
     use crate::physics::{ForceLaw, Tilted};
     use crate::test_scenes::fig1_with;
 
-    /// A stick phase: every junction is counted through the bins at a re-base, then all but
-    /// one rupture with the plate at rest. Each removal leaves a residue in the bound; the
-    /// engine refreshes the series whenever the residue count passes the attached count, so
-    /// the bound stays within `rtol / 2` of `kappa l0 N_att` (plus round-off), the refreshes
-    /// are amortised (one per halving of the count), and the series still agrees with the
-    /// direct sum within its bound.
-    #[test]
-    fn series_refreshed_in_a_stick_phase() {
+    /// The engine's series for `n` junctions (all attached, kinematic plate at rest).
+    fn engine(n: usize) -> ExactSeries<StrongKinetics, DrivenPlate> {
         let s = fig1_with(&[
             "run.engine=exact",
             "junctions.force_law=tilted",
-            "junctions.n=4096",
+            &format!("junctions.n={n}"),
             "junctions.initial=attached",
             "plate.kinematic=true",
         ]);
-        let mut e =
-            ExactSeries::new(&s, Tilted::from_scene(&s), StrongKinetics { k0: s.junctions.k0 }, DrivenPlate::new(0.0))
-                .unwrap();
-        let (core, k) = (&mut e.core, &mut e.kernel);
-        let base = k.series.base();
-        k.series.rebase(base);
-        let rebases0 = core.counters.series_rebases.unwrap();
-        let (kl0, rtol) = (k.law.kappa * k.law.l0, k.rtol);
-        // Spread the anchors over several bins, as a moving plate would have.
-        let y = 0.05;
-        while core.bags.n_attached() > 1 {
-            rupture(core, k, core.bags.n_attached() - 1, &mut Nothing);
-            let n = core.bags.n_attached();
-            assert!(k.series.residue() <= n as u64, "residue {} above {n} attached", k.series.residue());
-            let rel = k.series.error_bound() / (kl0 * n.max(1) as f64);
-            assert!(rel <= 0.5 * rtol * (1.0 + 1e-3), "relative bound {rel} at {n} attached, rtol {rtol}");
-            if n % 97 == 0 {
-                let direct: f64 = core.bags.attached[..n].iter().map(|a| k.law.force_x(y - a.c)).sum();
-                let err = (k.series.force(y) - direct).abs();
-                assert!(err <= k.series.error_bound() + 1e-12 * kl0, "series off by {err} at {n} attached");
+        ExactSeries::new(&s, Tilted::from_scene(&s), StrongKinetics { k0: s.junctions.k0 }, DrivenPlate::new(0.0))
+            .unwrap()
+    }
+
+    /// The series is in direct mode below `DIRECT_MAX` junctions, in bins mode from it on.
+    #[test]
+    fn series_mode_follows_the_junction_count() {
+        for (n, direct) in [(1, true), (300, true), (DIRECT_MAX - 1, true), (DIRECT_MAX, false)] {
+            assert_eq!(engine(n).kernel.series.is_direct(), direct, "N = {n}");
+        }
+    }
+
+    /// A stick phase: every junction is counted in the series at a re-base, then all but
+    /// one rupture with the plate at rest. Bins mode (the series rebuilt in bins mode, as
+    /// at `N >= DIRECT_MAX`): each removal leaves a residue in the bound; the engine
+    /// refreshes the series whenever the residue count passes the attached count, so the
+    /// bound stays within `rtol / 2` of `kappa l0 N_att` (plus round-off), the refreshes are
+    /// amortised (one per halving of the count), and the series still agrees with the direct
+    /// sum within its bound. Direct mode (the engine's own choice at 4096): no residue, no
+    /// refresh, the same bound and agreement.
+    #[test]
+    fn series_refreshed_in_a_stick_phase() {
+        for bins in [true, false] {
+            let mut e = engine(4096);
+            let (core, k) = (&mut e.core, &mut e.kernel);
+            assert!(k.series.is_direct());
+            if bins {
+                k.series = SeriesSum::new(k.law, k.rtol);
+                let n = core.bags.n_attached();
+                for a in &mut core.bags.attached[..n] {
+                    a.bin = k.series.add(a.c);
+                }
+            }
+            let base = k.series.base();
+            k.series.rebase(base);
+            let rebases0 = core.counters.series_rebases.unwrap();
+            let (kl0, rtol) = (k.law.kappa * k.law.l0, k.rtol);
+            let y = 0.05;
+            while core.bags.n_attached() > 1 {
+                rupture(core, k, core.bags.n_attached() - 1, &mut Nothing);
+                let n = core.bags.n_attached();
+                assert!(k.series.residue() <= n as u64, "residue {} above {n} attached", k.series.residue());
+                let rel = k.series.error_bound() / (kl0 * n.max(1) as f64);
+                assert!(rel <= 0.5 * rtol * (1.0 + 1e-3), "relative bound {rel} at {n} attached, rtol {rtol}");
+                if n % 97 == 0 {
+                    let direct: f64 = core.bags.attached[..n].iter().map(|a| k.law.force_x(y - a.c)).sum();
+                    let err = (k.series.force(y) - direct).abs();
+                    assert!(err <= k.series.error_bound() + 1e-12 * kl0, "series off by {err} at {n} attached");
+                }
+            }
+            let refreshes = core.counters.series_rebases.unwrap() - rebases0;
+            if bins {
+                assert!((10..=14).contains(&refreshes), "{refreshes} refreshes for 4095 ruptures from 4096");
+            } else {
+                assert_eq!((refreshes, k.series.residue()), (0, 0), "direct mode");
             }
         }
-        let refreshes = core.counters.series_rebases.unwrap() - rebases0;
-        assert!((10..=14).contains(&refreshes), "{refreshes} refreshes for 4095 ruptures from 4096");
     }
 }

@@ -23,7 +23,7 @@ pub(crate) use crate::ode::{RosenbrockConfig, RosenbrockN, StiffSystem};
 pub use engine::{ExactSeries, SeriesKernel};
 pub use kinetics::{Kinetics, StrongKinetics, WeakKinetics};
 pub use motion::{DrivenPlate, Motion, RosenbrockPlate};
-pub use sum::{LocalCubic, SeriesSum, tilted_taylor};
+pub use sum::{DIRECT_MAX, LocalCubic, SeriesSum, tilted_taylor};
 
 use crate::engine::{EngineError, EngineVisitor};
 use crate::physics::{Bond, Tilted};

@@ -888,11 +888,19 @@ mod tests {
     }
 
     /// Kinematic drive past one junction: the segment's mean is `int S dt / h` (compared
-    /// with a fine Simpson rule on the law itself), its spread `int (S - mean)^2 dt`.
+    /// with a fine Simpson rule on the law itself), its spread `int (S - mean)^2 dt`. In
+    /// both modes of the series (direct mode's radius is twice the bins', so its steps are
+    /// up to twice as long and it re-bases half as often).
     #[test]
     fn kinematic_segment_integrates_the_bond_force() {
+        for direct in [false, true] {
+            kinematic_segment(direct);
+        }
+    }
+
+    fn kinematic_segment(direct: bool) {
         let law = Tilted { kappa: 0.3, l0: 1.0 };
-        let mut series = SeriesSum::new(law, 1e-12);
+        let mut series = if direct { SeriesSum::direct(law, 1e-12) } else { SeriesSum::new(law, 1e-12) };
         let c = -0.4;
         series.add(c);
         let frame = Frame::new(0.7);
@@ -906,7 +914,7 @@ mod tests {
             m.finish(&step, step.s1, &series).unwrap();
             tau = step.s1;
         }
-        assert!(counters.series_rebases.unwrap() >= 10);
+        assert!(counters.series_rebases.unwrap() >= if direct { 5 } else { 10 });
         let n = 20_000;
         let f = |t: f64| law.force_x(0.7 * t - c);
         let simpson = |g: &dyn Fn(f64) -> f64| {
@@ -995,13 +1003,21 @@ mod tests {
     /// lag agrees with the same plate on the series alone within twice the integrators'
     /// summed local tolerances plus the remainder's effect, `|du| <= T max(r4 e^4) / eta`
     /// (`u' = -(S + K u)/eta - V`, the force perturbed by at most that, and `d/du` of the
-    /// right-hand side negative).
+    /// right-hand side negative). In both modes of the series (direct mode's wider disc
+    /// gives a larger `r4`, so a slightly shorter reach).
     #[test]
     fn local_cubic_plate_matches_the_series_plate() {
+        for direct in [false, true] {
+            local_cubic_plate(direct);
+        }
+    }
+
+    /// `local_cubic_plate_matches_the_series_plate` with the series in bins or direct mode.
+    fn local_cubic_plate(direct: bool) {
         let law = Tilted { kappa: 0.1, l0: 1.0 };
         let plate = Plate { mass: 0.0, eta: 50.0, k: 10.0, v: 0.5 };
         let (rtol, atol) = (1e-10, 1e-12);
-        let mut base = SeriesSum::new(law, rtol);
+        let mut base = if direct { SeriesSum::direct(law, rtol) } else { SeriesSum::new(law, rtol) };
         for i in 0..3000 {
             base.add(-0.9 + 0.6 * (i as f64 / 3000.0));
         }
@@ -1040,7 +1056,7 @@ mod tests {
         let allowed = e_c + e_s + 1.0 * worst * scale / plate.eta;
         assert!((u_c - u_s).abs() <= allowed, "{u_c} vs {u_s}, allowed {allowed}");
         println!(
-            "cubic steps {used}, series steps {series_steps}, |du| {:.3e}, allowed {allowed:.3e}",
+            "direct mode {direct}: cubic steps {used}, series steps {series_steps}, |du| {:.3e}, allowed {allowed:.3e}",
             (u_c - u_s).abs()
         );
     }

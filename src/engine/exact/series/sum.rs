@@ -1,8 +1,11 @@
 //! The tilted law's total bond force `S(y) = sum_i f^x(y - c_i)` (plate at `y`, junction `i`
 //! anchored at `c_i`, extension `x_i = y - c_i`) as a truncated series about a base point
-//! `y0`, updated in O(p) flops per attached or detached junction and re-based in
-//! O(bins p^2), independent of the number `N` of junctions. Measured costs:
-//! docs/performance.md, "Tilted law: the bond-force series".
+//! `y0`, updated in O(p) flops per attached or detached junction. Two modes, chosen once at
+//! construction ([`SeriesSum::for_junctions`]): **bins mode** re-bases in O(bins p^2) from
+//! the anchors' binned moments, independent of the number `N` of junctions; **direct mode**
+//! (`N < DIRECT_MAX = 8000`) keeps the junctions' offsets and re-bases in O(N p) by summing
+//! their own expansions, with twice the radius (section "Direct mode" below). Measured
+//! costs: docs/performance.md, "Tilted law: the bond-force series".
 //!
 //! **Split.** `f^x(x) = kappa x + phi(x)`, `phi(x) = -kappa l0 x h(x)`,
 //! `h(x) = (x^2 + l0^2)^(-1/2)`. The linear part is kept exactly as
@@ -36,7 +39,8 @@
 //! The bound is uniform in `x0`: every junction's expansion converges with ratio `r/l0`
 //! wherever it is centred.
 //!
-//! **Two expansions of one junction.** With `|d| <= rho`:
+//! **Two expansions of one junction** (bins mode; the sections down to "Direct mode" are
+//! about bins mode). With `|d| <= rho`:
 //! - its own (direct) expansion `D_i(d) = sum_(k<=p) phi_k(y0 - c_i) d^k`, truncation error
 //!   `<= kappa l0 T_d`, `T_d = sum_(k>p) (rho/l0)^k = q_d^(p+1)/(1-q_d)`, `q_d = 1/8`;
 //! - the bins' double expansion `B_i(d)`: anchors are grouped on a fixed grid of width `w`
@@ -99,6 +103,51 @@
 //! leaving a residue of order `kappa eps |c - origin|` in the moments and in `A` until its
 //! bin empties; the engine's periodic `shift` keeps `|c - origin|` small.)
 //!
+//! **Direct mode** ([`SeriesSum::direct`]). At small `N` the anchors fall into about as many
+//! bins as there are attached junctions, so a bins re-base (O(p^2) per bin) costs more than
+//! rebuilding the series junction by junction would, and the bins' radius `l0/8` (set by
+//! their double expansion, `q = (rho + w/2)/l0 = 1/4`) makes the plate re-base every
+//! `l0/16` of travel. Direct mode keeps no bins:
+//! - *State.* The live junctions' offsets `e_i = c_i - origin` (frame-independent like the
+//!   bins' offsets: `shift` moves `origin` and `y0` only) in a dense array, with stable
+//!   handles through a handle -> position table and swap-remove (O(1)). `add` adds `D_i`
+//!   (`phi_taylor(x_i)`, `x_i = base_off - e_i = y0 - c_i`) to `A` and `x_i` to `X0`;
+//!   `remove` subtracts the same `D_i` and `x_i`, computed from the stored offset, not from
+//!   the caller's `c`. So `A = sum_i D_i` at all times: no residue, and an add/remove pair
+//!   cancels exactly in the double-double accumulators (the high parts' `TwoSum` is exact;
+//!   only the low parts' own sums round, `O(eps^2 |A|)`).
+//! - *Re-base.* `rebase(y0)` rebuilds `A = sum_i D_i(y0)`, `X0 = sum_i x_i` and the spread
+//!   `sum_i |x_i|` from the offsets, O(N p): four junctions at a time through `phi_taylor4`
+//!   (`phi_taylor` on a structure of arrays, one pass, compiled to packed SSE2 operations on
+//!   baseline x86-64; bit for bit `phi_taylor`'s values, unit test `phi_taylor4_is_phi_taylor`).
+//! - *Radius and order.* Only the junctions' own expansions are left, so `rho = l0/4`
+//!   (`q_d = rho/l0 = 1/4`: twice the bins' radius, half the re-bases) and `p` is the
+//!   smallest order with `T_d = q_d^(p+1)/(1-q_d) <= rtol/4` (`p = 17` at `rtol = 1e-10`,
+//!   as in bins mode; capped at 31).
+//! - *Truncation bound.* `|S - S_true| <= kappa l0 n T_d` and `|dS/dy - S'_true| <= kappa n
+//!   T'_(q_d)` (the coefficient bound above with `|d| <= l0/4`): at most `(rtol/4) kappa l0
+//!   n`. A junction at `x0 = 0` with the plate at the radius attains it within a factor
+//!   3 to 40 (`p = 4` to 17; test `direct_bound_is_nearly_attained`).
+//! - *Round-off.* `|D_i|_rho <= kappa l0/(1 - q_d)` and `q_d = q`, so the unit `eps kappa
+//!   l0/(1-q)`, the per-operation charge `OP_ROUNDOFF` (measured at `rho = l0/4` too: 1.13,
+//!   `direct_coefficients_roundoff`), the Horner and the linear part's allowances are those
+//!   above (the spread is `sum_i |x_i|` itself). A re-base adds the terms in plain `f64`
+//!   per lane and coefficient over blocks of `BLOCK = 8` batches, adds the four lanes
+//!   pairwise and the block total to the double-double `A` (`TwoSum`, exact to `O(eps^2)`).
+//!   By the bound `gamma_(m-1) sum |terms|` of recursive summation (`u = eps/2`), each
+//!   present junction's term carries at most `(BLOCK - 1) u + 2 u = 4.5 eps` of summation
+//!   error besides its coefficients' own, so a re-base restarts the allowance at
+//!   `REBUILD_ROUNDOFF = OP_ROUNDOFF + (BLOCK + 1)/2 = 9.5` per present junction (for the
+//!   bins, `10 p + 19`). Summing all `N` terms in plain `f64` would charge `(N/4) u` per
+//!   junction, `O(N eps)` relative; the blocks keep it independent of `N` at one
+//!   double-double addition per 32 terms. `X0` is summed in double-double per lane.
+//! - *Threshold.* [`SeriesSum::for_junctions`] takes direct mode for `N < DIRECT_MAX =
+//!   8000`: on the scaled Fig. 1 scene direct mode is the faster below about 7000 junctions
+//!   with weak bonds and about 15000 with strong bonds (a re-base costs O(N_att p) against
+//!   the bins' O(bins p^2) twice as often, and the number of bins stops growing with `N`
+//!   once they cover the anchors' spread); measured figures and the command:
+//!   docs/performance.md, "Exact engine, tilted law".
+//!
 //! **Use (engine).** Keep `|y - base()| <= radius()` (call `rebase(y)` when the plate leaves
 //! it); give `remove` the anchor exactly as given to `add` (or as moved by the caller's own
 //! `shift` arithmetic) with the handle `add` returned; `integral(y0, y1)` is within
@@ -106,9 +155,10 @@
 //! `error_bound()` with `rtol kappa l0 max(len, 1)` now and then and call `rebase(base())`
 //! when it has used up its half (the stick phase of a long run, where the plate stays within
 //! the radius for many events: the residues then grow to at most `n_rb (T_b + T_d)`, and the
-//! per-operation round-off without limit). The state serialises (checkpoints) with the
-//! residue count; the per-bin matrices `G_b` are not stored at all (a re-base forms them
-//! bin by bin).
+//! per-operation round-off without limit; in direct mode only the latter, and the refresh
+//! costs O(N p)). The state serialises (checkpoints) with the residue count; the per-bin
+//! matrices `G_b` are not stored at all (a re-base forms them bin by bin). Direct mode
+//! writes its offsets and handles instead of the bins (`Wire`).
 //!
 //! **Local cubic** (`taylor_at`, `LocalCubic`): `[S, S', S''/2, S'''/6]` at a point in one
 //! Horner pass, with `r4 = sum_(k>=4) C(k,4) |A_k| rho^(k-4)` bounding `|S''''|/24` (so the
@@ -123,8 +173,25 @@ use crate::physics::Tilted;
 pub const PMAX: usize = 32;
 /// `q = (rho + w/2) / l0`, the convergence ratio of every bin's double expansion.
 const Q: f64 = 0.25;
-/// `rho / l0`, the convergence ratio of a junction's own expansion about the base.
+/// `rho / l0`, the convergence ratio of a junction's own expansion about the base (bins mode).
 const Q_DIRECT: f64 = 0.125;
+/// `rho / l0` in direct mode, the convergence ratio of every junction's own expansion (no
+/// bins: `rho = l0/4`).
+const Q_D: f64 = 0.25;
+/// Direct mode below this many junctions ([`SeriesSum::for_junctions`]); bins mode from it on.
+pub const DIRECT_MAX: usize = 8000;
+/// Junctions per lane of the direct re-base's batches (`LANES` at a time).
+const LANES: usize = 4;
+/// Batches summed in plain `f64` (per lane and coefficient) between two folds into the
+/// double-double series: each lane's block sum has at most `BLOCK` terms.
+const BLOCK: usize = 8;
+/// Round-off of one present junction's term in a direct re-base, in units of
+/// `eps kappa l0 / (1 - q)`: its coefficients (`OP_ROUNDOFF`, which covers `phi_taylor` at
+/// `rho = l0/4`: unit test `direct_coefficients_roundoff`) plus the plain-`f64` block sums,
+/// `(BLOCK - 1) u` per lane and `2 u` for adding the four lanes (`u = eps/2`; first order,
+/// Higham's bound for recursive summation), the fold into the double-double series exact
+/// to `O(eps^2)`.
+const REBUILD_ROUNDOFF: f64 = OP_ROUNDOFF + 0.5 * (BLOCK as f64 + 1.0);
 const EPS: f64 = f64::EPSILON;
 /// Round-off of one junction's direct coefficients `phi_taylor` plus their double-double
 /// accumulation, in the norm `sum_k |dA_k| rho^k` and units of `eps kappa l0 / (1 - q)`:
@@ -212,6 +279,76 @@ pub fn phi_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
     }
     if k < n {
         out[k] = so * (pk[k - 1] - s * pk[k]);
+    }
+}
+
+/// `acc[k][l] += phi_k(x[l])` for `k < n` and the four lanes `l`: [`phi_taylor`] on four
+/// points at once (structure of arrays, so that each step is one operation on a vector of
+/// lanes: two SSE2 instructions on baseline x86-64), bit for bit the same values (the same
+/// operations in the same order, none fused). Every `max(|x[l]|, l0)` must lie in
+/// `[1e-150, 1e150]` (the caller checks; outside, [`phi_taylor`] takes its `hypot` branch).
+#[inline]
+fn phi_taylor4(law: &Tilted, x: [f64; LANES], n: usize, acc: &mut [[f64; LANES]; PMAX]) {
+    debug_assert!((1..=PMAX).contains(&n));
+    let l0 = law.l0;
+    let (mut inv_u, mut inv_r, mut s, mut t) = ([0.0; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
+    for l in 0..LANES {
+        let u = x[l] * x[l] + l0 * l0;
+        inv_u[l] = 1.0 / u;
+        inv_r[l] = u.sqrt() * inv_u[l];
+        s[l] = x[l] * x[l] * inv_u[l];
+        t[l] = -x[l] * inv_r[l];
+    }
+    let a = -law.kappa * l0;
+    for l in 0..LANES {
+        acc[0][l] += -a * t[l];
+    }
+    // One pass, without `phi_taylor`'s array of `P_k`: at odd `k`, `phi_k` needs `P_(k-1)`
+    // and `Q_k = P_k / t`, `phi_(k+1)` needs `Q_k` and `P_(k+1)`; then the two chains step
+    // to `P_(k+3)` and `Q_(k+2)`. The same operations as `phi_taylor`'s two loops.
+    let mut pm = [1.0; LANES]; // P_(k-1)
+    let mut pp = [0.0; LANES]; // P_(k+1)
+    let mut qm = [0.0; LANES]; // Q_(k-2)
+    let mut qc = [1.0; LANES]; // Q_k
+    let (mut so, mut se) = ([0.0; LANES], [0.0; LANES]);
+    for l in 0..LANES {
+        pp[l] = 1.5 * s[l] - 0.5;
+        so[l] = a * inv_r[l];
+        se[l] = a * inv_u[l];
+    }
+    let mut k = 1;
+    while k < n {
+        for l in 0..LANES {
+            acc[k][l] += so[l] * (pm[l] - s[l] * qc[l]);
+        }
+        if k + 1 == n {
+            break;
+        }
+        for l in 0..LANES {
+            acc[k + 1][l] += se[l] * (t[l] * (qc[l] - pp[l]));
+        }
+        if k + 2 >= n {
+            break;
+        }
+        let [ae, be, ge] = LEGENDRE2[k + 1];
+        let (mut pn, mut qn) = ([0.0; LANES], [0.0; LANES]);
+        for l in 0..LANES {
+            so[l] *= inv_u[l];
+            se[l] *= inv_u[l];
+            pn[l] = (ae * s[l] - be) * pp[l] - ge * pm[l];
+        }
+        if k == 1 {
+            for l in 0..LANES {
+                qn[l] = 2.5 * s[l] - 1.5;
+            }
+        } else {
+            let [ao, bo, go] = LEGENDRE2[k];
+            for l in 0..LANES {
+                qn[l] = (ao * s[l] - bo) * qc[l] - go * qm[l];
+            }
+        }
+        (pm, pp, qm, qc) = (pp, pn, qc, qn);
+        k += 2;
     }
 }
 
@@ -339,9 +476,83 @@ impl Dense {
     }
 }
 
+/// Direct mode's junctions: their offsets `e_i = c_i - origin` (frame-independent, like the
+/// bins' offsets) in a dense array, and stable handles through a handle -> position table
+/// (swap-remove: O(1) `add` and `remove`).
+#[derive(Clone, Debug, Default, PartialEq)]
+struct Direct {
+    /// `e_i` of the live junctions, positions `0..n`.
+    e: Vec<f64>,
+    /// The handle of the junction at each position.
+    handle: Vec<u32>,
+    /// The position of each handle (`NONE`: free).
+    pos: Vec<u32>,
+    /// Free handles.
+    free: Vec<u32>,
+}
+
+/// Serialized form of [`Direct`] (the position table is rebuilt on reading).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct DirectWire {
+    e: Vec<f64>,
+    handle: Vec<u32>,
+    free: Vec<u32>,
+}
+
+impl From<DirectWire> for Direct {
+    fn from(w: DirectWire) -> Direct {
+        let len = w.handle.iter().chain(&w.free).map(|&h| h as usize + 1).max().unwrap_or(0);
+        let mut pos = vec![NONE; len];
+        for (i, &h) in w.handle.iter().enumerate() {
+            pos[h as usize] = i as u32;
+        }
+        Direct { e: w.e, handle: w.handle, pos, free: w.free }
+    }
+}
+
+impl Direct {
+    /// Stores a junction with offset `e`; returns its handle. O(1).
+    #[inline]
+    fn insert(&mut self, e: f64) -> u32 {
+        let at = self.e.len() as u32;
+        let h = match self.free.pop() {
+            Some(h) => {
+                self.pos[h as usize] = at;
+                h
+            }
+            None => {
+                self.pos.push(at);
+                self.pos.len() as u32 - 1
+            }
+        };
+        self.e.push(e);
+        self.handle.push(h);
+        h
+    }
+
+    /// Forgets the junction with handle `h`; returns its offset as stored. O(1).
+    #[inline]
+    fn take(&mut self, h: u32) -> f64 {
+        let at = self.pos.get(h as usize).copied().unwrap_or(NONE);
+        assert!(at != NONE, "SeriesSum::remove: handle {h} has no junction");
+        let at = at as usize;
+        let e = self.e.swap_remove(at);
+        self.handle.swap_remove(at);
+        if let Some(&moved) = self.handle.get(at) {
+            self.pos[moved as usize] = at as u32;
+        }
+        self.pos[h as usize] = NONE;
+        self.free.push(h);
+        e
+    }
+}
+
 /// Serialized form of `SeriesSum`. `n_rb` and `resid` are absent from checkpoints written
 /// before the O(p) update: such a state is read as re-based with every present junction
-/// counted through the bins (`n_rb = n`, `resid = 0`), which is what it was.
+/// counted through the bins (`n_rb = n`, `resid = 0`), which is what it was. Direct mode
+/// writes `direct` and no `bins`, `free`, `index` (a reader that knows only the bins then
+/// refuses the state instead of misreading it); bins mode writes the same bytes as before
+/// direct mode existed.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct Wire {
     law: Tilted,
@@ -353,20 +564,26 @@ struct Wire {
     x0: [f64; 2],
     a: [f64; PMAX],
     al: [f64; PMAX],
-    bins: Vec<Bin>,
-    free: Vec<u32>,
-    index: Vec<(i64, u32)>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    bins: Option<Vec<Bin>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    free: Option<Vec<u32>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    index: Option<Vec<(i64, u32)>>,
     roff: f64,
     spread: f64,
     #[serde(default)]
     n_rb: Option<u64>,
     #[serde(default)]
     resid: u64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    direct: Option<DirectWire>,
 }
 
 /// The bond force `S(y) = sum_i f^x(y - c_i)` of a set of junctions under the tilted law,
 /// kept as `kappa (X0 + n d) + sum_(k<=p) A_k d^k`, `d = y - base`, plus anchor bins for
-/// O(bins) re-basing (module doc).
+/// O(bins) re-basing (bins mode) or the junctions' offsets for an O(n) one (direct mode),
+/// chosen at construction (module doc).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(from = "Wire", into = "Wire")]
 pub struct SeriesSum {
@@ -402,6 +619,8 @@ pub struct SeriesSum {
     resid: u64,
     /// O(1) grid index -> slot cache of `index`.
     dense: Dense,
+    /// Direct mode: the junctions' offsets (no bins; `bins`, `index` stay empty).
+    direct: Option<Direct>,
 }
 
 impl From<Wire> for SeriesSum {
@@ -416,14 +635,15 @@ impl From<Wire> for SeriesSum {
             x0: w.x0,
             a: w.a,
             al: w.al,
-            bins: w.bins,
-            free: w.free,
-            index: w.index,
+            bins: w.bins.unwrap_or_default(),
+            free: w.free.unwrap_or_default(),
+            index: w.index.unwrap_or_default(),
             roff: w.roff,
             spread: w.spread,
             n_rb: w.n_rb.unwrap_or(w.n),
             resid: w.resid,
             dense: Dense::default(),
+            direct: w.direct.map(Direct::from),
         };
         if let Some(&(j, slot)) = s.index.last() {
             let index = std::mem::take(&mut s.index);
@@ -436,6 +656,7 @@ impl From<Wire> for SeriesSum {
 
 impl From<SeriesSum> for Wire {
     fn from(s: SeriesSum) -> Wire {
+        let bins_mode = s.direct.is_none();
         Wire {
             law: s.law,
             p: s.p,
@@ -446,13 +667,14 @@ impl From<SeriesSum> for Wire {
             x0: s.x0,
             a: s.a,
             al: s.al,
-            bins: s.bins,
-            free: s.free,
-            index: s.index,
+            bins: bins_mode.then_some(s.bins),
+            free: bins_mode.then_some(s.free),
+            index: bins_mode.then_some(s.index),
             roff: s.roff,
             spread: s.spread,
             n_rb: Some(s.n_rb),
             resid: s.resid,
+            direct: s.direct.map(|d| DirectWire { e: d.e, handle: d.handle, free: d.free }),
         }
     }
 }
@@ -471,6 +693,17 @@ fn tails_at(q: f64, p: usize) -> (f64, f64) {
 fn order_for(rtol: f64) -> usize {
     for p in 1..PMAX - 1 {
         if tails_at(Q, p).0 + tails_at(Q_DIRECT, p).0 <= 0.25 * rtol {
+            return p;
+        }
+    }
+    PMAX - 1
+}
+
+/// Smallest order `p` whose direct truncation bound meets `rtol/4`,
+/// `T_d = (1/4)^(p+1)/(3/4) <= rtol/4` (direct mode, `rho = l0/4`), capped at `PMAX - 1`.
+fn order_for_direct(rtol: f64) -> usize {
+    for p in 1..PMAX - 1 {
+        if tails_at(Q_D, p).0 <= 0.25 * rtol {
             return p;
         }
     }
@@ -526,7 +759,30 @@ impl SeriesSum {
             n_rb: 0,
             resid: 0,
             dense: Dense::default(),
+            direct: None,
         }
+    }
+
+    /// Empty set of anchors in direct mode: no bins, the junctions' offsets kept in a dense
+    /// array and `rebase` an O(`len()`) rebuild of the series from them; radius
+    /// `rho = l0/4` (`q_d = 1/4`) and the smallest order `p` with `(1/4)^(p+1)/(3/4) <= rtol/4`
+    /// (`p = 17` at `rtol = 1e-10`): the truncation part of `error_bound()` is at most
+    /// `(rtol/4) kappa l0 len()` (no residue: a removal subtracts exactly what its `add`
+    /// added). Cheaper than bins mode when the anchors fall into about as many bins as
+    /// there are junctions (module doc, "Direct mode").
+    pub fn direct(law: Tilted, rtol: f64) -> SeriesSum {
+        SeriesSum { p: order_for_direct(rtol), direct: Some(Direct::default()), ..SeriesSum::new(law, rtol) }
+    }
+
+    /// The series for a run of `n` junctions: direct mode below [`DIRECT_MAX`]
+    /// ([`SeriesSum::direct`]), bins mode from it on ([`SeriesSum::new`]).
+    pub fn for_junctions(law: Tilted, rtol: f64, n: usize) -> SeriesSum {
+        if n < DIRECT_MAX { SeriesSum::direct(law, rtol) } else { SeriesSum::new(law, rtol) }
+    }
+
+    /// Whether the series is in direct mode (no bins).
+    pub fn is_direct(&self) -> bool {
+        self.direct.is_some()
     }
 
     /// Removals charged as residue since the last re-base (junctions counted through the
@@ -561,9 +817,11 @@ impl SeriesSum {
     }
 
     /// The series is valid (error within `error_bound()`) for `|y - base| <= radius()`;
-    /// `radius = l0/8`. Outside it, nothing is guaranteed.
+    /// `radius = l0/8` (bins mode) or `l0/4` (direct mode). Outside it, nothing is
+    /// guaranteed.
+    #[inline]
     pub fn radius(&self) -> f64 {
-        0.125 * self.law.l0
+        if self.direct.is_some() { Q_D * self.law.l0 } else { 0.125 * self.law.l0 }
     }
 
     /// Bin width `w = l0/4`.
@@ -639,9 +897,30 @@ impl SeriesSum {
         self.roff += OP_ROUNDOFF;
     }
 
-    /// A junction with anchor `c` attached. O(p) flops (plus a binary search over the bins).
-    /// Returns a handle to pass to `remove`.
+    /// Direct mode: adds `sign * D_i`, the junction's own coefficients `phi_k(x)` about the
+    /// base (`x = y0 - c_i = base_off - e_i`), to the series and `sign * x` to `X0`. O(p).
+    #[inline]
+    fn apply_direct(&mut self, x: f64, sign: f64) {
+        let p = self.p;
+        let mut c = [0.0; PMAX];
+        phi_taylor(&self.law, x, &mut c[..=p]);
+        dd_add_all_signed(&mut self.a[..=p], &mut self.al[..=p], &c[..=p], sign);
+        dd_add(&mut self.x0, sign * x);
+        self.roff += OP_ROUNDOFF;
+    }
+
+    /// A junction with anchor `c` attached. O(p) flops (plus, in bins mode, a binary search
+    /// over the bins when the grid-index table misses). Returns a handle to pass to `remove`.
     pub fn add(&mut self, c: f64) -> u32 {
+        if let Some(d) = &mut self.direct {
+            let e = c - self.origin;
+            let h = d.insert(e);
+            let x = self.base_off - e;
+            self.n += 1;
+            self.spread += x.abs();
+            self.apply_direct(x, 1.0);
+            return h;
+        }
         let w = self.width();
         let t = c - self.origin;
         // floor(t / w) without the libm call (baseline x86-64 has no rounding instruction).
@@ -658,8 +937,20 @@ impl SeriesSum {
     }
 
     /// The junction with anchor `c` (as given to `add`, or as moved by `shift`) and handle `h`
-    /// detached. O(p) flops (O(bins) when its bin empties and is freed).
+    /// detached. O(p) flops (O(bins) when its bin empties and is freed). Direct mode uses the
+    /// offset stored at `add`, not `c`: it subtracts exactly the terms `add` added.
     pub fn remove(&mut self, c: f64, h: u32) {
+        if let Some(d) = &mut self.direct {
+            let e = d.take(h);
+            let x = self.base_off - e;
+            self.n -= 1;
+            self.spread = (self.spread - x.abs()).max(0.0);
+            self.apply_direct(x, -1.0);
+            if self.n == 0 {
+                self.clear();
+            }
+            return;
+        }
         let slot = h as usize;
         let w = self.width();
         let j = self.bins[slot].j;
@@ -678,15 +969,19 @@ impl SeriesSum {
             self.free_bin(slot, j);
         }
         if self.n == 0 {
-            // Exactly zero: forget the rounding and the residues.
-            self.x0 = [0.0; 2];
-            self.a = [0.0; PMAX];
-            self.al = [0.0; PMAX];
-            self.spread = 0.0;
-            self.roff = 0.0;
-            self.n_rb = 0;
-            self.resid = 0;
+            self.clear();
         }
+    }
+
+    /// No junction left: the series is exactly zero; forget the rounding and the residues.
+    fn clear(&mut self) {
+        self.x0 = [0.0; 2];
+        self.a = [0.0; PMAX];
+        self.al = [0.0; PMAX];
+        self.spread = 0.0;
+        self.roff = 0.0;
+        self.n_rb = 0;
+        self.resid = 0;
     }
 
     /// An emptied bin: its exact moments are zero, so forget the rounded ones and free the slot.
@@ -703,8 +998,13 @@ impl SeriesSum {
     }
 
     /// New base point `y0`: the series is recomputed from the bins' moments,
-    /// `A_k = sum_b sum_m G_b[m][k] M_(b,m)`. O(bins p^2), independent of `len()`.
+    /// `A_k = sum_b sum_m G_b[m][k] M_(b,m)`, O(bins p^2), independent of `len()` (bins
+    /// mode); or from the junctions' offsets, `A = sum_i D_i`, O(`len()` p) (direct mode).
     pub fn rebase(&mut self, y0: f64) {
+        if self.direct.is_some() {
+            self.rebase_direct(y0);
+            return;
+        }
         let n = self.n as f64;
         // X0 += n (y0 - base), the product exactly (Dekker split via fma-free two-product).
         let delta = y0 - self.base;
@@ -739,6 +1039,86 @@ impl SeriesSum {
         // Each present junction's term (powers, `G_b`, products, sums), as charged by the
         // O(p^2) update this replaced, plus the bin's sum over m.
         self.roff = n * (9.0 * (p as f64 + 2.0) + p as f64 + 1.0);
+        self.n_rb = self.n;
+        self.resid = 0;
+    }
+
+    /// Direct mode's re-base: `A = sum_i phi_taylor(x_i)`, `x_i = base_off - e_i`, four
+    /// junctions at a time ([`phi_taylor4`]) summed per lane in plain `f64` over blocks of
+    /// `BLOCK` batches and folded into the double-double series after each block; `X0 =
+    /// sum_i x_i` (double-double per lane) and `spread = sum_i |x_i|` afresh. The round-off
+    /// allowance restarts at `REBUILD_ROUNDOFF` per junction.
+    fn rebase_direct(&mut self, y0: f64) {
+        self.base = y0;
+        self.base_off = y0 - self.origin;
+        let base_off = self.base_off;
+        let (p, law) = (self.p, self.law);
+        let d = self.direct.as_ref().expect("direct mode");
+        let mut a = [0.0; PMAX];
+        let mut al = [0.0; PMAX];
+        let (mut xh, mut xl) = ([0.0; LANES], [0.0; LANES]);
+        let mut spread = [0.0; LANES];
+        let mut acc = [[0.0; LANES]; PMAX];
+        // Folds the block sums into the series (the four lanes pairwise, then one
+        // double-double addition per coefficient) and clears them.
+        let fold = |acc: &mut [[f64; LANES]; PMAX], a: &mut [f64; PMAX], al: &mut [f64; PMAX]| {
+            let mut t = [0.0; PMAX];
+            for (tk, ak) in t.iter_mut().zip(acc.iter_mut()).take(p + 1) {
+                *tk = (ak[0] + ak[1]) + (ak[2] + ak[3]);
+                *ak = [0.0; LANES];
+            }
+            dd_add_all(&mut a[..=p], &mut al[..=p], &t[..=p]);
+        };
+        let batches = d.e.chunks_exact(LANES);
+        let tail = batches.remainder();
+        let mut in_block = 0;
+        for e in batches {
+            let mut x = [0.0; LANES];
+            for l in 0..LANES {
+                x[l] = base_off - e[l];
+            }
+            if x.iter().all(|v| (1e-150..=1e150).contains(&v.abs().max(law.l0))) {
+                phi_taylor4(&law, x, p + 1, &mut acc);
+            } else {
+                let mut c = [0.0; PMAX];
+                for (l, &xv) in x.iter().enumerate() {
+                    phi_taylor(&law, xv, &mut c[..=p]);
+                    for (ak, ck) in acc.iter_mut().zip(&c).take(p + 1) {
+                        ak[l] += ck;
+                    }
+                }
+            }
+            for l in 0..LANES {
+                let (s, err) = two_sum(xh[l], x[l]);
+                xh[l] = s;
+                xl[l] += err;
+                spread[l] += x[l].abs();
+            }
+            in_block += 1;
+            if in_block == BLOCK {
+                fold(&mut acc, &mut a, &mut al);
+                in_block = 0;
+            }
+        }
+        fold(&mut acc, &mut a, &mut al);
+        let mut x0 = [0.0; 2];
+        for &e in tail {
+            let x = base_off - e;
+            let mut c = [0.0; PMAX];
+            phi_taylor(&law, x, &mut c[..=p]);
+            dd_add_all(&mut a[..=p], &mut al[..=p], &c[..=p]);
+            dd_add(&mut x0, x);
+            spread[0] += x.abs();
+        }
+        for l in 0..LANES {
+            dd_add(&mut x0, xh[l]);
+            dd_add(&mut x0, xl[l]);
+        }
+        self.a = a;
+        self.al = al;
+        self.x0 = x0;
+        self.spread = (spread[0] + spread[1]) + (spread[2] + spread[3]);
+        self.roff = self.n as f64 * REBUILD_ROUNDOFF;
         self.n_rb = self.n;
         self.resid = 0;
     }
@@ -800,6 +1180,12 @@ impl SeriesSum {
     /// (`dS/dy`): every present junction's expansion (the bins' double expansion, which
     /// dominates its own) plus each charged residue (bin expansion minus own expansion).
     fn truncation(&self) -> (f64, f64) {
+        if self.direct.is_some() {
+            // Every present junction's own expansion, `q_d = 1/4`; no residue.
+            let (df, ds) = tails_at(Q_D, self.p);
+            let n = self.n as f64;
+            return (n * df, n * ds);
+        }
         let (bf, bs) = tails_at(Q, self.p);
         let (df, ds) = tails_at(Q_DIRECT, self.p);
         let (n, r) = (self.n as f64, self.resid as f64);
@@ -1010,14 +1396,17 @@ mod tests {
     /// double-double value (the absolute error of `P_(k-1) - t P_k`, `|P_k| <= 1`, near
     /// `|t| = 1` where the difference cancels), and the error in the norm
     /// `sum_k |d phi_k| rho^k` of one junction's increment is below `OP_ROUNDOFF / 4` in units
-    /// of `eps kappa l0 / (1 - q)` (the worst is printed).
+    /// of `eps kappa l0 / (1 - q)`, at the radius of either mode (`rho = l0/8`, bins; `l0/4`,
+    /// direct; the worst of each is printed).
     #[test]
     fn direct_coefficients_roundoff() {
         let mut worst_norm: f64 = 0.0;
+        let mut worst_norm_d: f64 = 0.0;
         let mut worst_k: f64 = 0.0;
         for &(kappa, l0) in &[(1.0, 1.0), (0.3, 0.07), (2.0, 9.0)] {
             let law = Tilted { kappa, l0 };
             let rho = 0.125 * l0;
+            let rho_d = Q_D * l0;
             let mut ratios = vec![0.0];
             for i in 0..=240 {
                 let r = 10f64.powf(-6.0 + 12.0 * i as f64 / 240.0) * (1.0 + 0.013 * i as f64);
@@ -1030,7 +1419,7 @@ mod tests {
                 phi_taylor(&law, x, &mut c);
                 let want = phi_oracle(&law, x);
                 let r = x.hypot(l0);
-                let mut norm = 0.0;
+                let (mut norm, mut norm_d) = (0.0, 0.0);
                 for k in 0..PMAX {
                     let err = (D::from(c[k]) - want[k]).hi().abs();
                     let scale = kappa * l0 * r.powi(-(k as i32));
@@ -1038,12 +1427,147 @@ mod tests {
                     assert!(rel <= 4.0 * (k as f64 + 1.0), "x/l0 = {ratio}, k = {k}: {rel} eps");
                     worst_k = worst_k.max(rel / (k as f64 + 1.0));
                     norm += err * rho.powi(k as i32);
+                    norm_d += err * rho_d.powi(k as i32);
                 }
                 worst_norm = worst_norm.max(norm / (EPS * kappa * l0 / (1.0 - Q)));
+                worst_norm_d = worst_norm_d.max(norm_d / (EPS * kappa * l0 / (1.0 - Q_D)));
             }
         }
-        println!("worst error: {worst_k:.3} (k+1) eps kappa l0 R^-k; norm {worst_norm:.3} eps kappa l0/(1-q)");
+        println!(
+            "worst error: {worst_k:.3} (k+1) eps kappa l0 R^-k; norm {worst_norm:.3} (rho = l0/8), {worst_norm_d:.3} (rho = l0/4) eps kappa l0/(1-q)"
+        );
         assert!(worst_norm <= OP_ROUNDOFF / 4.0, "norm {worst_norm}");
+        assert!(worst_norm_d <= OP_ROUNDOFF / 4.0, "norm at l0/4 {worst_norm_d}");
+    }
+
+    /// `phi_taylor4` gives `phi_taylor`'s values bit for bit (the same operations), for
+    /// every number of coefficients, at points over twelve decades of `|x|/l0` and both
+    /// signs, several laws.
+    #[test]
+    fn phi_taylor4_is_phi_taylor() {
+        let mut xs = vec![0.0, -0.0, 1e-300];
+        for i in 0..=120 {
+            let r = 10f64.powf(-6.0 + 12.0 * i as f64 / 120.0) * (1.0 + 0.017 * i as f64);
+            xs.extend([r, -r]);
+        }
+        for &(kappa, l0) in &[(1.0, 1.0), (0.3, 0.07), (2.0, 9.0)] {
+            let law = Tilted { kappa, l0 };
+            for n in 1..=PMAX {
+                for chunk in xs.chunks_exact(LANES) {
+                    let x = [chunk[0] * l0, chunk[1] * l0, chunk[2] * l0, chunk[3] * l0];
+                    let mut acc = [[0.0; LANES]; PMAX];
+                    phi_taylor4(&law, x, n, &mut acc);
+                    for (l, &xl) in x.iter().enumerate() {
+                        let mut c = [0.0; PMAX];
+                        phi_taylor(&law, xl, &mut c[..n]);
+                        for k in 0..PMAX {
+                            // `0 + v` is `v` (but `-0` becomes `+0`, which `==` accepts).
+                            assert!(acc[k][l] == c[k], "n = {n}, x = {xl}, k = {k}: {} vs {}", acc[k][l], c[k]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Direct mode: radius `l0/4`, the smallest order with `T_d = (1/4)^(p+1)/(3/4) <= rtol/4`
+    /// (17 at `rtol = 1e-10`), no bins; `for_junctions` picks it below `DIRECT_MAX`.
+    #[test]
+    fn direct_mode_order_radius_and_choice() {
+        let law = Tilted { kappa: 1.0, l0: 2.0 };
+        let s = SeriesSum::direct(law, 1e-10);
+        assert!(s.is_direct());
+        assert_eq!((s.order(), s.radius()), (17, 0.5));
+        for rtol in [1e-1, 1e-4, 1e-10, 1e-13, 1e-17] {
+            let p = order_for_direct(rtol);
+            assert!(tails_at(Q_D, p).0 <= 0.25 * rtol, "rtol {rtol}: p = {p}");
+            assert!(p == 1 || tails_at(Q_D, p - 1).0 > 0.25 * rtol, "rtol {rtol}: p = {p} not minimal");
+        }
+        assert!(SeriesSum::for_junctions(law, 1e-10, 300).is_direct());
+        assert!(SeriesSum::for_junctions(law, 1e-10, DIRECT_MAX - 1).is_direct());
+        assert!(!SeriesSum::for_junctions(law, 1e-10, DIRECT_MAX).is_direct());
+        assert!(!SeriesSum::new(law, 1e-10).is_direct());
+    }
+
+    /// Direct mode: an add/remove pair cancels exactly in the double-double accumulators
+    /// (the same terms added and subtracted, `TwoSum` exact): right after each other, the
+    /// coefficients `A_k = hi + lo` the evaluation uses, `X0` and the force are back bit for
+    /// bit; interleaved with other pairs and a `shift`, and with a `c` at `remove` that
+    /// rounds differently (the stored offset is used), the double-double values are back
+    /// to the rounding of the low parts' sums (`O(eps^2)`). Nothing is charged as residue;
+    /// handles are reused; `len() = 0` is exactly zero.
+    #[test]
+    fn direct_add_remove_cancels_exactly() {
+        let law = Tilted { kappa: 0.4, l0: 1.0 };
+        let mut s = SeriesSum::direct(law, 1e-10);
+        let mut hs: Vec<(f64, u32)> = (0..50).map(|i| (-0.013 * i as f64, s.add(-0.013 * i as f64))).collect();
+        s.rebase(0.05);
+        let coef = |s: &SeriesSum| -> Vec<f64> { (0..=s.p).map(|k| s.a[k] + s.al[k]).collect() };
+        let before = s.clone();
+        for c in [7.3, -0.2, 0.05, 1e-9] {
+            let h = s.add(c);
+            s.remove(c, h);
+            assert_eq!(coef(&s), coef(&before), "c = {c}");
+            assert_eq!(s.x0[0] + s.x0[1], before.x0[0] + before.x0[1]);
+            assert_eq!(s.force_and_stiffness(0.1), before.force_and_stiffness(0.1));
+        }
+        let h = s.add(7.3);
+        let h2 = s.add(-0.2);
+        s.shift(0.1);
+        s.remove(-0.2 - 0.1 + 1e-15, h2);
+        s.remove(7.3 - 0.1, h);
+        for k in 0..=s.p {
+            let diff = (s.a[k] - before.a[k]) + (s.al[k] - before.al[k]);
+            assert!(diff.abs() <= 4.0 * EPS * EPS * before.a[k].abs().max(law.kappa), "k = {k}: {diff:e}");
+        }
+        let dx0 = (s.x0[0] - before.x0[0]) + (s.x0[1] - before.x0[1]);
+        assert!(dx0.abs() <= 4.0 * EPS * EPS * before.x0[0].abs(), "X0: {dx0:e}");
+        assert_eq!((s.resid, s.residue(), s.bin_count()), (0, 0, 0));
+        assert!(s.roff > before.roff, "the pairs' rounding is still charged");
+        let again = s.add(1.0);
+        assert!(again == h || again == h2, "a freed handle is reused: {again}");
+        hs.push((1.0, again));
+        for (c, h) in hs.drain(..) {
+            s.remove(c, h);
+        }
+        assert!(s.is_empty());
+        assert_eq!((s.force_and_stiffness(0.3), s.error_bound()), ((0.0, 0.0), 0.0));
+    }
+
+    /// Direct mode's re-base (four junctions at a time, blocks folded into the double-double
+    /// series, a tail of fewer than four, and one batch with a point outside `phi_taylor4`'s
+    /// range) against the same series built junction by junction (`add`, double-double) at
+    /// the same base: coefficients within the two round-off allowances, `X0` and the spread
+    /// to a few ulps.
+    #[test]
+    fn direct_rebase_matches_the_incremental_series() {
+        for &(kappa, l0, n) in &[(1.0, 1.0, 1003usize), (0.3, 0.07, 37), (2.0, 9.0, 3)] {
+            let law = Tilted { kappa, l0 };
+            let y0 = 0.3 * l0;
+            let mut by_add = SeriesSum::direct(law, 1e-10);
+            by_add.rebase(y0);
+            let mut state = 5u64;
+            for i in 0..n {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+                let c = if i == 5 { -1e151 * l0 } else { l0 * 30.0 * (u - 0.9) };
+                by_add.add(c);
+            }
+            let mut rebuilt = by_add.clone();
+            rebuilt.rebase(y0);
+            assert_eq!(rebuilt.base(), by_add.base());
+            let tol = by_add.coeff_roundoff() + rebuilt.coeff_roundoff();
+            let rho = rebuilt.radius();
+            let far = if n > 5 { 1e151 } else { 0.0 };
+            let norm: f64 = (0..=rebuilt.p)
+                .map(|k| ((rebuilt.a[k] + rebuilt.al[k]) - (by_add.a[k] + by_add.al[k])).abs() * rho.powi(k as i32))
+                .sum();
+            assert!(norm <= tol, "n = {n}: |dA|_rho = {norm:e} > {tol:e}");
+            let x0 = |s: &SeriesSum| s.x0[0] + s.x0[1];
+            assert!((x0(&rebuilt) - x0(&by_add)).abs() <= 4.0 * EPS * rebuilt.spread, "X0");
+            assert!((rebuilt.spread - by_add.spread).abs() <= 4.0 * EPS * (by_add.spread + far), "spread");
+            assert_eq!(rebuilt.roff, n as f64 * REBUILD_ROUNDOFF);
+        }
     }
 
     /// `p` is the smallest order whose residue bound meets `rtol/4`; non-finite or
