@@ -289,6 +289,9 @@ const TAYLOR_STIFFNESS: f64 = 4.0;
 /// Degree of the force's Taylor polynomial a Taylor step tries first: enough for order 9
 /// in time (dynamic plate), what a step of Fig. 1's plate between events needs at `rtol = 1e-10`.
 const LOW_DEGREE: usize = 7;
+/// How far (in radii) the plate may stray from the series' base before a Taylor step
+/// re-bases it, and how far ahead of the plate the new base goes.
+const LEAD: f64 = 0.75;
 
 fn on() -> bool {
     true
@@ -417,7 +420,7 @@ impl RosenbrockPlate {
     /// V`), widened by round-off. The step is halved while those bounds leave the series'
     /// disc (after re-basing the series at `y0` once) or, for weak bonds, are wider than
     /// `max_spread`; halving needs no new series. The series is re-based ahead of the plate
-    /// once the plate is more than half its radius from the base (at `y0 +- radius/2`, on
+    /// once the plate is more than `LEAD` radii from the base (at `y0 +- LEAD radius`, on
     /// the side the plate has moved to).
     fn taylor_step(&mut self, ctx: &mut StepCtx<'_>, tau: f64, target: f64) -> Result<Step, EngineError> {
         let (rtol, atol) = (self.ode.config().rtol, self.ode.config().atol);
@@ -426,11 +429,13 @@ impl RosenbrockPlate {
         let w0 = if self.dynamic { self.state[1] / self.tau_w } else { 0.0 };
         let tol = Tol { u: atol + rtol * u0.abs(), w: (atol + rtol * self.state[1].abs()) / self.tau_w };
         let y0 = self.y_of(u0, tau);
-        // Past half the radius, the series moves half a radius ahead of the plate, in the
-        // direction it came: a plate that keeps going crosses a whole radius before the next.
+        // Past `LEAD` of the radius, the series moves `LEAD` of its radius ahead of the
+        // plate, in the direction it came: a plate that keeps going crosses `2 LEAD` radii
+        // before the next re-base, and a step from within `LEAD` of the base may span the
+        // remaining `1 - LEAD` of the radius (a longer one is halved or re-based at `y0`).
         let off = y0 - ctx.series.base();
-        if off.abs() > 0.5 * ctx.series.radius() {
-            ctx.rebase_series(y0 + 0.5 * ctx.series.radius().copysign(off));
+        if off.abs() > LEAD * ctx.series.radius() {
+            ctx.rebase_series(y0 + LEAD * ctx.series.radius().copysign(off));
         }
         let mut retakes = 0u32;
         loop {

@@ -99,51 +99,47 @@ impl TimeSeries {
     /// ([`TimeSeries::truncation`]: the step `h` to the target then needs no cut), or `ORDER`.
     pub fn of(p: &Plant<'_>, u0: f64, w0: f64, h: f64, tol: Tol) -> TimeSeries {
         let mut u = [0.0; ORDER + 1];
-        // e[j][k] = [e^j]_k for 1 <= j <= k.
-        let mut e = [[0.0; ORDER + 1]; ORDER + 1];
         u[0] = u0;
         let dynamic = p.mass != 0.0;
-        let first = if dynamic {
+        let first = if dynamic { 2 } else { 1 };
+        if dynamic {
             u[1] = w0;
-            e[1][1] = w0 + p.v;
-            2
-        } else {
-            1
-        };
+        }
+        // b[i] = [e]_i: b_1 = u_1 + V, b_i = u_i.
+        let mut b = [0.0; ORDER + 1];
+        // pw[j][k] = [e^j]_k for 2 <= j <= k (row k written at stage k, read later).
+        let mut pw = [[0.0; ORDER + 1]; ORDER + 1];
         let t = p.force;
         let inv = 1.0 / if dynamic { p.mass } else { p.eta };
         let last = ORDER.min(p.degree + first);
         let mut order = last;
         let mut converged = false;
+        // h^(n-1) and h^n for the newest coefficient u_n.
+        let mut hn = if dynamic { h } else { 1.0 };
         for n in first..=last {
             // u_n from C_k, k = n - 2 (dynamic) or n - 1 (overdamped).
             let k = n - first;
-            let mut c = t[0];
-            if k >= 1 {
-                // Row k of the powers: e[1][k] = b_k (known: k < n), then e[j][k], j >= 2.
-                if k >= 2 || !dynamic {
-                    e[1][k] = if k == 1 { u[1] + p.v } else { u[k] };
-                }
+            let c = if k == 0 {
+                t[0]
+            } else {
+                b[k] = if k == 1 { u[1] + p.v } else { u[k] };
+                // Row k of the powers, then C_k = sum_j t_j [e^j]_k by two partial sums.
+                let mut c0 = t[1] * b[k];
+                let mut c1 = 0.0;
                 for j in 2..=k {
-                    let mut acc = 0.0;
-                    for i in 1..=k - j + 1 {
-                        acc += e[1][i] * e[j - 1][k - i];
+                    // [e^j]_k = sum_(i=1..k-j+1) b_i [e^(j-1)]_(k-i), by slices (no
+                    // bounds checks in the loop).
+                    let prev = if j == 2 { &b } else { &pw[j - 1] };
+                    let acc: f64 = b[1..=k - j + 1].iter().zip(prev[j - 1..k].iter().rev()).map(|(x, y)| x * y).sum();
+                    pw[j][k] = acc;
+                    if j % 2 == 0 {
+                        c1 += t[j] * acc;
+                    } else {
+                        c0 += t[j] * acc;
                     }
-                    e[j][k] = acc;
                 }
-                // Two partial sums: half the additions' latency on the recurrence's path.
-                let (mut c0, mut c1) = (0.0, 0.0);
-                let mut j = k;
-                while j >= 2 {
-                    c0 += t[j] * e[j][k];
-                    c1 += t[j - 1] * e[j - 1][k];
-                    j -= 2;
-                }
-                if j == 1 {
-                    c0 += t[1] * e[1][k];
-                }
-                c = c0 + c1;
-            }
+                c0 + c1
+            };
             let drive = if k == 0 { p.eta * p.v } else { 0.0 };
             let kf = k as f64;
             u[n] = if dynamic {
@@ -151,10 +147,19 @@ impl TimeSeries {
             } else {
                 -(drive + c + p.k * u[k]) * (inv * RECIP1[k])
             };
-            if n >= MIN_ORDER && Self::truncation(&u, n, h, dynamic, tol) <= 1.0 {
-                order = n;
-                converged = true;
-                break;
+            let hn1 = hn;
+            hn *= h;
+            if n >= MIN_ORDER {
+                let (a, bb) = (u[n - 1].abs(), u[n].abs());
+                let mut r = (a * hn1 + bb * hn) / tol.u;
+                if dynamic {
+                    r = r.max(((n - 1) as f64 * a * hn1 + n as f64 * bb * hn) / (h * tol.w));
+                }
+                if r <= 1.0 {
+                    order = n;
+                    converged = true;
+                    break;
+                }
             }
         }
         TimeSeries { u, order, converged }
@@ -235,23 +240,19 @@ impl TimeSeries {
         for k in (0..=n).rev() {
             i1 = i1 * s + q[k] * RECIP1[k];
         }
-        // (sum q_k s^k)^2 = sum_m s^m sum_(i+j=m) q_i q_j (each pair twice, the square
-        // once), integrated term by term.
+        // (sum q_k s^k)^2 = sum_m s^m sum_(i+j=m) q_i q_j: the product's coefficients by
+        // rows of the outer product (contiguous, so the compiler vectorises them), then
+        // integrated term by term.
+        let mut sq = [0.0; 2 * ORDER + 2];
+        for i in 0..=n {
+            let qi = q[i];
+            for (c, &qj) in sq[i..=i + n].iter_mut().zip(&q[..=n]) {
+                *c += qi * qj;
+            }
+        }
         let mut i2 = 0.0;
         for m in (0..=2 * n).rev() {
-            let (lo, hi) = (m.saturating_sub(n), m.min(n));
-            let mut cm = 0.0;
-            let (mut i, mut j) = (lo, hi);
-            while i < j {
-                cm += q[i] * q[j];
-                i += 1;
-                j -= 1;
-            }
-            cm *= 2.0;
-            if i == j {
-                cm += q[i] * q[i];
-            }
-            i2 = i2 * s + cm * RECIP_2N[m];
+            i2 = i2 * s + sq[m] * RECIP_2N[m];
         }
         (i1 * s, i2 * s)
     }
