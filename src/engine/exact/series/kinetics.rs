@@ -10,7 +10,7 @@
 //!   with `a = beta dx kappa`: the linear law's envelope, kept by [`WeakRupture`]'s sum tree.
 //!   Candidates arrive at `B = sum b_i` (constant over the step), pick `i` with
 //!   probability `b_i / B` and are accepted with probability `r_i(s) / b_i`
-//!   (docs/engines.md, "Plate between events (tilted law): a series and a stiff integrator").
+//!   (docs/engines.md, "Plate between events (tilted law): a series, Taylor steps and a stiff integrator").
 
 use rand_distr::{Distribution, Exp1};
 use serde::{Deserialize, Serialize, de::DeserializeOwned};

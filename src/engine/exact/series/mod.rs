@@ -8,7 +8,7 @@
 //! bonds rupture on a channel clock, weak bonds by thinning over each plate step against
 //! the linear law's envelope ([`WeakKinetics`]). The series remainder and the integrator's
 //! tolerance are the engine's approximations; both are reported in `summary.json`
-//! (docs/engines.md, "Plate between events (tilted law): a series and a stiff integrator").
+//! (docs/engines.md, "Plate between events (tilted law): a series, Taylor steps and a stiff integrator").
 //!
 //! Layout: `engine` (the kernel of the exact core: the series, its error bound, the plate
 //! step with thinning), `motion` (the plate), `kinetics` (ruptures), `sum` (the series).

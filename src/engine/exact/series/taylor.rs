@@ -1,6 +1,6 @@
 //! The plate over one step as a Taylor series in time, for scenes that are not stiff
 //! ([`super::motion::RosenbrockPlate`] chooses it once per run; docs/engines.md, "Plate
-//! between events (tilted law)").
+//! between events (tilted law): a series, Taylor steps and a stiff integrator").
 //!
 //! With the lag `u = X - V t`, the step's local time `s` and the bond force's Taylor
 //! polynomial about the step's start `y0`, `S(y0 + e) = sum_j t_j e^j` (`t_j = S^(j)(y0)/j!`
