@@ -70,6 +70,12 @@ pub enum EngineError {
     /// A large buffer could not be allocated.
     #[error(transparent)]
     OutOfMemory(#[from] alloc::AllocError),
+    /// The plate left the bounds its step proved (weak-bond thinning's envelope would no
+    /// longer dominate the rates: an acceptance above 1). An internal error, never expected.
+    #[error(
+        "internal error at t = {t}: the plate at y = {y} left its step's proven bounds [{lo}, {hi}], so the weak-bond thinning would not be exact"
+    )]
+    EnvelopeViolated { t: f64, y: f64, lo: f64, hi: f64 },
     /// The engine cannot run this scene.
     #[error("the {engine} engine cannot run this scene: {reason}")]
     Unsupported { engine: &'static str, reason: &'static str },

@@ -192,7 +192,13 @@ impl Kinetics for WeakKinetics {
             }
             *candidates += 1;
             let (slot, b) = self.envelope.envelope_candidate(rng, n_att);
-            let x = y_at(s)? - attached[slot].c;
+            // The acceptance `r_i / b_i` is at most 1 only while the plate is within the
+            // step's bounds: checked, so that thinning is exact or the run stops.
+            let y = y_at(s)?;
+            if !(y_lo <= y && y <= y_hi) {
+                return Err(EngineError::EnvelopeViolated { t: s, y, lo: y_lo, hi: y_hi });
+            }
+            let x = y - attached[slot].c;
             // r_i / k0 = exp(beta dx f(x)) <= exp(a |x|) <= b (an overflowing rate is accepted).
             let exponent = self.beta_dx * law.tension(x);
             if exponent > EXPONENT_CAP || rng.uniform() * b < exponent.exp() {
@@ -235,6 +241,19 @@ mod tests {
         let sd = (steps as f64 * p * (1.0 - p)).sqrt();
         assert!((count as f64 - mean).abs() < 4.0 * sd, "count {count}, expected {mean} +- {sd}");
         assert!(cand >= count);
+    }
+
+    /// A plate outside its step's bounds would make the acceptance exceed 1: the thinning
+    /// refuses it rather than sample a wrong law.
+    #[test]
+    fn a_plate_outside_its_bounds_is_refused() {
+        let law = Tilted { kappa: 0.5, l0: 1.0 };
+        let mut k = WeakKinetics::new(5.0, 2.0, law.kappa, 4);
+        let att = [Attached { c: -0.7, id: 0, bin: 0 }];
+        assert!(k.attached(0, att[0].c, 0.0));
+        let mut rng = pcg(3);
+        let r = k.thin(&mut rng, (0.0, 10.0), (0.0, 0.1), &att, &law, |_| Ok(0.2), &mut 0);
+        assert!(matches!(r, Err(EngineError::EnvelopeViolated { .. })), "{r:?}");
     }
 
     #[test]
