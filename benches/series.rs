@@ -7,7 +7,8 @@
 //!
 //! `cargo bench --bench series`; medians are recorded in docs/performance.md.
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::time::Duration;
 use stickslip::engine::exact::series::SeriesSum;
@@ -18,6 +19,31 @@ const N: usize = 100_000;
 fn anchors(l0: f64) -> Vec<f64> {
     // A fixed low-discrepancy spread over [-25 l0, 0): the plate at 0 formed them while sliding.
     (0..N).map(|i| -25.0 * l0 * ((i as f64 * 0.618_033_988_749_895) % 1.0)).collect()
+}
+
+/// The engine's pattern: a junction forms at the plate (one bin in bins mode, the bin search
+/// predicted) and one detaches by its handle.
+fn add_remove_at_plate(g: &mut BenchmarkGroup<'_, WallTime>, s: &mut SeriesSum) {
+    g.bench_function("add+remove/at-plate", |bn| {
+        let mut i = 0usize;
+        bn.iter(|| {
+            i = (i + 1) & 63;
+            let c = black_box(-0.001 * i as f64);
+            let h = s.add(c);
+            s.remove(c, h);
+        })
+    });
+}
+
+/// A re-base at `+-0.1` alternately.
+fn rebase_back_and_forth(g: &mut BenchmarkGroup<'_, WallTime>, s: &mut SeriesSum, name: &str) {
+    g.bench_function(name, |bn| {
+        let mut y = 0.1;
+        bn.iter(|| {
+            y = -y;
+            s.rebase(black_box(y))
+        })
+    });
 }
 
 fn series(c: &mut Criterion) {
@@ -32,17 +58,7 @@ fn series(c: &mut Criterion) {
     let mut g = c.benchmark_group("series");
     g.measurement_time(Duration::from_secs(3)).warm_up_time(Duration::from_secs(1));
 
-    // The engine's pattern: a junction forms at the plate (one bin, the bin search predicted)
-    // and one detaches by its handle.
-    g.bench_function("add+remove/at-plate", |bn| {
-        let mut i = 0usize;
-        bn.iter(|| {
-            i = (i + 1) & 63;
-            let c = black_box(-0.001 * i as f64);
-            let h = s.add(c);
-            s.remove(c, h);
-        })
-    });
+    add_remove_at_plate(&mut g, &mut s);
     // Anchors in random bins (each add looks its bin up in the grid-index table).
     g.bench_function("add+remove/random-bin", |bn| {
         let mut i = 0usize;
@@ -61,13 +77,7 @@ fn series(c: &mut Criterion) {
         })
     });
     g.bench_function("integral", |bn| bn.iter(|| s.integral(black_box(-0.05), black_box(0.1))));
-    g.bench_function("rebase", |bn| {
-        let mut y = 0.1;
-        bn.iter(|| {
-            y = -y;
-            s.rebase(black_box(y))
-        })
-    });
+    rebase_back_and_forth(&mut g, &mut s, "rebase");
     g.bench_function("direct_sum_1e5", |bn| {
         bn.iter(|| {
             let y = black_box(0.01);
@@ -83,22 +93,8 @@ fn series(c: &mut Criterion) {
     s.rebase(0.0);
     let mut g = c.benchmark_group("series/direct");
     g.measurement_time(Duration::from_secs(3)).warm_up_time(Duration::from_secs(1));
-    g.bench_function("add+remove/at-plate", |bn| {
-        let mut i = 0usize;
-        bn.iter(|| {
-            i = (i + 1) & 63;
-            let c = black_box(-0.001 * i as f64);
-            let h = s.add(c);
-            s.remove(c, h);
-        })
-    });
-    g.bench_function("rebase/1e3", |bn| {
-        let mut y = 0.1;
-        bn.iter(|| {
-            y = -y;
-            s.rebase(black_box(y))
-        })
-    });
+    add_remove_at_plate(&mut g, &mut s);
+    rebase_back_and_forth(&mut g, &mut s, "rebase/1e3");
     g.finish();
 }
 

@@ -175,24 +175,7 @@ fn path_scene(n: usize, seed: u64, method: &str, extra: &[&str]) -> Scene {
 fn strong_bonds_follow_the_direct_engine_path_by_path() {
     for n in [3, 30] {
         for seed in 1..=3u64 {
-            let run = |method: &str| record(&path_scene(n, seed, method, &["output.sample_dt=0.5"])).0;
-            let (a, b) = (run("series"), run("direct"));
-            assert!(a.events.len() > 10, "n = {n}: {} events", a.events.len());
-            assert_eq!(a.events.len(), b.events.len(), "n = {n} seed {seed}: event counts");
-            for (x, y) in a.events.iter().zip(&b.events) {
-                assert_eq!((x.t, x.junction, x.kind), (y.t, y.junction, y.kind), "n = {n} seed {seed}");
-                assert!(
-                    (x.extension - y.extension).abs() <= 1e-6 * (1.0 + y.extension.abs()),
-                    "n = {n} seed {seed} t = {}: extension {} vs {}",
-                    x.t,
-                    x.extension,
-                    y.extension
-                );
-            }
-            for (x, y) in a.samples.iter().zip(&b.samples) {
-                assert!((x.x - y.x).abs() <= 1e-6 * (1.0 + y.x.abs()), "t = {}: {} vs {}", x.t, x.x, y.x);
-                assert!((x.v - y.v).abs() <= 1e-6 * (1.0 + y.v.abs()), "t = {}: {} vs {}", x.t, x.v, y.v);
-            }
+            same_path_as_direct(n, seed, 10);
         }
     }
 }
@@ -209,24 +192,7 @@ fn direct_mode_series_follows_the_direct_engine_path_by_path() {
         let law = stickslip::physics::Tilted { kappa: 0.1, l0: 1.0 };
         assert!(SeriesSum::for_junctions(law, 1e-10, n).is_direct() && n < DIRECT_MAX, "N = {n}: not direct mode");
         for seed in 1..=2u64 {
-            let run = |method: &str| record(&path_scene(n, seed, method, &["output.sample_dt=0.5"])).0;
-            let (a, b) = (run("series"), run("direct"));
-            assert!(a.events.len() > 5 * n, "n = {n}: {} events", a.events.len());
-            assert_eq!(a.events.len(), b.events.len(), "n = {n} seed {seed}: event counts");
-            for (x, y) in a.events.iter().zip(&b.events) {
-                assert_eq!((x.t, x.junction, x.kind), (y.t, y.junction, y.kind), "n = {n} seed {seed}");
-                assert!(
-                    (x.extension - y.extension).abs() <= 1e-6 * (1.0 + y.extension.abs()),
-                    "n = {n} seed {seed} t = {}: extension {} vs {}",
-                    x.t,
-                    x.extension,
-                    y.extension
-                );
-            }
-            for (x, y) in a.samples.iter().zip(&b.samples) {
-                assert!((x.x - y.x).abs() <= 1e-6 * (1.0 + y.x.abs()), "t = {}: {} vs {}", x.t, x.x, y.x);
-                assert!((x.v - y.v).abs() <= 1e-6 * (1.0 + y.v.abs()), "t = {}: {} vs {}", x.t, x.v, y.v);
-            }
+            same_path_as_direct(n, seed, 5 * n);
         }
     }
 }
@@ -262,5 +228,29 @@ fn statistics_match_the_direct_engine_path_by_path() {
                 );
             }
         }
+    }
+}
+
+/// The series and direct engines on `path_scene(n, seed)` under a shared seed: more than
+/// `min_events` events, the same events at the same times, extensions and plate within
+/// `1e-6 (1 + |value|)` (the integrators' and the series' tolerances).
+fn same_path_as_direct(n: usize, seed: u64, min_events: usize) {
+    let run = |method: &str| record(&path_scene(n, seed, method, &["output.sample_dt=0.5"])).0;
+    let (a, b) = (run("series"), run("direct"));
+    assert!(a.events.len() > min_events, "n = {n}: {} events", a.events.len());
+    assert_eq!(a.events.len(), b.events.len(), "n = {n} seed {seed}: event counts");
+    for (x, y) in a.events.iter().zip(&b.events) {
+        assert_eq!((x.t, x.junction, x.kind), (y.t, y.junction, y.kind), "n = {n} seed {seed}");
+        assert!(
+            (x.extension - y.extension).abs() <= 1e-6 * (1.0 + y.extension.abs()),
+            "n = {n} seed {seed} t = {}: extension {} vs {}",
+            x.t,
+            x.extension,
+            y.extension
+        );
+    }
+    for (x, y) in a.samples.iter().zip(&b.samples) {
+        assert!((x.x - y.x).abs() <= 1e-6 * (1.0 + y.x.abs()), "t = {}: {} vs {}", x.t, x.x, y.x);
+        assert!((x.v - y.v).abs() <= 1e-6 * (1.0 + y.v.abs()), "t = {}: {} vs {}", x.t, x.v, y.v);
     }
 }
