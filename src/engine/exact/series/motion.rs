@@ -457,7 +457,8 @@ impl RosenbrockPlate {
             let mut h = ts.step_within(full, tol, self.dynamic);
             let b1 = ts.u[1] + p.v;
             let (base, r) = (ctx.series.base(), ctx.series.radius());
-            let rebased = loop {
+            // Retakes of this series: halved while too wide, until a re-base needs a new one.
+            loop {
                 let r2 = ts.curvature_bound(h) + tol.u;
                 let (lo, hi) = (y0 + (b1 * h).min(0.0) - r2, y0 + (b1 * h).max(0.0) + r2);
                 let (lo, hi) = (lo - 4.0 * f64::EPSILON * lo.abs(), hi + 4.0 * f64::EPSILON * hi.abs());
@@ -473,20 +474,19 @@ impl RosenbrockPlate {
                 }
                 retakes += 1;
                 self.taylor_retakes += 1;
-                if retakes > MAX_RETAKES || !(h > 0.0) {
+                if retakes > MAX_RETAKES || h.is_nan() || h <= 0.0 {
                     return Err(EngineError::StepSizeUnderflow { t: ctx.frame.time(tau), h, rtol });
                 }
                 if !valid && y0 != base {
                     ctx.rebase_series(y0);
-                    break true;
+                    break;
                 }
                 let mut factor: f64 = 0.5;
                 if !tight {
                     factor = factor.min(0.5 * ctx.max_spread / (hi - lo));
                 }
                 h *= factor;
-            };
-            debug_assert!(rebased);
+            }
         }
     }
 }

@@ -149,17 +149,10 @@ impl TimeSeries {
             };
             let hn1 = hn;
             hn *= h;
-            if n >= MIN_ORDER {
-                let (a, bb) = (u[n - 1].abs(), u[n].abs());
-                let mut r = (a * hn1 + bb * hn) / tol.u;
-                if dynamic {
-                    r = r.max(((n - 1) as f64 * a * hn1 + n as f64 * bb * hn) / (h * tol.w));
-                }
-                if r <= 1.0 {
-                    order = n;
-                    converged = true;
-                    break;
-                }
+            if n >= MIN_ORDER && Self::truncation(&u, n, h, hn1, dynamic, tol) <= 1.0 {
+                order = n;
+                converged = true;
+                break;
             }
         }
         TimeSeries { u, order, converged }
@@ -167,14 +160,14 @@ impl TimeSeries {
 
     /// The last two terms' size over `h` in units of the tolerance, the larger of
     /// `(|u_(n-1)| h^(n-1) + |u_n| h^n) / tol.u` and, for the dynamic plate, their
-    /// derivative's `((n-1) |u_(n-1)| h^(n-2) + n |u_n| h^(n-1)) / tol.w`.
+    /// derivative's `((n-1) |u_(n-1)| h^(n-2) + n |u_n| h^(n-1)) / tol.w`; `hn1 = h^(n-1)`.
     #[inline]
-    fn truncation(u: &[f64; ORDER + 1], n: usize, h: f64, dynamic: bool, tol: Tol) -> f64 {
+    fn truncation(u: &[f64; ORDER + 1], n: usize, h: f64, hn1: f64, dynamic: bool, tol: Tol) -> f64 {
         let (a, b) = (u[n - 1].abs(), u[n].abs());
-        let hn1 = h.powi(n as i32 - 2);
-        let mut r = (a * h + b * h * h) * hn1 / tol.u;
+        let hn = hn1 * h;
+        let mut r = (a * hn1 + b * hn) / tol.u;
         if dynamic {
-            r = r.max(((n - 1) as f64 * a + n as f64 * b * h) * hn1 / tol.w);
+            r = r.max(((n - 1) as f64 * a * hn1 + n as f64 * b * hn) / (h * tol.w));
         }
         r
     }
@@ -184,7 +177,7 @@ impl TimeSeries {
     /// `h <= (tol.w / (2 i |u_i|))^(1/(i-1))`, times a safety factor.
     pub fn step_within(&self, h: f64, tol: Tol, dynamic: bool) -> f64 {
         let n = self.order;
-        if Self::truncation(&self.u, n, h, dynamic, tol) <= 1.0 {
+        if Self::truncation(&self.u, n, h, h.powi(n as i32 - 1), dynamic, tol) <= 1.0 {
             return h;
         }
         let mut hmax = h;
@@ -264,10 +257,11 @@ mod tests {
 
     /// A linear force `S = t0 + t1 e` makes the plate a damped oscillator: the series
     /// must match its closed form (here integrated by a tight RK4 as the oracle).
-    fn rk4(mass: f64, eta: f64, k: f64, v: f64, t0: f64, t1: f64, u0: f64, w0: f64, h: f64) -> (f64, f64) {
+    fn rk4(p: &Plant<'_>, u0: f64, w0: f64, h: f64) -> (f64, f64) {
+        let [t0, t1] = [p.force[0], p.force[1]];
         let f = |u: f64, w: f64, s: f64| {
-            let e = u - u0 + v * s;
-            (w, -(eta * (w + v) + t0 + t1 * e + k * u) / mass)
+            let e = u - u0 + p.v * s;
+            (w, -(p.eta * (w + p.v) + t0 + t1 * e + p.k * u) / p.mass)
         };
         let (mut u, mut w, mut s) = (u0, w0, 0.0);
         let n = 20_000;
@@ -296,7 +290,7 @@ mod tests {
             let ts = TimeSeries::of(&p, u0, w0, h, tol);
             let h = ts.step_within(h, tol, true);
             let (u, w) = ts.at_with_slope(h);
-            let (ur, wr) = rk4(75.0, 75.0, 150.0, 0.5, 3.0, 15.0, u0, w0, h);
+            let (ur, wr) = rk4(&p, u0, w0, h);
             assert!((u - ur).abs() <= 1e-12, "h {h}: u {u} vs {ur}");
             assert!((w - wr).abs() <= 1e-11, "h {h}: w {w} vs {wr}");
         }
