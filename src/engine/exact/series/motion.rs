@@ -277,6 +277,11 @@ pub struct RosenbrockPlate {
     series_in_time: TimeSeries,
     #[serde(skip)]
     step_start: f64,
+    /// Degree of the force polynomial the next Taylor step asks for first: one more than the
+    /// last step's series needed. A hint only (the series' coefficients do not depend on it,
+    /// [`force_terms`]), so not serialised.
+    #[serde(skip)]
+    degree_hint: usize,
     /// Taylor steps taken and retaken.
     taylor_steps: u64,
     taylor_retakes: u64,
@@ -286,9 +291,27 @@ pub struct RosenbrockPlate {
 /// is at most this: then one step of order up to [`ORDER`] spans an event gap at the
 /// tolerances the scenes use, where RODAS4 (order 4) needs several.
 const TAYLOR_STIFFNESS: f64 = 4.0;
-/// Degree of the force's Taylor polynomial a Taylor step tries first: enough for order 9
-/// in time (dynamic plate), what a step of Fig. 1's plate between events needs at `rtol = 1e-10`.
-const LOW_DEGREE: usize = 7;
+/// The force's Taylor coefficients at `y0` (`force[j] = S^(j)(y0)/j!`) up to a degree of at
+/// least `degree`, rounded up to one of three (`derivatives_at` works in whole fixed-size
+/// arrays): the degree written. Each coefficient is the same whatever the degree asked, so
+/// a series in time built on them is too, up to the order the degree reaches.
+#[inline]
+fn force_terms(series: &SeriesSum, y0: f64, degree: usize, force: &mut [f64; ORDER + 1]) -> usize {
+    match degree {
+        0..=4 => {
+            force[..5].copy_from_slice(&series.derivatives_at::<5>(y0));
+            4
+        }
+        5..=7 => {
+            force[..8].copy_from_slice(&series.derivatives_at::<8>(y0));
+            7
+        }
+        _ => {
+            force[..ORDER - 1].copy_from_slice(&series.derivatives_at::<{ ORDER - 1 }>(y0));
+            ORDER - 2
+        }
+    }
+}
 /// How far (in radii) the plate may stray from the series' base before a Taylor step
 /// re-bases it, and how far ahead of the plate the new base goes.
 const LEAD: f64 = 0.75;
@@ -349,6 +372,7 @@ impl RosenbrockPlate {
             taylor,
             series_in_time: TimeSeries::default(),
             step_start: 0.0,
+            degree_hint: 0,
             taylor_steps: 0,
             taylor_retakes: 0,
         })
@@ -439,18 +463,19 @@ impl RosenbrockPlate {
         }
         let mut retakes = 0u32;
         loop {
-            // The force's first `LOW_DEGREE + 1` derivatives suffice for the orders a step
-            // between events takes; all of them only when those orders fall short.
+            // The degree the last step needed, plus one; all of it only when that falls short.
             let full = target - tau;
+            let first = if self.dynamic { 2 } else { 1 };
             let mut force = [0.0; ORDER + 1];
-            force[..=LOW_DEGREE].copy_from_slice(&ctx.series.derivatives_at::<{ LOW_DEGREE + 1 }>(y0));
-            let plant = Plant { mass: p.mass, eta: p.eta, k: p.k, v: p.v, force: &force, degree: LOW_DEGREE };
+            let degree = force_terms(ctx.series, y0, self.degree_hint, &mut force);
+            let plant = Plant { mass: p.mass, eta: p.eta, k: p.k, v: p.v, force: &force, degree };
             let mut ts = TimeSeries::of(&plant, u0, w0, full, tol);
-            if !ts.converged {
-                force[..ORDER - 1].copy_from_slice(&ctx.series.derivatives_at::<{ ORDER - 1 }>(y0));
-                let plant = Plant { mass: p.mass, eta: p.eta, k: p.k, v: p.v, force: &force, degree: ORDER - 2 };
+            if !ts.converged && degree < ORDER - 2 {
+                let degree = force_terms(ctx.series, y0, ORDER, &mut force);
+                let plant = Plant { mass: p.mass, eta: p.eta, k: p.k, v: p.v, force: &force, degree };
                 ts = TimeSeries::of(&plant, u0, w0, full, tol);
             }
+            self.degree_hint = ts.order + 1 - first;
             if let Some(&bad) = ts.u[..=ts.order].iter().find(|c| !c.is_finite()) {
                 return Err(EngineError::NonFinite { t: ctx.frame.time(tau), quantity: "plate series", value: bad });
             }

@@ -93,10 +93,75 @@ pub struct Plant<'a> {
     pub degree: usize,
 }
 
+/// `[e^j]_k` for `1 <= j <= k < ORDER`, row by row: the triangle flattened.
+type Powers = [f64; POWERS];
+const POWERS: usize = ORDER * (ORDER - 1) / 2;
+/// Where `[e^j]_k` sits in [`Powers`].
+#[inline(always)]
+const fn at(j: usize, k: usize) -> usize {
+    k * (k - 1) / 2 + j - 1
+}
+
+/// Row `k` of the powers, `[e^j]_k = sum_(i=1..k-j+1) [e]_i [e^(j-1)]_(k-i)` for `2 <= j
+/// <= k` (rows below `k` and `[e]_1..[e]_k` known), and `C_k = sum_(j=1..k) t_j [e^j]_k`.
+/// Dispatched to a copy per `k` whose loops have constant trip counts, so they unroll.
+#[inline]
+fn power_row(k: usize, pw: &mut Powers, t: &[f64; ORDER + 1]) -> f64 {
+    match k {
+        1 => row::<1>(pw, t),
+        2 => row::<2>(pw, t),
+        3 => row::<3>(pw, t),
+        4 => row::<4>(pw, t),
+        5 => row::<5>(pw, t),
+        6 => row::<6>(pw, t),
+        7 => row::<7>(pw, t),
+        8 => row::<8>(pw, t),
+        9 => row::<9>(pw, t),
+        10 => row::<10>(pw, t),
+        _ => row::<11>(pw, t),
+    }
+}
+
+/// [`power_row`] for a fixed `K` (`1 <= K < ORDER`).
+#[inline(always)]
+fn row<const K: usize>(pw: &mut Powers, t: &[f64; ORDER + 1]) -> f64 {
+    // Two partial sums of C_K: half the additions' latency chain.
+    let (mut c0, mut c1) = (t[1] * pw[at(1, K)], 0.0);
+    for j in 2..K + 1 {
+        let mut acc = 0.0;
+        for i in 1..K - j + 2 {
+            acc += pw[at(1, i)] * pw[at(j - 1, K - i)];
+        }
+        pw[at(j, K)] = acc;
+        if j % 2 == 0 {
+            c1 += t[j] * acc;
+        } else {
+            c0 += t[j] * acc;
+        }
+    }
+    c0 + c1
+}
+
+/// `sum_(k<L) q_k / (k + 1)` and `sum_(i,j<L) q_i q_j / (i + j + 1)` (the upper triangle,
+/// doubled off the diagonal).
+#[inline(always)]
+fn quad<const L: usize>(q: &[f64; ORDER + 1]) -> (f64, f64) {
+    let (mut i1, mut i2) = (0.0, 0.0);
+    for i in 0..L {
+        i1 += q[i] * RECIP1[i];
+        let mut row = 0.0;
+        for j in i + 1..L {
+            row += q[j] * RECIP_2N[i + j];
+        }
+        i2 += q[i] * (q[i] * RECIP_2N[2 * i] + 2.0 * row);
+    }
+    (i1, i2)
+}
+
 impl TimeSeries {
     /// The coefficients from `u(0) = u0` and `u'(0) = w0` (ignored when `M = 0`), up to the
     /// first order `n >= MIN_ORDER` at which the last two terms are within `tol` over `h`
-    /// ([`TimeSeries::truncation`]: the step `h` to the target then needs no cut), or `ORDER`.
+    /// ([`TimeSeries::within`]: the step `h` to the target then needs no cut), or `ORDER`.
     pub fn of(p: &Plant<'_>, u0: f64, w0: f64, h: f64, tol: Tol) -> TimeSeries {
         let mut u = [0.0; ORDER + 1];
         u[0] = u0;
@@ -105,10 +170,9 @@ impl TimeSeries {
         if dynamic {
             u[1] = w0;
         }
-        // b[i] = [e]_i: b_1 = u_1 + V, b_i = u_i.
-        let mut b = [0.0; ORDER + 1];
-        // pw[j][k] = [e^j]_k for 2 <= j <= k (row k written at stage k, read later).
-        let mut pw = [[0.0; ORDER + 1]; ORDER + 1];
+        // [e^j]_k for 1 <= j <= k (row k written at stage k, read later); j = 1 is `e`
+        // itself: [e]_1 = u_1 + V, [e]_k = u_k.
+        let mut pw: Powers = [0.0; POWERS];
         let t = p.force;
         let inv = 1.0 / if dynamic { p.mass } else { p.eta };
         let last = ORDER.min(p.degree + first);
@@ -116,29 +180,14 @@ impl TimeSeries {
         let mut converged = false;
         // h^(n-1) and h^n for the newest coefficient u_n.
         let mut hn = if dynamic { h } else { 1.0 };
-        for n in first..=last {
+        for n in first..last + 1 {
             // u_n from C_k, k = n - 2 (dynamic) or n - 1 (overdamped).
             let k = n - first;
             let c = if k == 0 {
                 t[0]
             } else {
-                b[k] = if k == 1 { u[1] + p.v } else { u[k] };
-                // Row k of the powers, then C_k = sum_j t_j [e^j]_k by two partial sums.
-                let mut c0 = t[1] * b[k];
-                let mut c1 = 0.0;
-                for j in 2..=k {
-                    // [e^j]_k = sum_(i=1..k-j+1) b_i [e^(j-1)]_(k-i), by slices (no
-                    // bounds checks in the loop).
-                    let prev = if j == 2 { &b } else { &pw[j - 1] };
-                    let acc: f64 = b[1..=k - j + 1].iter().zip(prev[j - 1..k].iter().rev()).map(|(x, y)| x * y).sum();
-                    pw[j][k] = acc;
-                    if j % 2 == 0 {
-                        c1 += t[j] * acc;
-                    } else {
-                        c0 += t[j] * acc;
-                    }
-                }
-                c0 + c1
+                pw[at(1, k)] = if k == 1 { u[1] + p.v } else { u[k] };
+                power_row(k, &mut pw, t)
             };
             let drive = if k == 0 { p.eta * p.v } else { 0.0 };
             let kf = k as f64;
@@ -149,7 +198,7 @@ impl TimeSeries {
             };
             let hn1 = hn;
             hn *= h;
-            if n >= MIN_ORDER && Self::truncation(&u, n, h, hn1, dynamic, tol) <= 1.0 {
+            if n >= MIN_ORDER && Self::within(&u, n, h, hn1, dynamic, tol) {
                 order = n;
                 converged = true;
                 break;
@@ -158,18 +207,13 @@ impl TimeSeries {
         TimeSeries { u, order, converged }
     }
 
-    /// The last two terms' size over `h` in units of the tolerance, the larger of
-    /// `(|u_(n-1)| h^(n-1) + |u_n| h^n) / tol.u` and, for the dynamic plate, their
-    /// derivative's `((n-1) |u_(n-1)| h^(n-2) + n |u_n| h^(n-1)) / tol.w`; `hn1 = h^(n-1)`.
+    /// Whether the last two terms are within the tolerance over `h`: `|u_(n-1)| h^(n-1) +
+    /// |u_n| h^n <= tol.u` and, for the dynamic plate, their derivative's `(n-1) |u_(n-1)|
+    /// h^(n-2) + n |u_n| h^(n-1) <= tol.w`; `hn1 = h^(n-1)`.
     #[inline]
-    fn truncation(u: &[f64; ORDER + 1], n: usize, h: f64, hn1: f64, dynamic: bool, tol: Tol) -> f64 {
-        let (a, b) = (u[n - 1].abs(), u[n].abs());
-        let hn = hn1 * h;
-        let mut r = (a * hn1 + b * hn) / tol.u;
-        if dynamic {
-            r = r.max(((n - 1) as f64 * a * hn1 + n as f64 * b * hn) / (h * tol.w));
-        }
-        r
+    fn within(u: &[f64; ORDER + 1], n: usize, h: f64, hn1: f64, dynamic: bool, tol: Tol) -> bool {
+        let (a, b) = (u[n - 1].abs() * hn1, u[n].abs() * hn1 * h);
+        a + b <= tol.u && (!dynamic || (n - 1) as f64 * a + n as f64 * b <= h * tol.w)
     }
 
     /// The longest step, at most `h`, over which the last two terms stay within `tol`: if `h`
@@ -177,7 +221,7 @@ impl TimeSeries {
     /// `h <= (tol.w / (2 i |u_i|))^(1/(i-1))`, times a safety factor.
     pub fn step_within(&self, h: f64, tol: Tol, dynamic: bool) -> f64 {
         let n = self.order;
-        if Self::truncation(&self.u, n, h, h.powi(n as i32 - 1), dynamic, tol) <= 1.0 {
+        if Self::within(&self.u, n, h, h.powi(n as i32 - 1), dynamic, tol) {
             return h;
         }
         let mut hmax = h;
@@ -197,7 +241,7 @@ impl TimeSeries {
     #[inline]
     pub fn at(&self, s: f64) -> f64 {
         let mut acc = 0.0;
-        for k in (0..=self.order).rev() {
+        for k in (0..self.order + 1).rev() {
             acc = acc * s + self.u[k];
         }
         acc
@@ -207,7 +251,7 @@ impl TimeSeries {
     #[inline]
     pub fn at_with_slope(&self, s: f64) -> (f64, f64) {
         let (mut acc, mut d) = (0.0, 0.0);
-        for k in (0..=self.order).rev() {
+        for k in (0..self.order + 1).rev() {
             d = d * s + acc;
             acc = acc * s + self.u[k];
         }
@@ -218,35 +262,30 @@ impl TimeSeries {
     #[inline]
     pub fn curvature_bound(&self, s: f64) -> f64 {
         let mut acc = 0.0;
-        for k in (2..=self.order).rev() {
+        for k in (2..self.order + 1).rev() {
             acc = acc * s + self.u[k].abs();
         }
         acc * s * s
     }
 
-    /// `int_0^s (u - c)` and `int_0^s (u - c)^2`, exact integrals of the polynomial.
+    /// `int_0^s (u - c)` and `int_0^s (u - c)^2`, exact integrals of the polynomial: with
+    /// `q_k = (u_k - c [k = 0]) s^k`, `s sum_k q_k / (k + 1)` and `s sum_(i,j) q_i q_j /
+    /// (i + j + 1)`, the latter over `i <= j` (the Hilbert matrix is symmetric).
     pub fn integrals(&self, s: f64, c: f64) -> (f64, f64) {
-        let n = self.order;
-        let mut q = self.u;
+        let mut q = [0.0; ORDER + 1];
+        let mut sk = 1.0;
+        for k in 0..self.order + 1 {
+            q[k] = self.u[k] * sk;
+            sk *= s;
+        }
         q[0] -= c;
-        let mut i1 = 0.0;
-        for k in (0..=n).rev() {
-            i1 = i1 * s + q[k] * RECIP1[k];
-        }
-        // (sum q_k s^k)^2 = sum_m s^m sum_(i+j=m) q_i q_j: the product's coefficients by
-        // rows of the outer product (contiguous, so the compiler vectorises them), then
-        // integrated term by term.
-        let mut sq = [0.0; 2 * ORDER + 2];
-        for i in 0..=n {
-            let qi = q[i];
-            for (c, &qj) in sq[i..=i + n].iter_mut().zip(&q[..=n]) {
-                *c += qi * qj;
-            }
-        }
-        let mut i2 = 0.0;
-        for m in (0..=2 * n).rev() {
-            i2 = i2 * s + sq[m] * RECIP_2N[m];
-        }
+        // Fixed trip counts (unrolled): the smallest of four sizes that holds the order.
+        let (i1, i2) = match self.order {
+            0..=4 => quad::<5>(&q),
+            5..=6 => quad::<7>(&q),
+            7..=9 => quad::<10>(&q),
+            _ => quad::<{ ORDER + 1 }>(&q),
+        };
         (i1 * s, i2 * s)
     }
 }
