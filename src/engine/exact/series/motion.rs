@@ -479,7 +479,7 @@ impl RosenbrockPlate {
             if let Some(&bad) = ts.u[..=ts.order].iter().find(|c| !c.is_finite()) {
                 return Err(EngineError::NonFinite { t: ctx.frame.time(tau), quantity: "plate series", value: bad });
             }
-            let mut h = ts.step_within(full, tol, self.dynamic);
+            let mut h = if ts.converged { full } else { ts.step_within(full, tol, self.dynamic) };
             let b1 = ts.u[1] + p.v;
             let (base, r) = (ctx.series.base(), ctx.series.radius());
             // Retakes of this series: halved while too wide, until a re-base needs a new one.

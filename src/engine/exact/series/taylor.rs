@@ -274,8 +274,8 @@ impl TimeSeries {
     pub fn integrals(&self, s: f64, c: f64) -> (f64, f64) {
         let mut q = [0.0; ORDER + 1];
         let mut sk = 1.0;
-        for k in 0..self.order + 1 {
-            q[k] = self.u[k] * sk;
+        for (qk, uk) in q.iter_mut().zip(&self.u[..self.order + 1]) {
+            *qk = uk * sk;
             sk *= s;
         }
         q[0] -= c;
