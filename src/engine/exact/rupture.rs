@@ -225,11 +225,7 @@ impl RuptureModel for WeakRupture {
     }
     #[inline]
     fn detached(&mut self, slot: usize, last: usize, _moved: Option<f64>) {
-        if slot != last {
-            let w = self.tree.get(last);
-            self.tree.set(slot, w);
-        }
-        self.tree.set(last, [0.0; 2]);
+        self.tree.swap_remove(slot, last);
     }
     fn plan<P: PlatePath>(&mut self, traj: &P, n_att: usize) -> Plan {
         self.immediate = false;
