@@ -147,6 +147,10 @@ pub struct WeakRupture {
     bounding: bool,
 }
 
+/// Relative margins of the acceptance squeeze in [`WeakRupture::pick`]: `1 -+ 1e-9`.
+const SQUEEZE_LO: f64 = 1.0 - 1e-9;
+const SQUEEZE_HI: f64 = 1.0 + 1e-9;
+
 /// A horizon longer than this many expected candidates only loosens the bound.
 const CANDIDATES_PER_HORIZON: f64 = 32.0;
 
@@ -281,7 +285,6 @@ impl RuptureModel for WeakRupture {
         if self.immediate {
             return Some(attached.len() - 1);
         }
-        let y = traj.position(s);
         let (m, p) = self.terms();
         let u = rng.uniform() * (m + p);
         let slot = if u < m { self.tree.find(0, u / self.e_hi) } else { self.tree.find(1, (u - m) / self.e_lo) };
@@ -290,13 +293,26 @@ impl RuptureModel for WeakRupture {
         super::pick::prefetch(&attached[slot]);
         // Accept with r_i / b_i = exp(a|y-c|) / (exp(a(y_hi-c)) + exp(a(c-y_lo))), from the
         // leaf weights [exp(-a c), exp(a c)] just read by the descent (no access to the
-        // junction, one exponential): exp(a(y-c)) = exp(a y) w0, exp(a(c-y)) = w1 / exp(a y).
+        // junction, at most one exponential): exp(a(y-c)) = exp(a y) w0, exp(a(c-y)) = w1 / exp(a y).
         // All factors stay finite: |a y| <= FRAME_EXPONENT_LIMIT and |a c| <= EXPONENT_CAP.
         let w = self.tree.get(slot);
+        let b = self.e_hi * w[0] + self.e_lo * w[1];
+        let ub = rng.uniform() * b;
+        // Squeeze: with y_lo <= y <= y_hi, r_i lies between
+        // r_min = max(w0 / e_lo, w1 / e_hi) = max(exp(a (y_lo - c)), exp(a (c - y_hi))) and
+        // r_max = max(e_hi w0, e_lo w1); a uniform outside [r_min, r_max) decides without
+        // the plate's position and its exponential. The margins (1e-9 relative, far above
+        // the exponentials' round-off) make both tests agree with the exact one below.
+        if ub < SQUEEZE_LO * (w[0] / self.e_lo).max(w[1] / self.e_hi) {
+            return Some(slot);
+        }
+        if ub >= SQUEEZE_HI * (self.e_hi * w[0]).max(self.e_lo * w[1]) {
+            return None;
+        }
+        let y = traj.position(s);
         let ey = (self.a * y).exp();
         let r = (ey * w[0]).max(w[1] / ey);
-        let b = self.e_hi * w[0] + self.e_lo * w[1];
-        (rng.uniform() * b < r).then_some(slot)
+        (ub < r).then_some(slot)
     }
     fn rebuild(&mut self, attached: &[Attached]) -> Vec<usize> {
         let over: Vec<usize> = (0..attached.len()).filter(|&s| self.a * attached[s].c.abs() > EXPONENT_CAP).collect();
