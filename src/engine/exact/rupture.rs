@@ -128,7 +128,8 @@ pub struct WeakRupture {
     pub a: f64,
     /// Weights `[exp(-a c), exp(a c)]` per attached slot.
     tree: SumTree2,
-    /// Bounds of the current horizon, and `exp(a y_hi)`, `exp(-a y_lo)`.
+    /// Bounds of the current horizon, and `exp(a y_hi)`, `exp(-a y_lo)` (for the linear
+    /// engine's plans, rounded up to the grid of [`WeakRupture::set_grid_bounds`]).
     y_lo: f64,
     y_hi: f64,
     e_hi: f64,
@@ -145,6 +146,49 @@ pub struct WeakRupture {
     /// The last plan bounded attached junctions (its horizon is meaningful).
     #[serde(default)]
     bounding: bool,
+    /// `exp(g / GRID)` for the plans' bounds on the grid ([`WeakRupture::set_grid_bounds`]).
+    #[serde(skip)]
+    grid: ExpGrid,
+}
+
+/// Grid steps per unit of the exponent `a y` on which [`WeakRupture::plan`] rounds its bounds
+/// outwards: the bound loosens by at most a factor `exp(1/GRID)` per side, and its two
+/// exponentials become table reads.
+const GRID: f64 = 64.0;
+/// Largest `|g|` in the table: `|a y| <= FRAME_EXPONENT_LIMIT` between re-bases, plus the
+/// horizon's spread and a margin; bounds beyond it take `exp` itself.
+const GRID_MAX: usize = (GRID as usize) * (FRAME_EXPONENT_LIMIT as usize + 8);
+
+/// The table `exp(g / GRID)`, `g = -GRID_MAX ..= GRID_MAX`, built on first use (a function of
+/// constants only: not serialized, and any two tables are equal).
+#[derive(Clone, Debug, Default)]
+struct ExpGrid(Vec<f64>);
+
+impl PartialEq for ExpGrid {
+    fn eq(&self, _: &ExpGrid) -> bool {
+        true
+    }
+}
+
+impl ExpGrid {
+    /// `exp(x)` rounded up to the grid: `exp(g / GRID)` with the smallest integer `g >= GRID x`
+    /// (at least `exp(x)`, up to the exponential's own round-off, as `exp(x)` itself).
+    #[inline]
+    fn exp_up(&mut self, x: f64) -> f64 {
+        let t = x * GRID;
+        if !(t.abs() < GRID_MAX as f64) {
+            return x.exp();
+        }
+        // ceil(t) by truncation (`f64::ceil` is a library call without SSE4.1).
+        let mut g = t as i64;
+        if (g as f64) < t {
+            g += 1;
+        }
+        if self.0.is_empty() {
+            self.0 = (0..=2 * GRID_MAX).map(|i| ((i as f64 - GRID_MAX as f64) / GRID).exp()).collect();
+        }
+        self.0[(g + GRID_MAX as i64) as usize]
+    }
 }
 
 /// Relative margins of the acceptance squeeze in [`WeakRupture::pick`]: `1 -+ 1e-9`.
@@ -172,6 +216,7 @@ impl WeakRupture {
             last_rate: 0.0,
             immediate: false,
             bounding: false,
+            grid: ExpGrid::default(),
         })
     }
     #[inline]
@@ -186,6 +231,16 @@ impl WeakRupture {
         self.y_hi = y_hi;
         self.e_hi = (self.a * y_hi).exp();
         self.e_lo = (-self.a * y_lo).exp();
+    }
+    /// Sets bounds at least as wide as `[y_lo, y_hi]`, with the exponents `a y_hi` and
+    /// `-a y_lo` rounded up to the grid `1/GRID` (tabulated: no exponential). Every rate
+    /// bound `b_i` stays above `r_i` on `[y_lo, y_hi]`, at most `exp(1/GRID)` looser.
+    #[inline]
+    fn set_grid_bounds(&mut self, y_lo: f64, y_hi: f64) {
+        self.y_lo = y_lo;
+        self.y_hi = y_hi;
+        self.e_hi = self.grid.exp_up(self.a * y_hi);
+        self.e_lo = self.grid.exp_up(-self.a * y_lo);
     }
     /// `exp(a y_hi) W-` and `exp(-a y_lo) W+`.
     #[inline]
@@ -264,7 +319,7 @@ impl RuptureModel for WeakRupture {
             b = b2;
         }
         self.horizon = h;
-        self.set_bounds(b.0, b.1);
+        self.set_grid_bounds(b.0, b.1);
         self.bounding = true;
         let (m, p) = self.terms();
         let rate = self.k0 * (m + p);
@@ -330,5 +385,58 @@ impl RuptureModel for WeakRupture {
     #[inline]
     fn needs_rebase(&self, y: f64, tau: f64) -> bool {
         self.a * y.abs() > FRAME_EXPONENT_LIMIT || (self.bounding && self.horizon < TIME_RESOLUTION * tau.abs())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::exact::motion::Drive;
+
+    /// The grid's factors bound the exponentials from above, within a factor `exp(1/GRID)`,
+    /// inside the table and beyond it.
+    #[test]
+    fn grid_rounds_exponentials_up() {
+        let mut g = ExpGrid::default();
+        let mut rng = crate::rng::pcg(3);
+        for i in 0..100_000 {
+            let x = if i % 2 == 0 { (rng.uniform() - 0.5) * 200.0 } else { (rng.uniform() - 0.5) * 1e-3 };
+            let (e, exact) = (g.exp_up(x), x.exp());
+            assert!(e >= exact, "x {x}: {e} < {exact}");
+            assert!(e <= exact * (1.0 / GRID).exp() * (1.0 + 1e-14), "x {x}: {e} vs {exact}");
+        }
+        assert_eq!(g.exp_up(0.0), 1.0);
+    }
+
+    /// A plan bounds every junction's rate over its whole horizon (`b_i >= r_i`: the
+    /// acceptance never exceeds 1), and the acceptance squeeze of `pick` brackets the rate:
+    /// `max(w0 / e_lo, w1 / e_hi) <= r_i <= max(e_hi w0, e_lo w1) <= b_i`.
+    #[test]
+    fn plan_bounds_every_rate_over_its_horizon() {
+        let a = 3.0;
+        let n = 64;
+        let mut rng = crate::rng::pcg(4);
+        let mut w = WeakRupture::new(1.0, a, n);
+        let anchors: Vec<f64> = (0..n).map(|_| (rng.uniform() - 0.5) * 4.0).collect();
+        for (slot, &c) in anchors.iter().enumerate() {
+            assert!(w.attached(slot, c, 0.0));
+        }
+        for drive in [Drive { y0: 0.3, v: 0.7 }, Drive { y0: -0.5, v: -2.0 }, Drive { y0: 1.1, v: 1e-9 }] {
+            let plan = w.plan(&drive, n);
+            assert!(plan.rate.is_finite() && plan.horizon > 0.0);
+            for k in 0..=200 {
+                let s = plan.horizon * k as f64 / 200.0;
+                let y = drive.position(s);
+                for (slot, &c) in anchors.iter().enumerate() {
+                    let r = (a * (y - c).abs()).exp();
+                    let wt = w.tree.get(slot);
+                    let b = w.e_hi * wt[0] + w.e_lo * wt[1];
+                    let lo = (wt[0] / w.e_lo).max(wt[1] / w.e_hi);
+                    let hi = (w.e_hi * wt[0]).max(w.e_lo * wt[1]);
+                    let tol = 1.0 + 1e-12;
+                    assert!(lo <= r * tol && r <= hi * tol && hi <= b, "y {y} c {c}: {lo} {r} {hi} {b}");
+                }
+            }
+        }
     }
 }
