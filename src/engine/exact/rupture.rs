@@ -176,7 +176,7 @@ impl ExpGrid {
     #[inline]
     fn exp_up(&mut self, x: f64) -> f64 {
         let t = x * GRID;
-        if !(t.abs() < GRID_MAX as f64) {
+        if t.is_nan() || t.abs() >= GRID_MAX as f64 {
             return x.exp();
         }
         // ceil(t) by truncation (`f64::ceil` is a library call without SSE4.1).
