@@ -14,7 +14,11 @@
 //!   probability `r_i(s) / b_i`. Accepted candidates are exactly the rupture events of the
 //!   time-dependent rates (Lewis & Shedler 1979; Ogata 1981). The horizon is chosen so
 //!   that `a (y_hi - y_lo) <= 1`, which keeps the acceptance probability above
-//!   `exp(-1) / 2`. Cost per candidate: O(log N).
+//!   `exp(-1) / 2`. Cost per candidate: O(log N). A plan rounds the exponents `a y_hi` and
+//!   `-a y_lo` up to a grid of `1/GRID` (its two factors read from a table, the bound at
+//!   most `exp(1/GRID)` looser per side), and the acceptance is first squeezed between
+//!   `max(exp(a (y_lo - c_i)), exp(a (c_i - y_hi))) <= r_i <= max(exp(a (y_hi - c_i)), exp(a (c_i - y_lo)))`,
+//!   which needs neither the plate's position nor an exponential.
 
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
