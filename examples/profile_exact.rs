@@ -26,9 +26,13 @@ fn time<E: Engine, O: Observer>(mut engine: E, obs: &mut O, span: f64) -> (u64, 
     engine.advance(20.0, obs).expect("warm-up runs");
     eprintln!("warm-up to t = 20: {:.2} s", warm.elapsed().as_secs_f64());
     let before = engine.counters().events.expect("the exact engine counts events");
+    let candidates_before = engine.counters().candidates.unwrap_or(0);
     let start = std::time::Instant::now();
     engine.advance(20.0 + span, obs).expect("the run finishes");
     let seconds = start.elapsed().as_secs_f64();
+    let c = engine.counters();
+    let (events, candidates) = (c.events.unwrap_or(0) - before, c.candidates.unwrap_or(0) - candidates_before);
+    eprintln!("candidates per event: {:.3}", candidates as f64 / events.max(1) as f64);
     (engine.counters().events.expect("the exact engine counts events") - before, seconds)
 }
 

@@ -14,7 +14,11 @@
 //!   probability `r_i(s) / b_i`. Accepted candidates are exactly the rupture events of the
 //!   time-dependent rates (Lewis & Shedler 1979; Ogata 1981). The horizon is chosen so
 //!   that `a (y_hi - y_lo) <= 1`, which keeps the acceptance probability above
-//!   `exp(-1) / 2`. Cost per candidate: O(log N).
+//!   `exp(-1) / 2`. Cost per candidate: O(log N). A plan rounds the exponents `a y_hi` and
+//!   `-a y_lo` up to a grid of `1/GRID` (its two factors read from a table, the bound at
+//!   most `exp(1/GRID)` looser per side), and the acceptance is first squeezed between
+//!   `max(exp(a (y_lo - c_i)), exp(a (c_i - y_hi))) <= r_i <= max(exp(a (y_hi - c_i)), exp(a (c_i - y_lo)))`,
+//!   which needs neither the plate's position nor an exponential.
 
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
@@ -128,7 +132,8 @@ pub struct WeakRupture {
     pub a: f64,
     /// Weights `[exp(-a c), exp(a c)]` per attached slot.
     tree: SumTree2,
-    /// Bounds of the current horizon, and `exp(a y_hi)`, `exp(-a y_lo)`.
+    /// Bounds of the current horizon, and `exp(a y_hi)`, `exp(-a y_lo)` (for the linear
+    /// engine's plans, rounded up to the grid of [`WeakRupture::set_grid_bounds`]).
     y_lo: f64,
     y_hi: f64,
     e_hi: f64,
@@ -145,7 +150,54 @@ pub struct WeakRupture {
     /// The last plan bounded attached junctions (its horizon is meaningful).
     #[serde(default)]
     bounding: bool,
+    /// `exp(g / GRID)` for the plans' bounds on the grid ([`WeakRupture::set_grid_bounds`]).
+    #[serde(skip)]
+    grid: ExpGrid,
 }
+
+/// Grid steps per unit of the exponent `a y` on which [`WeakRupture::plan`] rounds its bounds
+/// outwards: the bound loosens by at most a factor `exp(1/GRID)` per side, and its two
+/// exponentials become table reads.
+const GRID: f64 = 64.0;
+/// Largest `|g|` in the table: `|a y| <= FRAME_EXPONENT_LIMIT` between re-bases, plus the
+/// horizon's spread and a margin; bounds beyond it take `exp` itself.
+const GRID_MAX: usize = (GRID as usize) * (FRAME_EXPONENT_LIMIT as usize + 8);
+
+/// The table `exp(g / GRID)`, `g = -GRID_MAX ..= GRID_MAX`, built on first use (a function of
+/// constants only: not serialized, and any two tables are equal).
+#[derive(Clone, Debug, Default)]
+struct ExpGrid(Vec<f64>);
+
+impl PartialEq for ExpGrid {
+    fn eq(&self, _: &ExpGrid) -> bool {
+        true
+    }
+}
+
+impl ExpGrid {
+    /// `exp(x)` rounded up to the grid: `exp(g / GRID)` with the smallest integer `g >= GRID x`
+    /// (at least `exp(x)`, up to the exponential's own round-off, as `exp(x)` itself).
+    #[inline]
+    fn exp_up(&mut self, x: f64) -> f64 {
+        let t = x * GRID;
+        if t.is_nan() || t.abs() >= GRID_MAX as f64 {
+            return x.exp();
+        }
+        // ceil(t) by truncation (`f64::ceil` is a library call without SSE4.1).
+        let mut g = t as i64;
+        if (g as f64) < t {
+            g += 1;
+        }
+        if self.0.is_empty() {
+            self.0 = (0..=2 * GRID_MAX).map(|i| ((i as f64 - GRID_MAX as f64) / GRID).exp()).collect();
+        }
+        self.0[(g + GRID_MAX as i64) as usize]
+    }
+}
+
+/// Relative margins of the acceptance squeeze in [`WeakRupture::pick`]: `1 -+ 1e-9`.
+const SQUEEZE_LO: f64 = 1.0 - 1e-9;
+const SQUEEZE_HI: f64 = 1.0 + 1e-9;
 
 /// A horizon longer than this many expected candidates only loosens the bound.
 const CANDIDATES_PER_HORIZON: f64 = 32.0;
@@ -168,6 +220,7 @@ impl WeakRupture {
             last_rate: 0.0,
             immediate: false,
             bounding: false,
+            grid: ExpGrid::default(),
         })
     }
     #[inline]
@@ -182,6 +235,16 @@ impl WeakRupture {
         self.y_hi = y_hi;
         self.e_hi = (self.a * y_hi).exp();
         self.e_lo = (-self.a * y_lo).exp();
+    }
+    /// Sets bounds at least as wide as `[y_lo, y_hi]`, with the exponents `a y_hi` and
+    /// `-a y_lo` rounded up to the grid `1/GRID` (tabulated: no exponential). Every rate
+    /// bound `b_i` stays above `r_i` on `[y_lo, y_hi]`, at most `exp(1/GRID)` looser.
+    #[inline]
+    fn set_grid_bounds(&mut self, y_lo: f64, y_hi: f64) {
+        self.y_lo = y_lo;
+        self.y_hi = y_hi;
+        self.e_hi = self.grid.exp_up(self.a * y_hi);
+        self.e_lo = self.grid.exp_up(-self.a * y_lo);
     }
     /// `exp(a y_hi) W-` and `exp(-a y_lo) W+`.
     #[inline]
@@ -225,11 +288,7 @@ impl RuptureModel for WeakRupture {
     }
     #[inline]
     fn detached(&mut self, slot: usize, last: usize, _moved: Option<f64>) {
-        if slot != last {
-            let w = self.tree.get(last);
-            self.tree.set(slot, w);
-        }
-        self.tree.set(last, [0.0; 2]);
+        self.tree.swap_remove(slot, last);
     }
     fn plan<P: PlatePath>(&mut self, traj: &P, n_att: usize) -> Plan {
         self.immediate = false;
@@ -264,7 +323,7 @@ impl RuptureModel for WeakRupture {
             b = b2;
         }
         self.horizon = h;
-        self.set_bounds(b.0, b.1);
+        self.set_grid_bounds(b.0, b.1);
         self.bounding = true;
         let (m, p) = self.terms();
         let rate = self.k0 * (m + p);
@@ -285,7 +344,6 @@ impl RuptureModel for WeakRupture {
         if self.immediate {
             return Some(attached.len() - 1);
         }
-        let y = traj.position(s);
         let (m, p) = self.terms();
         let u = rng.uniform() * (m + p);
         let slot = if u < m { self.tree.find(0, u / self.e_hi) } else { self.tree.find(1, (u - m) / self.e_lo) };
@@ -294,13 +352,26 @@ impl RuptureModel for WeakRupture {
         super::pick::prefetch(&attached[slot]);
         // Accept with r_i / b_i = exp(a|y-c|) / (exp(a(y_hi-c)) + exp(a(c-y_lo))), from the
         // leaf weights [exp(-a c), exp(a c)] just read by the descent (no access to the
-        // junction, one exponential): exp(a(y-c)) = exp(a y) w0, exp(a(c-y)) = w1 / exp(a y).
+        // junction, at most one exponential): exp(a(y-c)) = exp(a y) w0, exp(a(c-y)) = w1 / exp(a y).
         // All factors stay finite: |a y| <= FRAME_EXPONENT_LIMIT and |a c| <= EXPONENT_CAP.
         let w = self.tree.get(slot);
+        let b = self.e_hi * w[0] + self.e_lo * w[1];
+        let ub = rng.uniform() * b;
+        // Squeeze: with y_lo <= y <= y_hi, r_i lies between
+        // r_min = max(w0 / e_lo, w1 / e_hi) = max(exp(a (y_lo - c)), exp(a (c - y_hi))) and
+        // r_max = max(e_hi w0, e_lo w1); a uniform outside [r_min, r_max) decides without
+        // the plate's position and its exponential. The margins (1e-9 relative, far above
+        // the exponentials' round-off) make both tests agree with the exact one below.
+        if ub < SQUEEZE_LO * (w[0] / self.e_lo).max(w[1] / self.e_hi) {
+            return Some(slot);
+        }
+        if ub >= SQUEEZE_HI * (self.e_hi * w[0]).max(self.e_lo * w[1]) {
+            return None;
+        }
+        let y = traj.position(s);
         let ey = (self.a * y).exp();
         let r = (ey * w[0]).max(w[1] / ey);
-        let b = self.e_hi * w[0] + self.e_lo * w[1];
-        (rng.uniform() * b < r).then_some(slot)
+        (ub < r).then_some(slot)
     }
     fn rebuild(&mut self, attached: &[Attached]) -> Vec<usize> {
         let over: Vec<usize> = (0..attached.len()).filter(|&s| self.a * attached[s].c.abs() > EXPONENT_CAP).collect();
@@ -318,5 +389,58 @@ impl RuptureModel for WeakRupture {
     #[inline]
     fn needs_rebase(&self, y: f64, tau: f64) -> bool {
         self.a * y.abs() > FRAME_EXPONENT_LIMIT || (self.bounding && self.horizon < TIME_RESOLUTION * tau.abs())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::exact::motion::Drive;
+
+    /// The grid's factors bound the exponentials from above, within a factor `exp(1/GRID)`,
+    /// inside the table and beyond it.
+    #[test]
+    fn grid_rounds_exponentials_up() {
+        let mut g = ExpGrid::default();
+        let mut rng = crate::rng::pcg(3);
+        for i in 0..100_000 {
+            let x = if i % 2 == 0 { (rng.uniform() - 0.5) * 200.0 } else { (rng.uniform() - 0.5) * 1e-3 };
+            let (e, exact) = (g.exp_up(x), x.exp());
+            assert!(e >= exact, "x {x}: {e} < {exact}");
+            assert!(e <= exact * (1.0 / GRID).exp() * (1.0 + 1e-14), "x {x}: {e} vs {exact}");
+        }
+        assert_eq!(g.exp_up(0.0), 1.0);
+    }
+
+    /// A plan bounds every junction's rate over its whole horizon (`b_i >= r_i`: the
+    /// acceptance never exceeds 1), and the acceptance squeeze of `pick` brackets the rate:
+    /// `max(w0 / e_lo, w1 / e_hi) <= r_i <= max(e_hi w0, e_lo w1) <= b_i`.
+    #[test]
+    fn plan_bounds_every_rate_over_its_horizon() {
+        let a = 3.0;
+        let n = 64;
+        let mut rng = crate::rng::pcg(4);
+        let mut w = WeakRupture::new(1.0, a, n);
+        let anchors: Vec<f64> = (0..n).map(|_| (rng.uniform() - 0.5) * 4.0).collect();
+        for (slot, &c) in anchors.iter().enumerate() {
+            assert!(w.attached(slot, c, 0.0));
+        }
+        for drive in [Drive { y0: 0.3, v: 0.7 }, Drive { y0: -0.5, v: -2.0 }, Drive { y0: 1.1, v: 1e-9 }] {
+            let plan = w.plan(&drive, n);
+            assert!(plan.rate.is_finite() && plan.horizon > 0.0);
+            for k in 0..=200 {
+                let s = plan.horizon * k as f64 / 200.0;
+                let y = drive.position(s);
+                for (slot, &c) in anchors.iter().enumerate() {
+                    let r = (a * (y - c).abs()).exp();
+                    let wt = w.tree.get(slot);
+                    let b = w.e_hi * wt[0] + w.e_lo * wt[1];
+                    let lo = (wt[0] / w.e_lo).max(wt[1] / w.e_hi);
+                    let hi = (w.e_hi * wt[0]).max(w.e_lo * wt[1]);
+                    let tol = 1.0 + 1e-12;
+                    assert!(lo <= r * tol && r <= hi * tol && hi <= b, "y {y} c {c}: {lo} {r} {hi} {b}");
+                }
+            }
+        }
     }
 }

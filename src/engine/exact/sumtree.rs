@@ -104,6 +104,41 @@ impl SumTree2 {
             node = parent;
         }
     }
+    /// Moves the weights of slot `last` into `slot` and empties `last` (the tree's side of
+    /// a `swap_remove`): the same tree, bit for bit, as `set(slot, get(last))` then
+    /// `set(last, [0; 2])`, with the two paths to the root walked together level by level
+    /// (both leaves are at the same depth), and once from where they meet.
+    #[inline]
+    pub fn swap_remove(&mut self, slot: usize, last: usize) {
+        assert!(
+            slot < self.cap && last < self.cap,
+            "SumTree2::swap_remove: slots {slot}, {last} beyond capacity {}",
+            self.cap
+        );
+        let mut a = self.first_bottom + slot / ARITY;
+        let mut b = self.first_bottom + last / ARITY;
+        let w = self.lines[b].0[last % ARITY];
+        self.lines[a].0[slot % ARITY] = w;
+        self.lines[b].0[last % ARITY] = [0.0; 2];
+        let lines = self.lines.as_mut_ptr();
+        // Each node is summed after its children are final (a level at a time), so every
+        // ancestor gets the same sums as from the two walks one after the other.
+        while a > 0 {
+            let (pa, pb) = ((a - 1) / ARITY, (b - 1) / ARITY);
+            // SAFETY: parents have smaller indices than their children, and `a`, `b` start
+            // inside the buffer (the checked accesses above).
+            unsafe {
+                let sum = (*lines.add(a)).sum();
+                (*lines.add(pa)).0[(a - 1) % ARITY] = sum;
+                if b != a {
+                    let sum = (*lines.add(b)).sum();
+                    (*lines.add(pb)).0[(b - 1) % ARITY] = sum;
+                }
+            }
+            a = pa;
+            b = pb;
+        }
+    }
     /// Sum of all weights, per component.
     #[inline]
     pub fn total(&self) -> [f64; 2] {
@@ -124,14 +159,9 @@ impl SumTree2 {
             // The next line is one of this node's four children (256 contiguous bytes):
             // requesting all four now starts the next miss before this node's choice is
             // known (whole runs at N = 1e6 with weak bonds: 14% faster, docs/performance.md).
-            let first = ARITY * node + 1;
             if node < self.first_bottom {
                 // SAFETY: a node above the bottom level has its four children in the tree.
-                unsafe {
-                    for i in 0..ARITY {
-                        super::pick::prefetch(self.line(first + i));
-                    }
-                }
+                unsafe { self.prefetch_children(node) };
             }
             // SAFETY: the descent starts at the root and goes to a child only from a node
             // above the bottom level (checked below), whose children are in the tree (the
@@ -156,6 +186,19 @@ impl SumTree2 {
                 return (node - self.first_bottom) * ARITY + j;
             }
             node = ARITY * node + 1 + j;
+        }
+    }
+    /// Requests the lines of the four children of `node` (256 contiguous bytes).
+    ///
+    /// # Safety
+    /// `node` is above the bottom level (`node < first_bottom`), and the tree's shape is
+    /// consistent (`ARITY * first_bottom < lines.len()`).
+    #[inline(always)]
+    unsafe fn prefetch_children(&self, node: usize) {
+        let first = ARITY * node + 1;
+        for i in 0..ARITY {
+            // SAFETY: the caller's contract: `first + i <= ARITY * first_bottom < lines.len()`.
+            unsafe { super::pick::prefetch(self.line(first + i)) };
         }
     }
     /// Rebuilds the tree from the first `weights.len()` slots (the rest are zero). O(N).
@@ -208,6 +251,38 @@ mod tests {
         }
         b.rebuild(w.into_iter());
         assert_eq!(a, b);
+    }
+
+    /// `swap_remove` against its definition, two `set`s, over random removals and
+    /// insertions of a compact prefix of slots (the engine's use), on several depths.
+    #[test]
+    fn swap_remove_equals_two_sets() {
+        use crate::rng::UniformSource;
+        let mut rng = crate::rng::pcg(5);
+        for cap in [3, 16, 70, 1000] {
+            let mut a = SumTree2::new(cap);
+            let mut b = SumTree2::new(cap);
+            let mut n = 0;
+            for _ in 0..4000 {
+                if n > 0 && (n == cap || rng.uniform() < 0.5) {
+                    let slot = ((rng.uniform() * n as f64) as usize).min(n - 1);
+                    let last = n - 1;
+                    a.swap_remove(slot, last);
+                    if slot != last {
+                        let w = b.get(last);
+                        b.set(slot, w);
+                    }
+                    b.set(last, [0.0; 2]);
+                    n -= 1;
+                } else {
+                    let e = (4.0 * rng.uniform() - 2.0).exp();
+                    a.set(n, [1.0 / e, e]);
+                    b.set(n, [1.0 / e, e]);
+                    n += 1;
+                }
+                assert_eq!(a, b, "cap {cap}, n {n}");
+            }
+        }
     }
 
     /// Deep trees: every slot is found at the middle of its own weight interval, and the
