@@ -1371,31 +1371,21 @@ impl SeriesSum {
     /// `|S(z) - cubic(z)| <= r4 |z - y|^4` there (Lagrange remainder).
     ///
     /// With `P(t) = sum_k A_k t^k` (`t = z - base`) the series and `t0 = y - base`:
-    /// `c_j = sum_k C(k, j) A_k t0^(k-j)` (`j <= 3`, Horner's scheme for normalised
-    /// derivatives, one pass; the linear part `kappa (X0 + n t0)` adds to `c0` and `kappa n`
-    /// to `c1`), and `r4 = sum_(k>=4) C(k, 4) |A_k| rho^(k-4)`, `rho = |t0| + d` (every
+    /// `c_j = sum_k C(k, j) A_k t0^(k-j)` (`j <= 3`, [`SeriesSum::derivatives_at`]; the
+    /// linear part `kappa (X0 + n t0)` adds to `c0` and `kappa n` to `c1`), and `r4 = sum_(k>=4) C(k, 4) |A_k| rho^(k-4)`, `rho = |t0| + d` (every
     /// `|z - base| <= rho` has `|P''''(z)|/24 <= r4`; the linear part has no fourth
     /// derivative), widened by `1 + 4 (p+1) eps` for its own rounding (positive terms). This
     /// bounds the cubic against the series; the series' own `error_bound` (against the true
     /// force, within `radius()` of the base) applies unchanged. The rounding of the `c_j` is
     /// that of the Horner evaluation the round-off allowance charges.
     pub fn taylor_at(&self, y: f64, d: f64) -> ([f64; 4], f64) {
-        let t0 = y - self.base;
-        let rho = t0.abs() + d;
-        let (mut b0, mut b1, mut b2, mut b3) = (0.0, 0.0, 0.0, 0.0);
+        let rho = (y - self.base).abs() + d;
         let mut r4 = 0.0;
-        for k in (0..=self.p).rev() {
-            let a = self.a[k] + self.al[k];
-            b3 = b3 * t0 + b2;
-            b2 = b2 * t0 + b1;
-            b1 = b1 * t0 + b0;
-            b0 = b0 * t0 + a;
-            if k >= 4 {
-                r4 = r4 * rho + BINOM4[k] * a.abs();
-            }
+        for k in (4..=self.p).rev() {
+            r4 = r4 * rho + BINOM4[k] * (self.a[k] + self.al[k]).abs();
         }
         let r4 = r4 * (1.0 + 4.0 * (self.p as f64 + 1.0) * EPS);
-        ([self.linear(t0) + b0, self.law.kappa * self.n as f64 + b1, b2, b3], r4)
+        (self.derivatives_at::<4>(y), r4)
     }
 }
 
