@@ -119,7 +119,9 @@
 //! - *Re-base.* `rebase(y0)` rebuilds `A = sum_i D_i(y0)`, `X0 = sum_i x_i` and the spread
 //!   `sum_i |x_i|` from the offsets, O(N p): four junctions at a time through `phi_taylor4`
 //!   (`phi_taylor` on a structure of arrays, one pass, compiled to packed SSE2 operations on
-//!   baseline x86-64; bit for bit `phi_taylor`'s values, unit test `phi_taylor4_is_phi_taylor`).
+//!   baseline x86-64 and to AVX2 ones where the processor has it; bit for bit `phi_taylor`'s
+//!   values, unit tests `phi_taylor4_is_phi_taylor` and
+//!   `direct_sums_are_the_same_in_every_vector_width`).
 //! - *Radius and order.* Only the junctions' own expansions are left, so `rho = l0/4`
 //!   (`q_d = rho/l0 = 1/4`: twice the bins' radius, half the re-bases) and `p` is the
 //!   smallest order with `T_d = q_d^(p+1)/(1-q_d) <= rtol/4` (`p = 17` at `rtol = 1e-10`,
@@ -284,8 +286,8 @@ pub fn phi_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
 
 /// `acc[k][l] += phi_k(x[l])` for `k < n` and the four lanes `l`: [`phi_taylor`] on four
 /// points at once (structure of arrays, so that each step is one operation on a vector of
-/// lanes: two SSE2 instructions on baseline x86-64, one with AVX2), bit for bit the same values (the same
-/// operations in the same order, none fused). Every `max(|x[l]|, l0)` must lie in
+/// lanes: two SSE2 instructions on baseline x86-64, one with AVX2), bit for bit the same
+/// values (the same operations in the same order, none fused). Every `max(|x[l]|, l0)` must lie in
 /// `[1e-150, 1e150]` (the caller checks; outside, [`phi_taylor`] takes its `hypot` branch).
 #[inline(always)]
 fn phi_taylor4(law: &Tilted, x: [f64; LANES], n: usize, acc: &mut [[f64; LANES]; PMAX]) {
@@ -1194,11 +1196,8 @@ impl SeriesSum {
         self.resid = 0;
     }
 
-    /// Direct mode's re-base: `A = sum_i phi_taylor(x_i)`, `x_i = base_off - e_i`, four
-    /// junctions at a time ([`phi_taylor4`]) summed per lane in plain `f64` over blocks of
-    /// `BLOCK` batches and folded into the double-double series after each block; `X0 =
-    /// sum_i x_i` (double-double per lane) and `spread = sum_i |x_i|` afresh. The round-off
-    /// allowance restarts at `REBUILD_ROUNDOFF` per junction.
+    /// Direct mode's re-base: `A`, `X0` and the spread afresh from the offsets
+    /// ([`direct_sums`]). The round-off allowance restarts at `REBUILD_ROUNDOFF` per junction.
     fn rebase_direct(&mut self, y0: f64) {
         self.base = y0;
         self.base_off = y0 - self.origin;
@@ -1372,12 +1371,13 @@ impl SeriesSum {
     ///
     /// With `P(t) = sum_k A_k t^k` (`t = z - base`) the series and `t0 = y - base`:
     /// `c_j = sum_k C(k, j) A_k t0^(k-j)` (`j <= 3`, [`SeriesSum::derivatives_at`]; the
-    /// linear part `kappa (X0 + n t0)` adds to `c0` and `kappa n` to `c1`), and `r4 = sum_(k>=4) C(k, 4) |A_k| rho^(k-4)`, `rho = |t0| + d` (every
-    /// `|z - base| <= rho` has `|P''''(z)|/24 <= r4`; the linear part has no fourth
-    /// derivative), widened by `1 + 4 (p+1) eps` for its own rounding (positive terms). This
-    /// bounds the cubic against the series; the series' own `error_bound` (against the true
-    /// force, within `radius()` of the base) applies unchanged. The rounding of the `c_j` is
-    /// that of the Horner evaluation the round-off allowance charges.
+    /// linear part `kappa (X0 + n t0)` adds to `c0` and `kappa n` to `c1`), and `r4 =
+    /// sum_(k>=4) C(k, 4) |A_k| rho^(k-4)`, `rho = |t0| + d` (every `|z - base| <= rho` has
+    /// `|P''''(z)|/24 <= r4`; the linear part has no fourth derivative), widened by `1 + 4
+    /// (p+1) eps` for its own rounding (positive terms). This bounds the cubic against the
+    /// series; the series' own `error_bound` (against the true force, within `radius()` of
+    /// the base) applies unchanged. The rounding of the `c_j` is that of the Horner
+    /// evaluation the round-off allowance charges.
     pub fn taylor_at(&self, y: f64, d: f64) -> ([f64; 4], f64) {
         let rho = (y - self.base).abs() + d;
         let mut r4 = 0.0;
@@ -1513,9 +1513,6 @@ mod tests {
         assert!(worst_norm_d <= OP_ROUNDOFF / 4.0, "norm at l0/4 {worst_norm_d}");
     }
 
-    /// `phi_taylor4` gives `phi_taylor`'s values bit for bit (the same operations), for
-    /// every number of coefficients, at points over twelve decades of `|x|/l0` and both
-    /// signs, several laws.
     /// The re-base's sums in 256-bit vectors (where the processor has AVX2) are those of the
     /// baseline build bit for bit: offsets over six decades, both signs, a tail of 1-3, and
     /// values that take the scalar branch; every order `p` of direct mode.
@@ -1594,6 +1591,9 @@ mod tests {
         }
     }
 
+    /// `phi_taylor4` gives `phi_taylor`'s values bit for bit (the same operations), for
+    /// every number of coefficients, at points over twelve decades of `|x|/l0` and both
+    /// signs, several laws.
     #[test]
     fn phi_taylor4_is_phi_taylor() {
         let mut xs = vec![0.0, -0.0, 1e-300];
