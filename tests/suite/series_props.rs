@@ -435,6 +435,38 @@ fn direct_serde_round_trip_is_exact() {
     }
 }
 
+/// A direct-mode series written before graded orders (no `graded` field: every junction to
+/// order `p`) is rebuilt at its base on reading: it then equals the series re-based there,
+/// and after removing all junctions but one it is that junction's series (a removal
+/// subtracts what the series holds).
+#[test]
+fn direct_series_without_graded_orders_is_rebuilt() {
+    let law = Tilted { kappa: 0.2, l0: 1.3 };
+    let mut s = SeriesSum::direct(law, 1e-10);
+    let hs: Vec<(f64, u32)> = (0..57).map(|i| (i as f64 * 0.41 - 9.0, 0)).collect();
+    let hs: Vec<(f64, u32)> = hs.into_iter().map(|(c, _)| (c, s.add(c))).collect();
+    s.rebase(0.7);
+    let mut json: serde_json::Value = serde_json::to_value(&s).unwrap();
+    assert_eq!(json["graded"], serde_json::Value::Bool(true));
+    let obj = json.as_object_mut().unwrap();
+    obj.remove("graded");
+    // As an older version would have written it: other coefficients (here, made up).
+    obj.insert("a".into(), serde_json::to_value([1.0; 32]).unwrap());
+    let mut t: SeriesSum = serde_json::from_value(json).unwrap();
+    let mut rebuilt = s.clone();
+    rebuilt.rebase(rebuilt.base());
+    assert_eq!(t.force_and_stiffness(0.75), rebuilt.force_and_stiffness(0.75));
+    let (&(c_last, _), rest) = hs.split_last().unwrap();
+    for &(c, h) in rest {
+        t.remove(c, h);
+    }
+    let mut one = SeriesSum::direct(law, 1e-10);
+    one.rebase(t.base());
+    one.add(c_last);
+    let (f, g) = (t.force(0.75), one.force(0.75));
+    assert!((f - g).abs() <= t.error_bound() + one.error_bound(), "{f} vs {g}");
+}
+
 /// Bulk sequences: many junctions added, a re-base (they are now counted through the
 /// bins), then removed in random order interleaved with new ones and with evaluations, then
 /// everything removed (exactly zero). `S`, `S'`, `int S` within the bounds after every
