@@ -46,8 +46,11 @@ impl SumTree2 {
     /// [`SumTree2::new`], with its nodes reserved fallibly.
     pub fn try_new(slots: usize) -> Result<SumTree2, AllocError> {
         let (cap, nodes) = Self::shape(slots);
-        let lines = alloc::filled(nodes, Line::default(), "the rupture sum tree")?;
+        // Huge pages are asked for before the tree is written: pages touched first are
+        // backed by 4 KiB ones (with the kernel's `madvise` setting, the common default).
+        let mut lines = alloc::with_capacity(nodes, "the rupture sum tree")?;
         super::bags::advise_huge_pages(&lines);
+        lines.resize(nodes, Line::default());
         Ok(SumTree2 { cap, first_bottom: nodes - cap / ARITY, lines })
     }
     /// `(slots of the bottom level, nodes)` of the tree for `slots` slots.
