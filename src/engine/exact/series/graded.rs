@@ -14,9 +14,9 @@
 //! the worst junction's `T_d(p)` and `T'_d(p)`, so the truncation bound `kappa l0 n T_d(p)`
 //! (and `kappa n T'_d(p)`) of [`super::SeriesSum::error_bound`] holds unchanged, term by
 //! term. At `rtol = 1e-10` (`p = 17`) a junction at `|x0| = 2 l0` is kept to order 10, at
-//! `4 l0` to 8 and at `20 l0` to 4 (test `quoted_orders`); on the letter's Fig. 1 scene the attached
-//! junctions are mostly a few `l0` from their anchors (docs/performance.md, "Exact engine,
-//! tilted law", has what this saves).
+//! `4 l0` to 8 and at `20 l0` to 4 (test `quoted_orders`); on the letter's Fig. 1 scene
+//! the attached junctions are mostly a few `l0` from their anchors (docs/performance.md,
+//! "Exact engine, tilted law", has what this saves).
 //!
 //! A junction's order is a function of its `u = x^2 + l0^2` alone ([`Grades::order`]), and
 //! `x = base_off - e` is computed the same way by the re-base, `add` and `remove`, so a
@@ -26,10 +26,10 @@
 //! **Re-base** ([`direct_sums`]). Four junctions at a time through `phi_taylor4`, each lane
 //! to its own order (the four run to the highest of their orders, the terms beyond a lane's
 //! own added as zeros; sorting the junctions by order first would save some of those
-//! terms, but the sort cost more than it saved at a few hundred junctions). Sums per lane in plain `f64` over blocks of `BLOCK` batches, folded into the
-//! double-double series after each block, as before: the round-off charge
-//! `REBUILD_ROUNDOFF` per junction is unchanged (each junction contributes fewer terms, none
-//! with more rounding).
+//! terms, but the sort cost more than it saved at a few hundred junctions). Sums per lane
+//! in plain `f64` over blocks of `BLOCK` batches, folded into the double-double series
+//! after each block: the round-off charge `REBUILD_ROUNDOFF` per junction holds (each
+//! junction contributes fewer terms, none with more rounding).
 
 use std::sync::OnceLock;
 
@@ -56,6 +56,8 @@ const FIRST: usize = 1023 << SUB_BITS;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Grades {
     table: &'static [u8; BUCKETS],
+    /// `l0^2` and its inverse.
+    l2: f64,
     inv_l2: f64,
     p: usize,
 }
@@ -120,7 +122,8 @@ impl Grades {
     /// The grades of order `p` for the length `l0`.
     pub(super) fn new(l0: f64, p: usize) -> Grades {
         let p = p.min(PMAX - 1);
-        Grades { table: TABLES[p].get_or_init(|| table(p)), inv_l2: 1.0 / (l0 * l0), p }
+        let l2 = l0 * l0;
+        Grades { table: TABLES[p].get_or_init(|| table(p)), l2, inv_l2: 1.0 / l2, p }
     }
 
     /// The order of a junction with `u = x^2 + l0^2`: its bucket's (a `u / l0^2` below 1 by
@@ -133,8 +136,8 @@ impl Grades {
 
     /// The order of a junction at extension `x` ([`Grades::order`] of `x^2 + l0^2`).
     #[inline(always)]
-    pub(super) fn order_at(&self, x: f64, l0: f64) -> usize {
-        self.order(x * x + l0 * l0)
+    pub(super) fn order_at(&self, x: f64) -> usize {
+        self.order(x * x + self.l2)
     }
 }
 
@@ -202,7 +205,7 @@ pub(super) fn direct_sums_in(e: &[f64], base_off: f64, g: &Grades, law: &Tilted)
         let mut n = [0; LANES];
         for l in 0..LANES {
             x[l] = base_off - e[l];
-            n[l] = g.order_at(x[l], law.l0) + 1;
+            n[l] = g.order_at(x[l]) + 1;
         }
         if x.iter().all(|&v| in_range(v, law.l0)) {
             phi_taylor4(&law, x, n, &mut acc);
@@ -231,7 +234,7 @@ pub(super) fn direct_sums_in(e: &[f64], base_off: f64, g: &Grades, law: &Tilted)
     let mut x0 = [0.0; 2];
     for &e in tail {
         let x = base_off - e;
-        let n = g.order_at(x, law.l0) + 1;
+        let n = g.order_at(x) + 1;
         let mut c = [0.0; PMAX];
         phi_taylor(&law, x, &mut c[..n]);
         dd_add_all(&mut a[..n], &mut al[..n], &c[..n]);
@@ -299,7 +302,7 @@ mod tests {
             let g = Grades::new(1.0, p);
             let mut x = 0.0;
             while x < 1e14 {
-                let o = g.order_at(x, 1.0);
+                let o = g.order_at(x);
                 assert!(o <= p);
                 let big = (x * x + 1.0).sqrt();
                 assert!(o == p || suffices(big * (1.0 - 1e-12), o, budget), "p {p}, x {x}: order {o} short");
@@ -307,8 +310,8 @@ mod tests {
                 assert!(o == 0 || !suffices(floor, o - 1, budget), "p {p}, x {x}: order {o} not minimal");
                 x = if x == 0.0 { 1e-3 } else { x * 1.013 };
             }
-            assert_eq!(g.order_at(0.0, 1.0), p, "the worst junction keeps every order");
-            assert_eq!(g.order_at(1e200, 1.0), g.order(f64::INFINITY));
+            assert_eq!(g.order_at(0.0), p, "the worst junction keeps every order");
+            assert_eq!(g.order_at(1e200), g.order(f64::INFINITY));
         }
     }
 
@@ -316,7 +319,7 @@ mod tests {
     #[test]
     fn quoted_orders() {
         let g = Grades::new(1.0, 17);
-        let at = |x: f64| g.order_at(x, 1.0);
+        let at = |x: f64| g.order_at(x);
         assert_eq!([at(0.0), at(2.0), at(4.0), at(20.0)], [17, 10, 8, 4]);
     }
 
@@ -325,7 +328,7 @@ mod tests {
     fn orders_depend_on_x_over_l0() {
         let (g1, g7) = (Grades::new(1.0, 17), Grades::new(0.07, 17));
         for x in [0.0, 0.5, 1.3, 2.0, 4.5, 9.0, 30.0, 1e4] {
-            assert_eq!(g1.order_at(x, 1.0), g7.order_at(0.07 * x, 0.07), "x/l0 = {x}");
+            assert_eq!(g1.order_at(x), g7.order_at(0.07 * x), "x/l0 = {x}");
         }
     }
 
@@ -344,7 +347,7 @@ mod tests {
         let mut worst: f64 = 0.0;
         for i in 0..400 {
             let x = 0.05 * i as f64 * if i % 2 == 0 { 1.0 } else { -1.0 };
-            let m = g.order_at(x, law.l0);
+            let m = g.order_at(x);
             let mut full = [0.0; PMAX];
             phi_taylor(&law, x, &mut full);
             for d in [-rho, -0.5 * rho, 0.5 * rho, rho] {

@@ -527,8 +527,8 @@ impl Dense {
 
 /// Direct mode's junctions: their offsets `e_i = c_i - origin` (frame-independent, like the
 /// bins' offsets) in a dense array, and stable handles through a handle -> position table
-/// (swap-remove: O(1) `add` and `remove`).
-#[derive(Clone, Debug, Default, PartialEq)]
+/// (swap-remove: O(1) `add` and `remove`), and their graded orders.
+#[derive(Clone, Debug, PartialEq)]
 struct Direct {
     /// `e_i` of the live junctions, positions `0..n`.
     e: Vec<f64>,
@@ -538,6 +538,8 @@ struct Direct {
     pos: Vec<u32>,
     /// Free handles.
     free: Vec<u32>,
+    /// The junctions' orders (derived from `law.l0` and `p`, not serialised).
+    grades: Grades,
 }
 
 /// Serialized form of [`Direct`] (the position table is rebuilt on reading).
@@ -548,18 +550,22 @@ struct DirectWire {
     free: Vec<u32>,
 }
 
-impl From<DirectWire> for Direct {
-    fn from(w: DirectWire) -> Direct {
+impl Direct {
+    /// No junctions, orders `grades`.
+    fn new(grades: Grades) -> Direct {
+        Direct { e: Vec::new(), handle: Vec::new(), pos: Vec::new(), free: Vec::new(), grades }
+    }
+
+    /// The junctions read from `w` (the position table rebuilt), orders `grades`.
+    fn from_wire(w: DirectWire, grades: Grades) -> Direct {
         let len = w.handle.iter().chain(&w.free).map(|&h| h as usize + 1).max().unwrap_or(0);
         let mut pos = vec![NONE; len];
         for (i, &h) in w.handle.iter().enumerate() {
             pos[h as usize] = i as u32;
         }
-        Direct { e: w.e, handle: w.handle, pos, free: w.free }
+        Direct { e: w.e, handle: w.handle, pos, free: w.free, grades }
     }
-}
 
-impl Direct {
     /// Stores a junction with offset `e`; returns its handle. O(1).
     #[inline]
     fn insert(&mut self, e: f64) -> u32 {
@@ -674,8 +680,6 @@ pub struct SeriesSum {
     dense: Dense,
     /// Direct mode: the junctions' offsets (no bins; `bins`, `index` stay empty).
     direct: Option<Direct>,
-    /// Direct mode's per-junction orders (derived from `law.l0` and `p`).
-    grades: Grades,
 }
 
 impl From<Wire> for SeriesSum {
@@ -698,8 +702,7 @@ impl From<Wire> for SeriesSum {
             n_rb: w.n_rb.unwrap_or(w.n),
             resid: w.resid,
             dense: Dense::default(),
-            direct: w.direct.map(Direct::from),
-            grades: Grades::new(w.law.l0, w.p.min(PMAX - 1)),
+            direct: w.direct.map(|d| Direct::from_wire(d, Grades::new(w.law.l0, w.p.min(PMAX - 1)))),
         };
         if s.direct.is_some() && !w.graded {
             // Written with every junction to order `p`: rebuilt at its base with graded
@@ -823,7 +826,6 @@ impl SeriesSum {
             resid: 0,
             dense: Dense::default(),
             direct: None,
-            grades: Grades::new(law.l0, p),
         }
     }
 
@@ -836,7 +838,7 @@ impl SeriesSum {
     /// there are junctions (module doc, "Direct mode").
     pub fn direct(law: Tilted, rtol: f64) -> SeriesSum {
         let p = order_for_direct(rtol);
-        SeriesSum { p, direct: Some(Direct::default()), grades: Grades::new(law.l0, p), ..SeriesSum::new(law, rtol) }
+        SeriesSum { p, direct: Some(Direct::new(Grades::new(law.l0, p))), ..SeriesSum::new(law, rtol) }
     }
 
     /// The series for a run of `n` junctions: direct mode below [`DIRECT_MAX`]
@@ -981,11 +983,11 @@ impl SeriesSum {
         self.roff += OP_ROUNDOFF;
     }
 
-    /// Direct mode: adds `sign * D_i`, the junction's own coefficients `phi_k(x)` about the
-    /// base (`x = y0 - c_i = base_off - e_i`), to the series and `sign * x` to `X0`. O(p).
+    /// Direct mode: adds `sign * D_i`, the junction's own coefficients `phi_k(x)`, `k < n`
+    /// (`n - 1` its graded order), about the base (`x = y0 - c_i = base_off - e_i`), to the
+    /// series and `sign * x` to `X0`. O(n).
     #[inline]
-    fn apply_direct(&mut self, x: f64, sign: f64) {
-        let n = self.grades.order_at(x, self.law.l0) + 1;
+    fn apply_direct(&mut self, x: f64, n: usize, sign: f64) {
         let mut c = [0.0; PMAX];
         phi_taylor(&self.law, x, &mut c[..n]);
         dd_add_all_signed(&mut self.a[..n], &mut self.al[..n], &c[..n], sign);
@@ -1000,9 +1002,10 @@ impl SeriesSum {
             let e = c - self.origin;
             let h = d.insert(e);
             let x = self.base_off - e;
+            let n = d.grades.order_at(x) + 1;
             self.n += 1;
             self.spread += x.abs();
-            self.apply_direct(x, 1.0);
+            self.apply_direct(x, n, 1.0);
             return h;
         }
         let w = self.width();
@@ -1027,9 +1030,10 @@ impl SeriesSum {
         if let Some(d) = &mut self.direct {
             let e = d.take(h);
             let x = self.base_off - e;
+            let n = d.grades.order_at(x) + 1;
             self.n -= 1;
             self.spread = (self.spread - x.abs()).max(0.0);
-            self.apply_direct(x, -1.0);
+            self.apply_direct(x, n, -1.0);
             if self.n == 0 {
                 self.clear();
             }
@@ -1133,7 +1137,7 @@ impl SeriesSum {
         self.base = y0;
         self.base_off = y0 - self.origin;
         let d = self.direct.as_ref().expect("direct mode");
-        let sums = direct_sums(&d.e, self.base_off, &self.grades, &self.law);
+        let sums = direct_sums(&d.e, self.base_off, &d.grades, &self.law);
         self.a = sums.a;
         self.al = sums.al;
         self.x0 = sums.x0;
