@@ -246,6 +246,11 @@ impl WeakRupture {
         self.e_hi = self.grid.exp_up(self.a * y_hi);
         self.e_lo = self.grid.exp_up(-self.a * y_lo);
     }
+    /// The anchor of `slot` from its weight `exp(a c)` (tests).
+    #[cfg(test)]
+    pub(crate) fn anchor_of(&self, slot: usize) -> f64 {
+        self.tree.get(slot)[1].ln() / self.a
+    }
     /// `exp(a y_hi) W-` and `exp(-a y_lo) W+`.
     #[inline]
     fn terms(&self) -> (f64, f64) {
@@ -262,15 +267,46 @@ impl WeakRupture {
         m + p
     }
     /// A candidate of the envelope last set by [`WeakRupture::envelope`]: the slot, drawn
-    /// with probability `b_i / B`, and its bound `b_i / k0 = exp(a (y_hi - c_i)) + exp(a (c_i - y_lo))`.
+    /// with probability `b_i / B`, and its [`Bracket`] (from its leaf weights, which the
+    /// descent has just read: no access to the junction).
     #[inline]
-    pub fn envelope_candidate(&self, rng: &mut Pcg64, n_att: usize) -> (usize, f64) {
+    pub fn envelope_candidate(&self, rng: &mut Pcg64, n_att: usize) -> (usize, Bracket) {
         let (m, p) = self.terms();
         let u = rng.uniform() * (m + p);
         let slot = if u < m { self.tree.find(0, u / self.e_hi) } else { self.tree.find(1, (u - m) / self.e_lo) };
         let slot = slot.min(n_att - 1);
         let w = self.tree.get(slot);
-        (slot, self.e_hi * w[0] + self.e_lo * w[1])
+        let (hi0, hi1) = (self.e_hi * w[0], self.e_lo * w[1]);
+        let bracket = Bracket { b: hi0 + hi1, lo: (w[0] / self.e_lo).max(w[1] / self.e_hi), hi: hi0.max(hi1) };
+        (slot, bracket)
+    }
+}
+
+/// What a candidate's leaf weights say of `e^{a |x|}`, `x = y - c_i`, for every plate
+/// position `y_lo <= y <= y_hi` of the envelope (in units of `k0`):
+/// `lo = max(exp(a (y_lo - c_i)), exp(a (c_i - y_hi))) <= e^{a |x|} <= hi = max(exp(a (y_hi - c_i)), exp(a (c_i - y_lo)))`,
+/// and the candidate's bound `b = exp(a (y_hi - c_i)) + exp(a (c_i - y_lo)) >= hi`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bracket {
+    pub b: f64,
+    pub lo: f64,
+    pub hi: f64,
+}
+
+impl Bracket {
+    /// Decides a candidate whose rate `r` (units of `k0`) lies in `[lo_r, hi_r]`, with the
+    /// uniform product `ub = U b`, without the rate itself: `Some(true)` if `ub < lo_r`,
+    /// `Some(false)` if `ub >= hi_r`, `None` in between. The margins (1e-9 relative, far above
+    /// the round-off of the bounds and of the rate) make it agree with the exact test `ub < r`.
+    #[inline]
+    pub fn squeeze(ub: f64, lo_r: f64, hi_r: f64) -> Option<bool> {
+        if ub < SQUEEZE_LO * lo_r {
+            Some(true)
+        } else if ub >= SQUEEZE_HI * hi_r {
+            Some(false)
+        } else {
+            None
+        }
     }
 }
 
@@ -362,11 +398,10 @@ impl RuptureModel for WeakRupture {
         // r_max = max(e_hi w0, e_lo w1); a uniform outside [r_min, r_max) decides without
         // the plate's position and its exponential. The margins (1e-9 relative, far above
         // the exponentials' round-off) make both tests agree with the exact one below.
-        if ub < SQUEEZE_LO * (w[0] / self.e_lo).max(w[1] / self.e_hi) {
-            return Some(slot);
-        }
-        if ub >= SQUEEZE_HI * (self.e_hi * w[0]).max(self.e_lo * w[1]) {
-            return None;
+        match Bracket::squeeze(ub, (w[0] / self.e_lo).max(w[1] / self.e_hi), (self.e_hi * w[0]).max(self.e_lo * w[1])) {
+            Some(true) => return Some(slot),
+            Some(false) => return None,
+            None => {}
         }
         let y = traj.position(s);
         let ey = (self.a * y).exp();

@@ -116,7 +116,8 @@ impl<K: Kinetics, P: Motion> SeriesKernel<K, P> {
     }
 
     /// Strong bonds: the plate step draws no random numbers, so the junction the due event
-    /// on channel `ch` will pick is already known; asking for its record now lets the memory
+    /// on channel `ch` will pick is already known (weak bonds: once the step's thinning is
+    /// done, for a formation); asking for its record now lets the memory
     /// access (a random one among millions at large N) overlap the step. The picks are
     /// drawn on a copy of the generator, exactly as the event will draw them (formation:
     /// after the thinning's uniform when `g < 1`, so both candidates), and the run's
@@ -145,7 +146,12 @@ impl<K: Kinetics, P: Motion> SeriesKernel<K, P> {
     /// One plate step towards `target`; weak bonds thin their rupture candidates over it.
     /// Returns the slot that ruptured inside the step, if one did (the state is then at
     /// the rupture time).
-    fn plate_step(&mut self, core: &mut Core<ArrayQueue>, target: f64) -> Result<Option<usize>, EngineError> {
+    fn plate_step(
+        &mut self,
+        core: &mut Core<ArrayQueue>,
+        target: f64,
+        formation_due: bool,
+    ) -> Result<Option<usize>, EngineError> {
         let rebases = core.counters.series_rebases;
         let mut ctx = StepCtx {
             series: &mut self.series,
@@ -168,6 +174,12 @@ impl<K: Kinetics, P: Motion> SeriesKernel<K, P> {
                 &mut cands,
             )?;
             *core.counters.candidates.get_or_insert(0) += cands;
+            if formation_due && hit.is_none() && step.s1 >= target {
+                // The thinning has drawn its numbers: the formation due at the step's end
+                // picks from the generator as it is now, so its junction can be asked for
+                // while the step is finished.
+                Self::prefetch_pick(core, FORMATION);
+            }
         }
         let end = hit.map_or(step.s1, |(s, _)| s);
         self.motion.finish(&step, end, &self.series)?;
@@ -243,7 +255,7 @@ impl<K: Kinetics, P: Motion> Kernel for SeriesKernel<K, P> {
             if !K::IS_WEAK && to.due {
                 Self::prefetch_pick(core, to.ch);
             }
-            if let Some(slot) = self.plate_step(core, target)? {
+            if let Some(slot) = self.plate_step(core, target, K::IS_WEAK && to.due && to.ch == FORMATION)? {
                 core.finite("X", self.y(core))?;
                 return Ok(Moved::Ruptured(slot));
             }

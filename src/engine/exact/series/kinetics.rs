@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
 use crate::engine::EngineError;
 use crate::engine::exact::bags::Attached;
-use crate::engine::exact::rupture::{EXPONENT_CAP, RuptureModel, WeakRupture};
+use crate::engine::exact::rupture::{Bracket, EXPONENT_CAP, RuptureModel, WeakRupture};
 use crate::physics::{ForceLaw, Tilted};
 use crate::rng::{Pcg64, UniformSource};
 
@@ -109,6 +109,39 @@ pub struct WeakKinetics {
     /// `beta dx`.
     pub beta_dx: f64,
     envelope: WeakRupture,
+    /// `e^{-a l0}` for the acceptance squeeze (a function of the parameters: not saved).
+    #[serde(skip)]
+    shrink: Shrink,
+}
+
+/// Above this bound of `e^{a |x|}` (`e^{EXPONENT_CAP} / 4`) a candidate is decided by the
+/// exact test alone, which accepts an overflowing rate without a uniform.
+const SQUEEZE_RATE_MAX: f64 = 9.4e259;
+
+/// `e^{-a l0}`, computed once for the `(a, l0)` it was asked for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Shrink {
+    a: f64,
+    l0: f64,
+    factor: f64,
+}
+
+impl Default for Shrink {
+    fn default() -> Self {
+        Shrink { a: f64::NAN, l0: f64::NAN, factor: 0.0 }
+    }
+}
+
+impl Shrink {
+    /// `e^{-a l0}` (0, a valid lower factor, for non-finite products).
+    #[inline]
+    fn factor(&mut self, a: f64, l0: f64) -> f64 {
+        if a != self.a || l0 != self.l0 {
+            let f = (-a * l0).exp();
+            *self = Shrink { a, l0, factor: if f.is_finite() { f } else { 0.0 } };
+        }
+        self.factor
+    }
 }
 
 impl WeakKinetics {
@@ -122,12 +155,22 @@ impl WeakKinetics {
         kappa: f64,
         n: usize,
     ) -> Result<WeakKinetics, crate::engine::alloc::AllocError> {
-        Ok(WeakKinetics { k0, beta_dx, envelope: WeakRupture::try_new(k0, beta_dx * kappa, n)? })
+        Ok(WeakKinetics {
+            k0,
+            beta_dx,
+            envelope: WeakRupture::try_new(k0, beta_dx * kappa, n)?,
+            shrink: Shrink::default(),
+        })
     }
     /// `a = beta dx kappa`.
     #[inline]
     pub fn a(&self) -> f64 {
         self.envelope.a
+    }
+    /// The anchor of `slot` as its leaf weights give it, `ln(w1) / a` (tests).
+    #[cfg(test)]
+    fn envelope_anchor(&self, slot: usize) -> f64 {
+        self.envelope.anchor_of(slot)
     }
 }
 
@@ -183,6 +226,17 @@ impl Kinetics for WeakKinetics {
             *candidates += 1;
             return Ok(Some((s0, n_att - 1)));
         }
+        let shrink = self.shrink.factor(self.a(), law.l0);
+        // The acceptance `r_i / b_i` is at most 1 only while the plate is within the step's
+        // bounds: checked wherever the position is computed, so that thinning is exact or
+        // the run stops.
+        let mut position = |s: f64| -> Result<f64, EngineError> {
+            let y = y_at(s)?;
+            if !(y_lo <= y && y <= y_hi) {
+                return Err(EngineError::EnvelopeViolated { t: s, y, lo: y_lo, hi: y_hi });
+            }
+            Ok(y)
+        };
         let mut s = s0;
         loop {
             let e: f64 = Exp1.sample(rng);
@@ -191,17 +245,37 @@ impl Kinetics for WeakKinetics {
                 return Ok(None);
             }
             *candidates += 1;
-            let (slot, b) = self.envelope.envelope_candidate(rng, n_att);
-            // The acceptance `r_i / b_i` is at most 1 only while the plate is within the
-            // step's bounds: checked, so that thinning is exact or the run stops.
-            let y = y_at(s)?;
-            if !(y_lo <= y && y <= y_hi) {
-                return Err(EngineError::EnvelopeViolated { t: s, y, lo: y_lo, hi: y_hi });
+            let (slot, br) = self.envelope.envelope_candidate(rng, n_att);
+            // The junction is read only if the squeeze cannot decide, or by the rupture:
+            // start loading it now.
+            crate::engine::exact::pick::prefetch(&attached[slot]);
+            if br.hi <= SQUEEZE_RATE_MAX {
+                // r_i / k0 = exp(a (l - l0)) with |x| <= l <= |x| + l0, so
+                // max(1, e^{-a l0} lo) <= r_i / k0 <= hi: the squeeze decides most candidates
+                // without the plate's position, the junction or an exponential, as the exact
+                // test `U b < r_i / k0` below would. Below SQUEEZE_RATE_MAX the exponent
+                // cannot pass EXPONENT_CAP, so the exact test always draws its uniform here,
+                // and the draws are the same as without the squeeze.
+                let ub = rng.uniform() * br.b;
+                match Bracket::squeeze(ub, (shrink * br.lo).max(1.0), br.hi) {
+                    Some(true) => {
+                        position(s)?;
+                        return Ok(Some((s, slot)));
+                    }
+                    Some(false) => continue,
+                    None => {
+                        let x = position(s)? - attached[slot].c;
+                        if ub < (self.beta_dx * law.tension(x)).exp() {
+                            return Ok(Some((s, slot)));
+                        }
+                        continue;
+                    }
+                }
             }
-            let x = y - attached[slot].c;
+            let x = position(s)? - attached[slot].c;
             // r_i / k0 = exp(beta dx f(x)) <= exp(a |x|) <= b (an overflowing rate is accepted).
             let exponent = self.beta_dx * law.tension(x);
-            if exponent > EXPONENT_CAP || rng.uniform() * b < exponent.exp() {
+            if exponent > EXPONENT_CAP || rng.uniform() * br.b < exponent.exp() {
                 return Ok(Some((s, slot)));
             }
         }
@@ -254,6 +328,97 @@ mod tests {
         let mut rng = pcg(3);
         let r = k.thin(&mut rng, (0.0, 10.0), (0.0, 0.1), &att, &law, |_| Ok(0.2), &mut 0);
         assert!(matches!(r, Err(EngineError::EnvelopeViolated { .. })), "{r:?}");
+    }
+
+    /// The squeeze's bracket holds the tilted rate for every plate position within the
+    /// bounds: `max(1, e^{-a l0} lo) <= r_i / k0 <= hi <= b` (`a l0` from 0.05 to 5).
+    #[test]
+    fn bracket_holds_the_tilted_rate() {
+        let mut rng = pcg(11);
+        for (beta_dx, kappa, l0) in [(1.0, 0.1, 0.5), (2.0, 0.5, 1.0), (1.0, 1.0, 5.0), (0.3, 2.0, 0.2)] {
+            let law = Tilted { kappa, l0 };
+            let mut k = WeakKinetics::new(1.0, beta_dx, kappa, 64);
+            let shrink = (-k.a() * l0).exp();
+            for slot in 0..64 {
+                assert!(k.attached(slot, (rng.uniform() - 0.5) * 8.0 / k.a(), 0.0));
+            }
+            for _ in 0..2000 {
+                let y_lo = (rng.uniform() - 0.5) * 4.0 / k.a();
+                let y_hi = y_lo + rng.uniform() / k.a();
+                k.envelope.envelope(y_lo, y_hi);
+                let (slot, br) = k.envelope.envelope_candidate(&mut rng, 64);
+                let c = k.envelope_anchor(slot);
+                for j in 0..=16 {
+                    let y = y_lo + (y_hi - y_lo) * j as f64 / 16.0;
+                    let r = (beta_dx * law.tension(y - c)).exp();
+                    let tol = 1.0 + 1e-12;
+                    assert!((shrink * br.lo).max(1.0) <= r * tol, "lo: y {y} c {c} {} > {r}", shrink * br.lo);
+                    assert!(r <= br.hi * tol && br.hi <= br.b, "hi: y {y} c {c} {r} {} {}", br.hi, br.b);
+                }
+            }
+        }
+    }
+
+    /// The thinning without the squeeze: the plate's position, the junction and an
+    /// exponential for every candidate (the oracle of [`squeeze_keeps_every_draw`]).
+    #[allow(clippy::too_many_arguments)]
+    fn plain_thin(
+        k: &mut WeakKinetics,
+        rng: &mut Pcg64,
+        (s0, s1): (f64, f64),
+        (y_lo, y_hi): (f64, f64),
+        attached: &[Attached],
+        law: &Tilted,
+        y_at: impl Fn(f64) -> f64,
+    ) -> Option<(f64, usize)> {
+        let rate = k.k0 * k.envelope.envelope(y_lo, y_hi);
+        let mut s = s0;
+        loop {
+            let e: f64 = Exp1.sample(rng);
+            s += e / rate;
+            if s >= s1 {
+                return None;
+            }
+            let (slot, br) = k.envelope.envelope_candidate(rng, attached.len());
+            let exponent = k.beta_dx * law.tension(y_at(s) - attached[slot].c);
+            if exponent > EXPONENT_CAP || rng.uniform() * br.b < exponent.exp() {
+                return Some((s, slot));
+            }
+        }
+    }
+
+    /// The squeeze decides as the exact test would and draws the same numbers: over many
+    /// steps, with `a l0` small (most candidates squeezed) and large (many in the band), the
+    /// accepted candidates, their times and the generator's state agree bit for bit with
+    /// [`plain_thin`].
+    #[test]
+    fn squeeze_keeps_every_draw() {
+        for (beta_dx, kappa, l0) in [(1.0, 0.1, 1.0), (2.0, 1.0, 1.5)] {
+            let law = Tilted { kappa, l0 };
+            let mut k = WeakKinetics::new(0.5, beta_dx, kappa, 40);
+            let mut scene_rng = pcg(5);
+            let att: Vec<Attached> = (0..40)
+                .map(|i| Attached { c: (scene_rng.uniform() - 0.5) * 6.0 / (beta_dx * kappa), id: i, bin: 0 })
+                .collect();
+            for (slot, a) in att.iter().enumerate() {
+                assert!(k.attached(slot, a.c, 0.0));
+            }
+            let mut plain = k.clone();
+            let (mut r1, mut r2) = (pcg(9), pcg(9));
+            let mut events = 0;
+            for i in 0..20_000 {
+                let (s0, s1) = (i as f64 * 0.1, (i + 1) as f64 * 0.1);
+                let y0 = (scene_rng.uniform() - 0.5) * 2.0;
+                let (y_lo, y_hi) = (y0, y0 + 0.5 / (beta_dx * kappa));
+                let path = |s: f64| y_lo + (y_hi - y_lo) * (s - s0) / (s1 - s0);
+                let got = k.thin(&mut r1, (s0, s1), (y_lo, y_hi), &att, &law, |s| Ok(path(s)), &mut 0).unwrap();
+                let want = plain_thin(&mut plain, &mut r2, (s0, s1), (y_lo, y_hi), &att, &law, path);
+                assert_eq!(got, want, "step {i}");
+                events += usize::from(got.is_some());
+            }
+            assert!(events > 1000, "{events} events");
+            assert_eq!(r1.uniform(), r2.uniform(), "the generators have drawn the same numbers");
+        }
     }
 
     #[test]
