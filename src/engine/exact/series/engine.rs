@@ -17,6 +17,11 @@ use crate::physics::{ForceLaw, Tilted};
 use crate::rng::UniformSource;
 use crate::scene::Scene;
 
+/// Fewest junctions for which the next pick's record is prefetched: below it the bags
+/// (24 bytes a junction) stay in the core's own cache, and predicting the pick (a copy of
+/// the generator and its draws) costs more than the load it would hide.
+pub const PREFETCH_MIN_N: usize = 1 << 16;
+
 /// Exact engine for the tilted law with the bond force kept as a [`SeriesSum`]: rupture
 /// kinetics `K`, plate motion `P`.
 pub type ExactSeries<K, P> = Exact<SeriesKernel<K, P>>;
@@ -115,7 +120,7 @@ impl<K: Kinetics, P: Motion> SeriesKernel<K, P> {
         *core.counters.series_rebases.get_or_insert(0) += 1;
     }
 
-    /// Strong bonds: the plate step draws no random numbers, so the junction the due event
+    /// Strong bonds (with at least [`PREFETCH_MIN_N`] junctions): the plate step draws no random numbers, so the junction the due event
     /// on channel `ch` will pick is already known (weak bonds: once the step's thinning is
     /// done, for a formation); asking for its record now lets the memory
     /// access (a random one among millions at large N) overlap the step. The picks are
@@ -252,10 +257,11 @@ impl<K: Kinetics, P: Motion> Kernel for SeriesKernel<K, P> {
     ) -> Result<Moved, EngineError> {
         let target = to.tau;
         if core.tau < target {
-            if !K::IS_WEAK && to.due {
+            let prefetch = to.due && core.n >= PREFETCH_MIN_N;
+            if !K::IS_WEAK && prefetch {
                 Self::prefetch_pick(core, to.ch);
             }
-            if let Some(slot) = self.plate_step(core, target, K::IS_WEAK && to.due && to.ch == FORMATION)? {
+            if let Some(slot) = self.plate_step(core, target, K::IS_WEAK && prefetch && to.ch == FORMATION)? {
                 core.finite("X", self.y(core))?;
                 return Ok(Moved::Ruptured(slot));
             }
