@@ -17,10 +17,10 @@ use crate::physics::{ForceLaw, Tilted};
 use crate::rng::UniformSource;
 use crate::scene::Scene;
 
-/// Fewest junctions for which the next pick's record is prefetched: below it the bags
-/// (24 bytes a junction) stay in the core's own cache, and predicting the pick (a copy of
-/// the generator and its draws) costs more than the load it would hide.
-pub const PREFETCH_MIN_N: usize = 1 << 16;
+/// Fewest junctions for which the next pick's record is prefetched: below it the bags (16
+/// or 24 bytes a junction, under 100 KB) stay in the core's own caches, and predicting the
+/// pick (a copy of the generator and its draws) costs more than the load it would hide.
+pub const PREFETCH_MIN_N: usize = 1 << 12;
 
 /// Exact engine for the tilted law with the bond force kept as a [`SeriesSum`]: rupture
 /// kinetics `K`, plate motion `P`.
