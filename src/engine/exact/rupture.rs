@@ -111,7 +111,7 @@ impl RuptureModel for StrongRupture {
     fn pick<P: PlatePath>(&mut self, rng: &mut Pcg64, _traj: &P, _s: f64, attached: &[Attached]) -> Option<usize> {
         Some(self.next.take(attached.len(), rng))
     }
-    #[inline]
+    #[inline(always)]
     fn prefetch(&self, attached: &[Attached]) {
         self.next.prefetch(attached);
     }

@@ -67,11 +67,12 @@ pub fn rebase<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K, obs:
 }
 
 /// After an event at the current time (`fired`: the channel that fired, if one did):
-/// counters, re-base, a new piece, new rates.
-#[inline]
+/// counters, re-base, a new piece, new rates. Always inlined: it runs after every event,
+/// its call cost a twentieth of one, and inlined `fired` is a constant.
+#[inline(always)]
 pub fn after_event<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K, fired: Option<usize>, obs: &mut O) {
     core.events_since_rebase += 1;
-    *core.counters.events.get_or_insert(0) = core.counters.ruptures + core.counters.formations;
+    core.counters.events = Some(core.counters.ruptures + core.counters.formations);
     maybe_rebase(core, k, obs);
     k.open_piece(core);
     refresh_clocks(core, k, fired);
@@ -80,8 +81,8 @@ pub fn after_event<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K,
 
 /// Sets every channel's rate after a change of state (formation `kon0 N_det`, times the
 /// kernel's acceptance; rupture and horizon from [`Kernel::rupture_plan`]); channel `fired`
-/// draws afresh.
-#[inline]
+/// draws afresh. Always inlined (it runs after every event).
+#[inline(always)]
 pub fn refresh_clocks<K: Kernel>(core: &mut Core<K::Queue>, k: &mut K, fired: Option<usize>) {
     let now = core.tau;
     let (rupture_rate, horizon_end) = k.rupture_plan(core);

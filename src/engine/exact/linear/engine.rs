@@ -85,16 +85,22 @@ struct PlateCache {
 
 impl PlateCache {
     const SLOTS: usize = 64;
-    #[inline]
+    /// Always inlined (a hit is a compare and an address); a miss is the call [`Self::fill`].
+    #[inline(always)]
     fn get(&mut self, p: &Plate, kappa: f64, n_att: usize) -> &LinearPlate {
+        if self.entries.len() != Self::SLOTS || self.entries[n_att % Self::SLOTS].0 != n_att {
+            self.fill(p, kappa, n_att);
+        }
+        &self.entries[n_att % Self::SLOTS].1
+    }
+    /// Classifies the plate for `n_att` into its slot (and makes the slots on first use).
+    #[cold]
+    #[inline(never)]
+    fn fill(&mut self, p: &Plate, kappa: f64, n_att: usize) {
         if self.entries.len() != Self::SLOTS {
             self.entries = vec![(usize::MAX, LinearPlate::new(1.0, 1.0, 1.0)); Self::SLOTS];
         }
-        let slot = &mut self.entries[n_att % Self::SLOTS];
-        if slot.0 != n_att {
-            *slot = (n_att, LinearPlate::new(p.mass, p.eta, p.k + kappa * n_att as f64));
-        }
-        &slot.1
+        self.entries[n_att % Self::SLOTS] = (n_att, LinearPlate::new(p.mass, p.eta, p.k + kappa * n_att as f64));
     }
 }
 
@@ -369,7 +375,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
         self.rupture.rebuild(attached)
     }
 
-    #[inline]
+    #[inline(always)]
     fn prefetch(&self, core: &Core<Q>) {
         self.next_formation.prefetch(&core.bags.detached);
         self.rupture.prefetch(&core.bags.attached);
