@@ -307,8 +307,9 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
         Ok(false)
     }
 
-    /// Moves along the piece to `t` and reports `[piece.tau0, t]` as a segment.
-    #[inline]
+    /// Moves along the piece to `t` and reports `[piece.tau0, t]` as a segment. Always
+    /// inlined: a rupture closes its piece here, and the call cost a tenth of the closing.
+    #[inline(always)]
     fn close<O: Observer>(&mut self, core: &mut Core<Q>, t: f64, obs: &mut O) -> Result<(), EngineError> {
         if M::KINEMATIC {
             self.close_kinematic(core, t, obs);
