@@ -57,8 +57,10 @@ impl Pick {
     /// most one element per event).
     /// The addresses are formed without a bounds check (a prefetch never faults, and the
     /// indices are below `n` anyway; an empty bag prefetches its dangling base, harmlessly).
+    /// By reference: the picks are read in place (by value, the queue was copied to the
+    /// stack to be indexed).
     #[inline(always)]
-    pub fn prefetch<T>(self, bag: &[T]) {
+    pub fn prefetch<T>(&self, bag: &[T]) {
         let n = bag.len();
         let h = self.head as usize & MASK;
         prefetch_ptr(bag.as_ptr().wrapping_add(index(self.q[h], n)));
