@@ -62,26 +62,62 @@ impl Clock {
     }
 }
 
-/// The channels of an engine: their clocks and the queue that orders them.
+/// Most channels an engine has (formation, rupture, the end of a horizon).
+pub const MAX_CHANNELS: usize = 3;
+
+/// The channels of an engine: their clocks and the queue that orders them. The clocks sit
+/// in a fixed array of [`MAX_CHANNELS`] (the unused ones at rate 0, never firing), so the
+/// event loop indexes them with constants and no bounds check; they are written and read
+/// as a list of the engine's `n` channels, as before.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(bound = "")]
+#[serde(bound = "", into = "ChannelsRepr<Q>", try_from = "ChannelsRepr<Q>")]
 pub struct Channels<Q: ChannelQueue> {
+    clocks: [Clock; MAX_CHANNELS],
+    n: usize,
+    queue: Q,
+}
+
+/// How [`Channels`] is written: the clocks of its `n` channels, and the queue.
+#[derive(Serialize, Deserialize)]
+#[serde(bound = "")]
+struct ChannelsRepr<Q: ChannelQueue> {
     clocks: Vec<Clock>,
     queue: Q,
 }
 
+impl<Q: ChannelQueue> From<Channels<Q>> for ChannelsRepr<Q> {
+    fn from(c: Channels<Q>) -> Self {
+        ChannelsRepr { clocks: c.clocks[..c.n].to_vec(), queue: c.queue }
+    }
+}
+
+impl<Q: ChannelQueue> TryFrom<ChannelsRepr<Q>> for Channels<Q> {
+    type Error = String;
+    fn try_from(r: ChannelsRepr<Q>) -> Result<Self, String> {
+        let n = r.clocks.len();
+        if n > MAX_CHANNELS {
+            return Err(format!("{n} channels (at most {MAX_CHANNELS})"));
+        }
+        let mut clocks = [Clock::default(); MAX_CHANNELS];
+        clocks[..n].copy_from_slice(&r.clocks);
+        Ok(Channels { clocks, n, queue: r.queue })
+    }
+}
+
 impl<Q: ChannelQueue> Channels<Q> {
-    /// `n` channels, all at rate 0 (never firing).
+    /// `n` channels (at most [`MAX_CHANNELS`]), all at rate 0 (never firing).
     pub fn new(n: usize) -> Self {
-        Channels { clocks: vec![Clock::default(); n], queue: Q::new(n) }
+        assert!(n <= MAX_CHANNELS, "Channels::new: {n} channels (at most {MAX_CHANNELS})");
+        Channels { clocks: [Clock::default(); MAX_CHANNELS], n, queue: Q::new(n) }
     }
     /// Sets the rates of channels `0..R` at `now`. Pending times are rescaled; channel
     /// `fired`, and any channel coming back from rate 0, draws a fresh exponential.
     /// Always inlined: it runs after every event, and a call costs a tenth of it.
     #[inline(always)]
     pub fn set_rates<const R: usize>(&mut self, now: f64, rates: [f64; R], fired: Option<usize>, rng: &mut Pcg64) {
-        let clocks: &mut [Clock; R] = (&mut self.clocks[..R]).try_into().expect("R channels");
-        for (ch, (clock, rate)) in clocks.iter_mut().zip(rates).enumerate() {
+        const { assert!(R <= MAX_CHANNELS) };
+        for (ch, rate) in rates.into_iter().enumerate() {
+            let clock = &mut self.clocks[ch];
             let fresh = if fired == Some(ch) {
                 clock.rate = rate;
                 true
@@ -114,7 +150,7 @@ impl<Q: ChannelQueue> Channels<Q> {
     }
     /// Subtracts `dt` from every pending time (re-basing).
     pub fn shift(&mut self, dt: f64) {
-        self.clocks.iter_mut().for_each(|c| c.next -= dt);
+        self.clocks[..self.n].iter_mut().for_each(|c| c.next -= dt);
         self.queue.shift(dt);
     }
 }
@@ -130,15 +166,45 @@ pub trait ChannelQueue: Clone + std::fmt::Debug + Serialize + DeserializeOwned +
     fn shift(&mut self, dt: f64);
 }
 
-/// A linear scan over a handful of channels.
+/// A scan over a handful of channels, in a fixed array of [`MAX_CHANNELS`] (the unused
+/// entries at `+inf`, which never come first: the scan is three comparisons, whatever the
+/// engine's count); written and read as the list of its `n` times.
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(into = "ArrayQueueRepr", try_from = "ArrayQueueRepr")]
 pub struct ArrayQueue {
+    times: [f64; MAX_CHANNELS],
+    n: usize,
+}
+
+/// How [`ArrayQueue`] is written: the times of its `n` channels.
+#[derive(Serialize, Deserialize)]
+struct ArrayQueueRepr {
     times: Vec<f64>,
+}
+
+impl From<ArrayQueue> for ArrayQueueRepr {
+    fn from(q: ArrayQueue) -> Self {
+        ArrayQueueRepr { times: q.times[..q.n].to_vec() }
+    }
+}
+
+impl TryFrom<ArrayQueueRepr> for ArrayQueue {
+    type Error = String;
+    fn try_from(r: ArrayQueueRepr) -> Result<Self, String> {
+        let n = r.times.len();
+        if n > MAX_CHANNELS {
+            return Err(format!("{n} channel times (at most {MAX_CHANNELS})"));
+        }
+        let mut times = [f64::INFINITY; MAX_CHANNELS];
+        times[..n].copy_from_slice(&r.times);
+        Ok(ArrayQueue { times, n })
+    }
 }
 
 impl ChannelQueue for ArrayQueue {
     fn new(channels: usize) -> Self {
-        ArrayQueue { times: vec![f64::INFINITY; channels] }
+        assert!(channels <= MAX_CHANNELS, "ArrayQueue: {channels} channels (at most {MAX_CHANNELS})");
+        ArrayQueue { times: [f64::INFINITY; MAX_CHANNELS], n: channels }
     }
     #[inline]
     fn set(&mut self, ch: usize, time: f64) {
@@ -146,16 +212,18 @@ impl ChannelQueue for ArrayQueue {
     }
     #[inline]
     fn first(&self) -> (usize, f64) {
-        let mut best = (0, self.times[0]);
-        for (i, &t) in self.times.iter().enumerate().skip(1) {
-            if t < best.1 {
-                best = (i, t);
-            }
+        let [t0, t1, t2] = self.times;
+        let mut best = (0, t0);
+        if t1 < best.1 {
+            best = (1, t1);
+        }
+        if t2 < best.1 {
+            best = (2, t2);
         }
         best
     }
     fn shift(&mut self, dt: f64) {
-        self.times.iter_mut().for_each(|t| *t -= dt);
+        self.times[..self.n].iter_mut().for_each(|t| *t -= dt);
     }
 }
 

@@ -55,15 +55,30 @@ impl Pick {
     /// Prefetches the elements of `bag` that the front pick and the back pick would choose
     /// now (the bag's size changes by about one per event, which moves an index by at
     /// most one element per event).
-    #[inline]
-    pub fn prefetch<T>(self, bag: &[T]) {
+    /// The addresses are formed without a bounds check (a prefetch never faults, and the
+    /// indices are below `n` anyway; an empty bag prefetches its dangling base, harmlessly).
+    /// By reference: the picks are read in place (by value, the queue was copied to the
+    /// stack to be indexed).
+    #[inline(always)]
+    pub fn prefetch<T>(&self, bag: &[T]) {
         let n = bag.len();
-        if n != 0 {
-            let h = self.head as usize & MASK;
-            prefetch(&bag[index(self.q[h], n)]);
-            prefetch(&bag[index(self.q[(h + MASK) & MASK], n)]);
-        }
+        let h = self.head as usize & MASK;
+        prefetch_ptr(bag.as_ptr().wrapping_add(index(self.q[h], n)));
+        prefetch_ptr(bag.as_ptr().wrapping_add(index(self.q[(h + MASK) & MASK], n)));
     }
+}
+
+/// [`prefetch`] of a raw address, which need not be valid (a prefetch never faults).
+#[inline(always)]
+pub fn prefetch_ptr<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch never faults and has no architectural effect, whatever the address.
+    #[allow(unused_unsafe)]
+    unsafe {
+        core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(p.cast::<i8>());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }
 
 /// Hints the processor to load the cache line holding `*p`. A no-op where unsupported.

@@ -22,7 +22,7 @@
 
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
-use super::bags::Attached;
+use super::bags::{Attached, count};
 use super::motion::PlatePath;
 use super::pick::Pick;
 use super::sumtree::SumTree2;
@@ -105,13 +105,13 @@ impl RuptureModel for StrongRupture {
     fn detached(&mut self, _slot: usize, _last: usize, _moved: Option<f64>) {}
     #[inline]
     fn plan<P: PlatePath>(&mut self, _traj: &P, n_att: usize) -> Plan {
-        Plan { rate: self.k0 * n_att as f64, horizon: f64::INFINITY }
+        Plan { rate: self.k0 * count(n_att), horizon: f64::INFINITY }
     }
     #[inline]
     fn pick<P: PlatePath>(&mut self, rng: &mut Pcg64, _traj: &P, _s: f64, attached: &[Attached]) -> Option<usize> {
         Some(self.next.take(attached.len(), rng))
     }
-    #[inline]
+    #[inline(always)]
     fn prefetch(&self, attached: &[Attached]) {
         self.next.prefetch(attached);
     }

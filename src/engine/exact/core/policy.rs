@@ -27,11 +27,19 @@ impl RebasePolicy {
     /// Whether to re-base at local `(y, tau)`, `events` events after the last re-base of an
     /// engine of `n` junctions; `forced` is the engine's own reason (its rupture kinetics'
     /// weights about to overflow).
+    ///
+    /// Within the soft limits (almost always) only `forced` is read: the hard limits lie
+    /// beyond the soft ones ([`REBASE`]; a policy whose hard limit is below its soft one
+    /// is checked in full).
     #[inline]
     pub fn due(&self, y: f64, tau: f64, events: u64, n: usize, forced: bool) -> bool {
         let (ya, ta) = (y.abs(), tau.abs());
+        let beyond_soft = ya > self.soft_y || ta > self.soft_tau;
+        if !beyond_soft && self.hard_y >= self.soft_y && self.hard_tau >= self.soft_tau {
+            return forced;
+        }
         let hard = ya > self.hard_y || ta > self.hard_tau || forced;
-        let soft = (ya > self.soft_y || ta > self.soft_tau) && events >= (n as u64 / 4).max(1);
+        let soft = beyond_soft && events >= (n as u64 / 4).max(1);
         hard || soft
     }
 }

@@ -345,12 +345,20 @@ impl Trajectory {
     /// moving a new value: the engine restarts its trajectory at every event).
     #[inline]
     pub fn restart(&mut self, plate: &LinearPlate, y0: f64, v0: f64, a: f64, b: f64) {
-        let p = plate;
+        self.plate = *plate;
+        self.restart_on_plate(y0, v0, a, b);
+    }
+
+    /// [`Trajectory::restart`] on the plate this trajectory already has: only the initial
+    /// state and the forcing are written (a caller that keeps one trajectory per plate
+    /// restarts without copying the plate).
+    #[inline]
+    pub fn restart_on_plate(&mut self, y0: f64, v0: f64, a: f64, b: f64) {
+        let p = &self.plate;
         let f0 = a - p.k * y0;
-        self.plate = *p;
-        self.y0 = y0;
         // M = 0: the velocity follows from the forces, (a - k y0) / eta.
         self.v0 = if p.branch == Branch::FirstOrder { f0 * p.inv_mu } else { v0 };
+        self.y0 = y0;
         self.f0 = f0;
         self.b = b;
     }
