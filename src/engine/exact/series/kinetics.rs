@@ -11,6 +11,9 @@
 //!   Candidates arrive at `B = sum b_i` (constant over the step), pick `i` with
 //!   probability `b_i / B` and are accepted with probability `r_i(s) / b_i`
 //!   (docs/engines.md, "Plate between events (tilted law): a series, Taylor steps and a stiff integrator").
+//!   The acceptance is first squeezed between `max(1, e^{-a l0} lo_i)` and `hi_i`
+//!   ([`Bracket`], from the leaf weights), which decides most candidates without the
+//!   plate's position, the junction or an exponential, with the same draws.
 
 use rand_distr::{Distribution, Exp1};
 use serde::{Deserialize, Serialize, de::DeserializeOwned};

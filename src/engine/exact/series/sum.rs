@@ -121,17 +121,17 @@
 //!   (`phi_taylor` on a structure of arrays, one pass, each lane to its own order, compiled
 //!   to packed SSE2 operations on baseline x86-64 and to AVX2 ones where the processor has
 //!   it; bit for bit `phi_taylor`'s values, unit tests `phi_taylor4_is_phi_taylor` and
-//!   `direct_sums_are_the_same_in_every_vector_width`), in [`super::graded`].
+//!   `direct_sums_are_the_same_in_every_vector_width`), in `graded.rs`.
 //! - *Radius and order.* Only the junctions' own expansions are left, so `rho = l0/4`
 //!   (`q_d = rho/l0 = 1/4`: twice the bins' radius, half the re-bases) and `p` is the
 //!   smallest order with `T_d = q_d^(p+1)/(1-q_d) <= rtol/4` (`p = 17` at `rtol = 1e-10`,
 //!   as in bins mode; capped at 31). That order is the worst junction's (`x0 = 0`); each
 //!   junction keeps its own expansion only to the order its distance from its anchor needs
-//!   for the same tails (*graded orders*, [`super::graded`]: at `rtol = 1e-10`, order 10 at
+//!   for the same tails (*graded orders*, `graded.rs`: at `rtol = 1e-10`, order 10 at
 //!   `|x0| = 2 l0`, 8 at `4 l0`), in `add`, `remove` and the re-base alike.
 //! - *Truncation bound.* `|S - S_true| <= kappa l0 n T_d` and `|dS/dy - S'_true| <= kappa n
 //!   T'_(q_d)` (the coefficient bound above with `|d| <= l0/4`; with graded orders each
-//!   junction's tails are within these, [`super::graded`]): at most `(rtol/4) kappa l0
+//!   junction's tails are within these, `graded.rs`): at most `(rtol/4) kappa l0
 //!   n`. A junction at `x0 = 0` with the plate at the radius attains it within a factor
 //!   3 to 40 (`p = 4` to 17; test `direct_bound_is_nearly_attained`).
 //! - *Round-off.* `|D_i|_rho <= kappa l0/(1 - q_d)` and `q_d = q`, so the unit `eps kappa
