@@ -14,7 +14,10 @@
 //! (`testkit::scaled_linear`, the scene of `benches/exact.rs`, one engine per row warmed up
 //! to `t = 20`, then `1e6 / N` time units per iteration, about 1e5 events). After each `N` the bench prints the
 //! median events per second of each row over its samples, and the engine's ratio to the
-//! peer.
+//! peer. It then measures the ratio in *paired rounds*: fresh systems warmed up to `t = 20`,
+//! then [`ROUNDS`] rounds each timing one span of rebop and one of each engine back to
+//! back, so that the host's slow and fast spells (other tenants) fall on both sides of each
+//! ratio; it prints the median of the rounds' ratios with their quartiles.
 //!
 //! ```text
 //! cargo bench -p stickslip-peer --bench peer                 # N = 1e3, 1e6, 1e7
@@ -145,6 +148,66 @@ fn engine_row<E: Engine>(c: &mut Criterion, name: &str, n: usize, make: impl Fn(
     g.finish();
 }
 
+/// Rounds of the paired measurement ([`paired`]).
+const ROUNDS: usize = 31;
+
+/// `(lower quartile, median, upper quartile)` of `v` (sorted in place).
+fn quartiles(v: &mut [f64]) -> (f64, f64, f64) {
+    v.sort_by(f64::total_cmp);
+    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+    (at(0.25), at(0.5), at(0.75))
+}
+
+/// The ratio of each engine to rebop in [`ROUNDS`] paired rounds: in each, one span of
+/// rebop's two-state system (its events counted by a pilot, as in [`rebop_row`]) and one
+/// span of each engine, timed back to back.
+fn paired(n: usize, k0: f64, kon: f64, strong: &stickslip::scene::Scene, weak: &stickslip::scene::Scene) {
+    let mut pilot = Counted::with_parameters(k0, kon);
+    pilot.seed(3);
+    pilot.A = (n as f64 * kon / (k0 + kon)).round() as isize;
+    pilot.B = n as isize - pilot.A;
+    pilot.advance_until(WARM);
+    let before = pilot.E;
+    pilot.advance_until(WARM + span(n));
+    let per_span = (pilot.E - before) as f64;
+    let mut peer = two_state(n, k0, kon, 4);
+    peer.advance_until(WARM);
+    let mut s = strong_linear::<ArrayQueue>(strong);
+    s.advance(WARM, &mut Nothing).unwrap();
+    let mut w = weak_linear::<ArrayQueue>(weak);
+    w.advance(WARM, &mut Nothing).unwrap();
+    let mut t = WARM;
+    let (mut rs, mut rw) = (Vec::new(), Vec::new());
+    for _ in 0..ROUNDS {
+        t += span(n);
+        let start = Instant::now();
+        peer.advance_until(t);
+        let peer_rate = per_span / start.elapsed().as_secs_f64();
+        std::hint::black_box(peer.A);
+        let rate = |e: &mut dyn FnMut() -> u64| {
+            let start = Instant::now();
+            let events = e();
+            events as f64 / start.elapsed().as_secs_f64()
+        };
+        let strong_rate = rate(&mut || {
+            let before = s.counters().events.unwrap();
+            s.advance(t, &mut Nothing).unwrap();
+            s.counters().events.unwrap() - before
+        });
+        let weak_rate = rate(&mut || {
+            let before = w.counters().events.unwrap();
+            w.advance(t, &mut Nothing).unwrap();
+            w.counters().events.unwrap() - before
+        });
+        rs.push(strong_rate / peer_rate);
+        rw.push(weak_rate / peer_rate);
+    }
+    for (name, v) in [("strong-linear", &mut rs), ("weak-linear", &mut rw)] {
+        let (lo, mid, hi) = quartiles(v);
+        println!("peer N = {n}: {name} paired over {ROUNDS} rounds: {mid:.3}x rebop (quartiles {lo:.3}, {hi:.3})");
+    }
+}
+
 /// The sizes: `PEER_N` (a comma-separated list, e.g. `PEER_N=1000000`), else 1e3, 1e6, 1e7.
 fn sizes() -> Vec<usize> {
     match std::env::var("PEER_N") {
@@ -172,6 +235,7 @@ fn peer(c: &mut Criterion) {
                 println!("peer N = {n}: {name} {:.2} M events/s, {:.3}x rebop", own / 1e6, own / peer);
             }
         }
+        paired(n, k0, kon, &strong, &weak);
         println!();
     }
 }
