@@ -84,15 +84,21 @@ fn two_state(n: usize, k0: f64, kon: f64, seed: u64) -> TwoState {
     s
 }
 
-fn rebop_row(c: &mut Criterion, n: usize, k0: f64, kon: f64) {
+/// The events of one span after the warm-up, counted by a pilot of the two-state system
+/// with a counter (the timed system has none).
+fn events_per_span(n: usize, k0: f64, kon: f64, seed: u64) -> u64 {
     let mut pilot = Counted::with_parameters(k0, kon);
-    pilot.seed(1);
+    pilot.seed(seed);
     pilot.A = (n as f64 * kon / (k0 + kon)).round() as isize;
     pilot.B = n as isize - pilot.A;
     pilot.advance_until(WARM);
     let before = pilot.E;
     pilot.advance_until(WARM + span(n));
-    let per_span = (pilot.E - before) as u64;
+    (pilot.E - before) as u64
+}
+
+fn rebop_row(c: &mut Criterion, n: usize, k0: f64, kon: f64) {
+    let per_span = events_per_span(n, k0, kon, 1);
 
     let row = format!("rebop-two-state/{n}");
     let mut g = c.benchmark_group("peer");
@@ -159,17 +165,10 @@ fn quartiles(v: &mut [f64]) -> (f64, f64, f64) {
 }
 
 /// The ratio of each engine to rebop in [`ROUNDS`] paired rounds: in each, one span of
-/// rebop's two-state system (its events counted by a pilot, as in [`rebop_row`]) and one
+/// rebop's two-state system (its events counted by a pilot, [`events_per_span`]) and one
 /// span of each engine, timed back to back.
 fn paired(n: usize, k0: f64, kon: f64, strong: &stickslip::scene::Scene, weak: &stickslip::scene::Scene) {
-    let mut pilot = Counted::with_parameters(k0, kon);
-    pilot.seed(3);
-    pilot.A = (n as f64 * kon / (k0 + kon)).round() as isize;
-    pilot.B = n as isize - pilot.A;
-    pilot.advance_until(WARM);
-    let before = pilot.E;
-    pilot.advance_until(WARM + span(n));
-    let per_span = (pilot.E - before) as f64;
+    let per_span = events_per_span(n, k0, kon, 3) as f64;
     let mut peer = two_state(n, k0, kon, 4);
     peer.advance_until(WARM);
     let mut s = strong_linear::<ArrayQueue>(strong);
