@@ -252,13 +252,13 @@ impl Kinetics for WeakKinetics {
             // The junction is read only if the squeeze cannot decide, or by the rupture:
             // start loading it now.
             crate::engine::exact::pick::prefetch(&attached[slot]);
-            if br.hi <= SQUEEZE_RATE_MAX {
-                // r_i / k0 = exp(a (l - l0)) with |x| <= l <= |x| + l0, so
-                // max(1, e^{-a l0} lo) <= r_i / k0 <= hi: the squeeze decides most candidates
-                // without the plate's position, the junction or an exponential, as the exact
-                // test `U b < r_i / k0` below would. Below SQUEEZE_RATE_MAX the exponent
-                // cannot pass EXPONENT_CAP, so the exact test always draws its uniform here,
-                // and the draws are the same as without the squeeze.
+            // r_i / k0 = exp(a (l - l0)) with |x| <= l <= |x| + l0, so
+            // max(1, e^{-a l0} lo) <= r_i / k0 <= hi: the squeeze decides most candidates
+            // without the plate's position, the junction or an exponential, as the exact
+            // test `U b < r_i / k0` below would. Below SQUEEZE_RATE_MAX the exponent cannot
+            // pass EXPONENT_CAP, so the exact test would draw its uniform anyway: drawn here
+            // first, the draws are the same as without the squeeze.
+            let ub = if br.hi <= SQUEEZE_RATE_MAX {
                 let ub = rng.uniform() * br.b;
                 match Bracket::squeeze(ub, (shrink * br.lo).max(1.0), br.hi) {
                     Some(true) => {
@@ -266,19 +266,19 @@ impl Kinetics for WeakKinetics {
                         return Ok(Some((s, slot)));
                     }
                     Some(false) => continue,
-                    None => {
-                        let x = position(s)? - attached[slot].c;
-                        if ub < (self.beta_dx * law.tension(x)).exp() {
-                            return Ok(Some((s, slot)));
-                        }
-                        continue;
-                    }
+                    None => Some(ub),
                 }
-            }
+            } else {
+                None
+            };
             let x = position(s)? - attached[slot].c;
             // r_i / k0 = exp(beta dx f(x)) <= exp(a |x|) <= b (an overflowing rate is accepted).
             let exponent = self.beta_dx * law.tension(x);
-            if exponent > EXPONENT_CAP || rng.uniform() * br.b < exponent.exp() {
+            let accepted = match ub {
+                Some(ub) => ub < exponent.exp(),
+                None => exponent > EXPONENT_CAP || rng.uniform() * br.b < exponent.exp(),
+            };
+            if accepted {
                 return Ok(Some((s, slot)));
             }
         }
