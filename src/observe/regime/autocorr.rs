@@ -24,10 +24,42 @@
 type C = (f64, f64);
 
 /// In-place iterative radix-2 FFT of `a` (length a power of two); `inverse` uses `e^{+i..}`
-/// and does not scale.
+/// and does not scale. The twiddles `e^{-+2 pi i m/n}`, `m < n/2`, are computed once per
+/// call (`n/2` `sin_cos`, not `n/2` per stage): stage `len` uses `m = k n/len`, whose angle
+/// `(2 pi/n) (k n/len)` is the same `f64` as `(2 pi/len) k` (the two differ by powers of two
+/// only), so the transform is the one that computes every twiddle in its stage, bit for bit
+/// (unit test `fft_is_the_per_stage_fft`).
 fn fft(a: &mut [C], inverse: bool) {
     let n = a.len();
     debug_assert!(n.is_power_of_two());
+    bit_reverse(a);
+    let sign = if inverse { 1.0 } else { -1.0 };
+    let ang = sign * 2.0 * std::f64::consts::PI / n as f64;
+    let twiddles: Vec<C> = (0..n / 2)
+        .map(|m| {
+            let (s, c) = (ang * m as f64).sin_cos();
+            (c, s)
+        })
+        .collect();
+    let mut len = 2;
+    while len <= n {
+        let stride = n / len;
+        for start in (0..n).step_by(len) {
+            for k in 0..len / 2 {
+                let (c, s) = twiddles[k * stride];
+                let (u, v) = (a[start + k], a[start + k + len / 2]);
+                let t = (v.0 * c - v.1 * s, v.0 * s + v.1 * c);
+                a[start + k] = (u.0 + t.0, u.1 + t.1);
+                a[start + k + len / 2] = (u.0 - t.0, u.1 - t.1);
+            }
+        }
+        len <<= 1;
+    }
+}
+
+/// The FFT's bit-reversal permutation.
+fn bit_reverse(a: &mut [C]) {
+    let n = a.len();
     let mut j = 0;
     for i in 1..n {
         let mut bit = n >> 1;
@@ -39,21 +71,6 @@ fn fft(a: &mut [C], inverse: bool) {
         if i < j {
             a.swap(i, j);
         }
-    }
-    let sign = if inverse { 1.0 } else { -1.0 };
-    let mut len = 2;
-    while len <= n {
-        let ang = sign * 2.0 * std::f64::consts::PI / len as f64;
-        for start in (0..n).step_by(len) {
-            for k in 0..len / 2 {
-                let (s, c) = (ang * k as f64).sin_cos();
-                let (u, v) = (a[start + k], a[start + k + len / 2]);
-                let t = (v.0 * c - v.1 * s, v.0 * s + v.1 * c);
-                a[start + k] = (u.0 + t.0, u.1 + t.1);
-                a[start + k + len / 2] = (u.0 - t.0, u.1 - t.1);
-            }
-        }
-        len <<= 1;
     }
 }
 
@@ -140,6 +157,45 @@ mod tests {
         (0..=max_lag)
             .map(|j| (0..b - j).map(|i| (x[i] - m) * (x[i + j] - m)).sum::<f64>() / (b - j) as f64 / c0)
             .collect()
+    }
+
+    /// The transform with each twiddle computed in its stage, `(2 pi/len) k`.
+    fn per_stage_fft(a: &mut [C], inverse: bool) {
+        let n = a.len();
+        bit_reverse(a);
+        let sign = if inverse { 1.0 } else { -1.0 };
+        let mut len = 2;
+        while len <= n {
+            let ang = sign * 2.0 * std::f64::consts::PI / len as f64;
+            for start in (0..n).step_by(len) {
+                for k in 0..len / 2 {
+                    let (s, c) = (ang * k as f64).sin_cos();
+                    let (u, v) = (a[start + k], a[start + k + len / 2]);
+                    let t = (v.0 * c - v.1 * s, v.0 * s + v.1 * c);
+                    a[start + k] = (u.0 + t.0, u.1 + t.1);
+                    a[start + k + len / 2] = (u.0 - t.0, u.1 - t.1);
+                }
+            }
+            len <<= 1;
+        }
+    }
+
+    /// The shared twiddle table gives the per-stage transform bit for bit, both ways, at
+    /// every size from 1 to 2^14.
+    #[test]
+    fn fft_is_the_per_stage_fft() {
+        for bits in 0..=14 {
+            let n = 1usize << bits;
+            let x: Vec<C> =
+                (0..n).map(|i| (((i * 7919) % 1013) as f64 * 0.37 - 100.0, (i % 13) as f64 - 6.0)).collect();
+            for inverse in [false, true] {
+                let (mut a, mut b) = (x.clone(), x.clone());
+                fft(&mut a, inverse);
+                per_stage_fft(&mut b, inverse);
+                let bits_of = |v: &[C]| v.iter().flat_map(|z| [z.0.to_bits(), z.1.to_bits()]).collect::<Vec<_>>();
+                assert!(bits_of(&a) == bits_of(&b), "n = {n}, inverse = {inverse}");
+            }
+        }
     }
 
     #[test]
