@@ -753,6 +753,13 @@ pub(super) fn tails_at(q: f64, p: usize) -> (f64, f64) {
     (qp * q / (1.0 - q), p1 * qp / (1.0 - q) + qp * q / ((1.0 - q) * (1.0 - q)))
 }
 
+/// [`tails_at`] of `Q_D`, `Q` and `Q_DIRECT` at every order `p < PMAX`, computed once per
+/// process: the error bound is asked for after most events, and `powi` was half its cost.
+fn tails_table() -> &'static [[(f64, f64); 3]; PMAX] {
+    static TABLE: std::sync::OnceLock<[[(f64, f64); 3]; PMAX]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| std::array::from_fn(|p| [tails_at(Q_D, p), tails_at(Q, p), tails_at(Q_DIRECT, p)]))
+}
+
 /// Smallest order `p` whose residue bound (bin plus direct truncation) meets `rtol/4`,
 /// `q^(p+1)/(1-q) + (1/8)^(p+1)/(7/8) <= rtol/4`, capped at `PMAX - 1`.
 fn order_for(rtol: f64) -> usize {
@@ -1204,14 +1211,15 @@ impl SeriesSum {
     /// (`dS/dy`): every present junction's expansion (the bins' double expansion, which
     /// dominates its own) plus each charged residue (bin expansion minus own expansion).
     fn truncation(&self) -> (f64, f64) {
+        let [t_d, t_b, t_direct] = tails_table()[self.p];
         if self.direct.is_some() {
             // Every present junction's own expansion, `q_d = 1/4`; no residue.
-            let (df, ds) = tails_at(Q_D, self.p);
+            let (df, ds) = t_d;
             let n = self.n as f64;
             return (n * df, n * ds);
         }
-        let (bf, bs) = tails_at(Q, self.p);
-        let (df, ds) = tails_at(Q_DIRECT, self.p);
+        let (bf, bs) = t_b;
+        let (df, ds) = t_direct;
         let (n, r) = (self.n as f64, self.resid as f64);
         (n * bf + r * (bf + df), n * bs + r * (bs + ds))
     }
