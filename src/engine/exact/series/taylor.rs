@@ -319,11 +319,17 @@ impl TimeSeries {
             sk *= s;
         }
         q[0] -= c;
-        // Fixed trip counts (unrolled): the smallest of four sizes that holds the order.
+        // Fixed trip counts (unrolled), one size per order from MIN_ORDER: the terms a
+        // larger size would add are zeros, which leave both sums as they are.
         let (i1, i2) = match self.order {
             0..=4 => quad::<5>(&q),
-            5..=6 => quad::<7>(&q),
-            7..=9 => quad::<10>(&q),
+            5 => quad::<6>(&q),
+            6 => quad::<7>(&q),
+            7 => quad::<8>(&q),
+            8 => quad::<9>(&q),
+            9 => quad::<10>(&q),
+            10 => quad::<11>(&q),
+            11 => quad::<12>(&q),
             _ => quad::<{ ORDER + 1 }>(&q),
         };
         (i1 * s, i2 * s)
