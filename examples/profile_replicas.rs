@@ -16,20 +16,16 @@ use stickslip::runner::{RunOptions, run_scene_with};
 
 const USAGE: &str = "usage: profile_replicas SCENE REPLICAS [section.key=value ...]";
 
+fn usage() -> ! {
+    eprintln!("{USAGE}");
+    std::process::exit(2)
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (path, reps) = match args.as_slice() {
-        [p, r, ..] => match r.parse::<u64>() {
-            Ok(r) if r > 0 => (p.clone(), r),
-            _ => {
-                eprintln!("{USAGE}");
-                std::process::exit(2);
-            }
-        },
-        _ => {
-            eprintln!("{USAGE}");
-            std::process::exit(2);
-        }
+        [p, r, ..] => (p.clone(), r.parse::<u64>().ok().filter(|&r| r > 0).unwrap_or_else(|| usage())),
+        _ => usage(),
     };
     let base = match Scene::from_file(std::path::Path::new(&path), &args[2..]) {
         Ok(s) => s,
