@@ -93,86 +93,25 @@ pub struct Plant<'a> {
     pub degree: usize,
 }
 
-/// `[e^j]_k` for `1 <= j <= k < ORDER`, row by row: the triangle flattened. Row `k` is
-/// written in full at stage `k` (`[e]_k` by [`TimeSeries::of`], `j >= 2` by [`row`])
-/// before anything reads it, and only earlier rows and its own first entry are read, so
-/// the triangle starts uninitialised: zeroing its 66 entries cost about 50 instructions a
-/// step, a sixth of the recurrence's own work at order 8.
-struct Powers {
-    v: [std::mem::MaybeUninit<f64>; POWERS],
-    /// Entries written (checked in debug builds).
-    #[cfg(debug_assertions)]
-    written: u128,
-}
-const POWERS: usize = ORDER * (ORDER - 1) / 2;
+/// `[e^j]_k` at `[j][k]` for `1 <= j <= k < ORDER`. [`TimeSeries::of`]'s stages are
+/// unrolled and every index is a constant, so the entries become scalars (registers or fixed
+/// stack slots): the zeros are never stored, and no index is computed. Row `k` is written
+/// at stage `k` (`[e]_k` by [`TimeSeries::of`], `j >= 2` by [`row`]) before anything reads
+/// it.
+type Powers = [[f64; ORDER]; ORDER];
 
-impl Powers {
-    #[inline(always)]
-    fn new() -> Powers {
-        Powers {
-            v: [const { std::mem::MaybeUninit::uninit() }; POWERS],
-            #[cfg(debug_assertions)]
-            written: 0,
-        }
-    }
-    #[inline(always)]
-    fn set(&mut self, i: usize, x: f64) {
-        self.v[i] = std::mem::MaybeUninit::new(x);
-        #[cfg(debug_assertions)]
-        {
-            self.written |= 1 << i;
-        }
-    }
-}
-
-impl std::ops::Index<usize> for Powers {
-    type Output = f64;
-    #[inline(always)]
-    fn index(&self, i: usize) -> &f64 {
-        #[cfg(debug_assertions)]
-        assert!(self.written & (1 << i) != 0, "Powers: entry {i} read before it was written");
-        // SAFETY: rows are written in full, in order, before they are read (type doc), so
-        // every entry read has been written by `set`.
-        unsafe { self.v[i].assume_init_ref() }
-    }
-}
-/// Where `[e^j]_k` sits in [`Powers`].
-#[inline(always)]
-const fn at(j: usize, k: usize) -> usize {
-    k * (k - 1) / 2 + j - 1
-}
-
-/// Row `k` of the powers, `[e^j]_k = sum_(i=1..k-j+1) [e]_i [e^(j-1)]_(k-i)` for `2 <= j
-/// <= k` (rows below `k` and `[e]_1..[e]_k` known), and `C_k = sum_(j=1..k) t_j [e^j]_k`.
-/// Dispatched to a copy per `k` whose loops have constant trip counts, so they unroll.
-#[inline]
-fn power_row(k: usize, pw: &mut Powers, t: &[f64; ORDER + 1]) -> f64 {
-    match k {
-        1 => row::<1>(pw, t),
-        2 => row::<2>(pw, t),
-        3 => row::<3>(pw, t),
-        4 => row::<4>(pw, t),
-        5 => row::<5>(pw, t),
-        6 => row::<6>(pw, t),
-        7 => row::<7>(pw, t),
-        8 => row::<8>(pw, t),
-        9 => row::<9>(pw, t),
-        10 => row::<10>(pw, t),
-        _ => row::<11>(pw, t),
-    }
-}
-
-/// [`power_row`] for a fixed `K` (`1 <= K < ORDER`).
+/// Row `K` of the powers, `[e^j]_K = sum_(i=1..K-j+1) [e]_i [e^(j-1)]_(K-i)` for `2 <= j
+/// <= K` (rows below `K` and `[e]_1..[e]_K` known), and `C_K = sum_(j=1..K) t_j [e^j]_K`.
 #[inline(always)]
 fn row<const K: usize>(pw: &mut Powers, t: &[f64; ORDER + 1]) -> f64 {
     // Two partial sums of C_K: half the additions' latency chain.
-    let (mut c0, mut c1) = (t[1] * pw[at(1, K)], 0.0);
+    let (mut c0, mut c1) = (t[1] * pw[1][K], 0.0);
     for j in 2..K + 1 {
         let mut acc = 0.0;
         for i in 1..K - j + 2 {
-            acc += pw[at(1, i)] * pw[at(j - 1, K - i)];
+            acc += pw[1][i] * pw[j - 1][K - i];
         }
-        pw.set(at(j, K), acc);
+        pw[j][K] = acc;
         if j % 2 == 0 {
             c1 += t[j] * acc;
         } else {
@@ -202,49 +141,106 @@ impl TimeSeries {
     /// The coefficients from `u(0) = u0` and `u'(0) = w0` (ignored when `M = 0`), up to the
     /// first order `n >= MIN_ORDER` at which the last two terms are within `tol` over `h`
     /// ([`TimeSeries::within`]: the step `h` to the target then needs no cut), or `ORDER`.
+    ///
+    /// Compiled for AVX2 where the processor has it (a run-time check): its three-operand
+    /// instructions save the register copies of SSE2's two-operand ones, and the operations
+    /// are the same, so the values are the same bit for bit (no FMA).
+    #[inline]
     pub fn of(p: &Plant<'_>, u0: f64, w0: f64, h: f64, tol: Tol) -> TimeSeries {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2, checked just above.
+            return unsafe { Self::of_avx2(p, u0, w0, h, tol) };
+        }
+        Self::of_in(p, u0, w0, h, tol)
+    }
+
+    /// [`TimeSeries::of`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn of_avx2(p: &Plant<'_>, u0: f64, w0: f64, h: f64, tol: Tol) -> TimeSeries {
+        Self::of_in(p, u0, w0, h, tol)
+    }
+
+    /// [`TimeSeries::of`] for the plate at hand.
+    #[inline(always)]
+    fn of_in(p: &Plant<'_>, u0: f64, w0: f64, h: f64, tol: Tol) -> TimeSeries {
+        if p.mass != 0.0 {
+            Self::recurrence::<true>(p, u0, w0, h, tol)
+        } else {
+            Self::recurrence::<false>(p, u0, w0, h, tol)
+        }
+    }
+
+    /// [`TimeSeries::of`] for the dynamic plate (`DYNAMIC`, `M != 0`) or the overdamped one,
+    /// its stages unrolled: stage `k` gives `u_n`, `n = k + 2` (dynamic) or `k + 1`, with
+    /// every index and order a constant.
+    #[inline(always)]
+    fn recurrence<const DYNAMIC: bool>(p: &Plant<'_>, u0: f64, w0: f64, h: f64, tol: Tol) -> TimeSeries {
+        let first = if DYNAMIC { 2 } else { 1 };
         let mut u = [0.0; ORDER + 1];
         u[0] = u0;
-        let dynamic = p.mass != 0.0;
-        let first = if dynamic { 2 } else { 1 };
-        if dynamic {
+        if DYNAMIC {
             u[1] = w0;
         }
         // [e^j]_k for 1 <= j <= k (row k written at stage k, read later); j = 1 is `e`
         // itself: [e]_1 = u_1 + V, [e]_k = u_k.
-        let mut pw = Powers::new();
+        let mut pw: Powers = [[0.0; ORDER]; ORDER];
         let t = p.force;
-        let inv = 1.0 / if dynamic { p.mass } else { p.eta };
+        let inv = 1.0 / if DYNAMIC { p.mass } else { p.eta };
         let last = ORDER.min(p.degree + first);
-        let mut order = last;
-        let mut converged = false;
-        // h^(n-1) and h^n for the newest coefficient u_n.
-        let mut hn = if dynamic { h } else { 1.0 };
-        for n in first..last + 1 {
-            // u_n from C_k, k = n - 2 (dynamic) or n - 1 (overdamped).
-            let k = n - first;
-            let c = if k == 0 {
-                t[0]
-            } else {
-                pw.set(at(1, k), if k == 1 { u[1] + p.v } else { u[k] });
-                power_row(k, &mut pw, t)
-            };
-            let drive = if k == 0 { p.eta * p.v } else { 0.0 };
-            let kf = k as f64;
-            u[n] = if dynamic {
-                -(p.eta * (kf + 1.0) * u[k + 1] + drive + c + p.k * u[k]) * (inv * RECIP2[k])
-            } else {
-                -(drive + c + p.k * u[k]) * (inv * RECIP1[k])
-            };
-            let hn1 = hn;
-            hn *= h;
-            if n >= MIN_ORDER && Self::within(&u, n, h, hn1, dynamic, tol) {
-                order = n;
-                converged = true;
-                break;
-            }
+        // The velocity's bound of `within`, the same product at every order.
+        let hw = h * tol.w;
+        // h^(n-1) for the newest coefficient u_n (times h at each stage after the first).
+        let mut hn1 = if DYNAMIC { h } else { 1.0 };
+        macro_rules! stage {
+            ($k:literal) => {{
+                // u_n from C_k, k = n - 2 (dynamic) or n - 1 (overdamped).
+                const K: usize = $k;
+                let n = K + first;
+                if n > last {
+                    return TimeSeries { u, order: last, converged: false };
+                }
+                if K > 0 {
+                    hn1 *= h;
+                }
+                let c = if K == 0 {
+                    t[0]
+                } else {
+                    pw[1][K] = if K == 1 { u[1] + p.v } else { u[K] };
+                    row::<K>(&mut pw, t)
+                };
+                let drive = if K == 0 { p.eta * p.v } else { 0.0 };
+                let kf = K as f64;
+                u[n] = if DYNAMIC {
+                    -(p.eta * (kf + 1.0) * u[K + 1] + drive + c + p.k * u[K]) * (inv * RECIP2[K])
+                } else {
+                    -(drive + c + p.k * u[K]) * (inv * RECIP1[K])
+                };
+                // Self::within, on the same values in the same order.
+                if n >= MIN_ORDER {
+                    let (a, b) = (u[n - 1].abs() * hn1, u[n].abs() * hn1 * h);
+                    if a + b <= tol.u && (!DYNAMIC || (n - 1) as f64 * a + n as f64 * b <= hw) {
+                        return TimeSeries { u, order: n, converged: true };
+                    }
+                }
+            }};
         }
-        TimeSeries { u, order, converged }
+        stage!(0);
+        stage!(1);
+        stage!(2);
+        stage!(3);
+        stage!(4);
+        stage!(5);
+        stage!(6);
+        stage!(7);
+        stage!(8);
+        stage!(9);
+        stage!(10);
+        if !DYNAMIC {
+            stage!(11);
+        }
+        TimeSeries { u, order: last, converged: false }
     }
 
     /// Whether the last two terms are within the tolerance over `h`: `|u_(n-1)| h^(n-1) +
@@ -457,5 +453,229 @@ mod tests {
         let (a, b) = (a * s / n as f64, b * s / n as f64);
         let (i1, i2) = ts.integrals(s, c);
         assert!((i1 - a).abs() < 1e-7 && (i2 - b).abs() < 1e-7, "{i1} {a} {i2} {b}");
+    }
+
+    /// The recurrence as it was before its stages were unrolled (a triangle with computed
+    /// indices, dispatched per stage), kept verbatim as the oracle of bit-identity.
+    mod oracle {
+        use super::super::{MIN_ORDER, ORDER, Plant, RECIP1, RECIP2, TimeSeries, Tol};
+
+        /// `[e^j]_k` for `1 <= j <= k < ORDER`, row by row: the triangle flattened. Row `k` is
+        /// written in full at stage `k` (`[e]_k` by `of`, `j >= 2` by `row`)
+        /// before anything reads it, and only earlier rows and its own first entry are read, so
+        /// the triangle starts uninitialised: zeroing its 66 entries cost about 50 instructions a
+        /// step, a sixth of the recurrence's own work at order 8.
+        struct Powers {
+            v: [std::mem::MaybeUninit<f64>; POWERS],
+            /// Entries written (checked in debug builds).
+            #[cfg(debug_assertions)]
+            written: u128,
+        }
+        const POWERS: usize = ORDER * (ORDER - 1) / 2;
+
+        impl Powers {
+            #[inline(always)]
+            fn new() -> Powers {
+                Powers {
+                    v: [const { std::mem::MaybeUninit::uninit() }; POWERS],
+                    #[cfg(debug_assertions)]
+                    written: 0,
+                }
+            }
+            #[inline(always)]
+            fn set(&mut self, i: usize, x: f64) {
+                self.v[i] = std::mem::MaybeUninit::new(x);
+                #[cfg(debug_assertions)]
+                {
+                    self.written |= 1 << i;
+                }
+            }
+        }
+
+        impl std::ops::Index<usize> for Powers {
+            type Output = f64;
+            #[inline(always)]
+            fn index(&self, i: usize) -> &f64 {
+                #[cfg(debug_assertions)]
+                assert!(self.written & (1 << i) != 0, "Powers: entry {i} read before it was written");
+                // SAFETY: rows are written in full, in order, before they are read (type doc), so
+                // every entry read has been written by `set`.
+                unsafe { self.v[i].assume_init_ref() }
+            }
+        }
+        /// Where `[e^j]_k` sits in `Powers`.
+        #[inline(always)]
+        const fn at(j: usize, k: usize) -> usize {
+            k * (k - 1) / 2 + j - 1
+        }
+
+        /// Row `k` of the powers, `[e^j]_k = sum_(i=1..k-j+1) [e]_i [e^(j-1)]_(k-i)` for `2 <= j
+        /// <= k` (rows below `k` and `[e]_1..[e]_k` known), and `C_k = sum_(j=1..k) t_j [e^j]_k`.
+        /// Dispatched to a copy per `k` whose loops have constant trip counts, so they unroll.
+        #[inline]
+        fn power_row(k: usize, pw: &mut Powers, t: &[f64; ORDER + 1]) -> f64 {
+            match k {
+                1 => row::<1>(pw, t),
+                2 => row::<2>(pw, t),
+                3 => row::<3>(pw, t),
+                4 => row::<4>(pw, t),
+                5 => row::<5>(pw, t),
+                6 => row::<6>(pw, t),
+                7 => row::<7>(pw, t),
+                8 => row::<8>(pw, t),
+                9 => row::<9>(pw, t),
+                10 => row::<10>(pw, t),
+                _ => row::<11>(pw, t),
+            }
+        }
+
+        /// `power_row` for a fixed `K` (`1 <= K < ORDER`).
+        #[inline(always)]
+        fn row<const K: usize>(pw: &mut Powers, t: &[f64; ORDER + 1]) -> f64 {
+            // Two partial sums of C_K: half the additions' latency chain.
+            let (mut c0, mut c1) = (t[1] * pw[at(1, K)], 0.0);
+            for j in 2..K + 1 {
+                let mut acc = 0.0;
+                for i in 1..K - j + 2 {
+                    acc += pw[at(1, i)] * pw[at(j - 1, K - i)];
+                }
+                pw.set(at(j, K), acc);
+                if j % 2 == 0 {
+                    c1 += t[j] * acc;
+                } else {
+                    c0 += t[j] * acc;
+                }
+            }
+            c0 + c1
+        }
+
+        pub struct Old;
+
+        impl Old {
+            /// The coefficients from `u(0) = u0` and `u'(0) = w0` (ignored when `M = 0`), up to the
+            /// first order `n >= MIN_ORDER` at which the last two terms are within `tol` over `h`
+            /// (`within`: the step `h` to the target then needs no cut), or `ORDER`.
+            pub fn of(p: &Plant<'_>, u0: f64, w0: f64, h: f64, tol: Tol) -> TimeSeries {
+                let mut u = [0.0; ORDER + 1];
+                u[0] = u0;
+                let dynamic = p.mass != 0.0;
+                let first = if dynamic { 2 } else { 1 };
+                if dynamic {
+                    u[1] = w0;
+                }
+                // [e^j]_k for 1 <= j <= k (row k written at stage k, read later); j = 1 is `e`
+                // itself: [e]_1 = u_1 + V, [e]_k = u_k.
+                let mut pw = Powers::new();
+                let t = p.force;
+                let inv = 1.0 / if dynamic { p.mass } else { p.eta };
+                let last = ORDER.min(p.degree + first);
+                let mut order = last;
+                let mut converged = false;
+                // h^(n-1) and h^n for the newest coefficient u_n.
+                let mut hn = if dynamic { h } else { 1.0 };
+                for n in first..last + 1 {
+                    // u_n from C_k, k = n - 2 (dynamic) or n - 1 (overdamped).
+                    let k = n - first;
+                    let c = if k == 0 {
+                        t[0]
+                    } else {
+                        pw.set(at(1, k), if k == 1 { u[1] + p.v } else { u[k] });
+                        power_row(k, &mut pw, t)
+                    };
+                    let drive = if k == 0 { p.eta * p.v } else { 0.0 };
+                    let kf = k as f64;
+                    u[n] = if dynamic {
+                        -(p.eta * (kf + 1.0) * u[k + 1] + drive + c + p.k * u[k]) * (inv * RECIP2[k])
+                    } else {
+                        -(drive + c + p.k * u[k]) * (inv * RECIP1[k])
+                    };
+                    let hn1 = hn;
+                    hn *= h;
+                    if n >= MIN_ORDER && Old::within(&u, n, h, hn1, dynamic, tol) {
+                        order = n;
+                        converged = true;
+                        break;
+                    }
+                }
+                TimeSeries { u, order, converged }
+            }
+
+            /// Whether the last two terms are within the tolerance over `h`: `|u_(n-1)| h^(n-1) +
+            /// |u_n| h^n <= tol.u` and, for the dynamic plate, their derivative's `(n-1) |u_(n-1)|
+            /// h^(n-2) + n |u_n| h^(n-1) <= tol.w`; `hn1 = h^(n-1)`.
+            #[inline]
+            fn within(u: &[f64; ORDER + 1], n: usize, h: f64, hn1: f64, dynamic: bool, tol: Tol) -> bool {
+                let (a, b) = (u[n - 1].abs() * hn1, u[n].abs() * hn1 * h);
+                a + b <= tol.u && (!dynamic || (n - 1) as f64 * a + n as f64 * b <= h * tol.w)
+            }
+        }
+    }
+
+    /// The unrolled recurrence gives the oracle's coefficients bit for bit, with the same
+    /// order and convergence, over random plants (dynamic and overdamped), force
+    /// coefficients of varied magnitudes and degrees, steps from 1e-4 to 1 and tolerances
+    /// from 1e-15 to 1e-6.
+    #[test]
+    fn unrolled_recurrence_is_bit_identical_to_the_oracle() {
+        use rand::RngExt;
+        let mut rng = crate::rng::pcg(20261126);
+        let log_uniform = |rng: &mut crate::rng::Pcg64, lo: f64, hi: f64| {
+            let x: f64 = rng.random();
+            10f64.powf(lo + (hi - lo) * x)
+        };
+        let (mut converged, mut orders) = (0usize, [0usize; ORDER + 1]);
+        let cases = 200_000;
+        for case in 0..cases {
+            let dynamic = case % 4 != 3;
+            let sign = |rng: &mut crate::rng::Pcg64| if rng.random::<bool>() { 1.0 } else { -1.0 };
+            let mass = if dynamic { log_uniform(&mut rng, -2.0, 3.0) } else { 0.0 };
+            let eta = if dynamic && case % 16 == 0 { 0.0 } else { log_uniform(&mut rng, -2.0, 3.0) };
+            let k = if case % 8 == 1 { 0.0 } else { log_uniform(&mut rng, -2.0, 3.0) };
+            let v = if case % 8 == 2 { 0.0 } else { sign(&mut rng) * log_uniform(&mut rng, -3.0, 1.0) };
+            // Coefficients t_j ~ A / R^j (a force of scale A varying over a length R), some
+            // exactly zero or negative zero.
+            let (scale, radius) = (log_uniform(&mut rng, -3.0, 4.0), log_uniform(&mut rng, -2.0, 1.0));
+            let mut force = [0.0; ORDER + 1];
+            let mut rj = 1.0;
+            for f in force.iter_mut() {
+                *f = match rng.random_range(0..20) {
+                    0 => 0.0,
+                    1 => -0.0,
+                    _ => sign(&mut rng) * scale * log_uniform(&mut rng, -1.0, 1.0) / rj,
+                };
+                rj *= radius;
+            }
+            let degree = match case % 5 {
+                0 => 4,
+                1 => 7,
+                2 => ORDER - 2,
+                3 => ORDER,
+                _ => rng.random_range(0..ORDER + 1),
+            };
+            let p = Plant { mass, eta, k, v, force: &force, degree };
+            let u0 = if case % 32 == 5 { 0.0 } else { sign(&mut rng) * log_uniform(&mut rng, -5.0, 0.0) };
+            let w0 = if case % 32 == 6 { -0.0 } else { sign(&mut rng) * log_uniform(&mut rng, -5.0, 0.0) };
+            let h = log_uniform(&mut rng, -4.0, 0.0);
+            let tol = Tol {
+                u: log_uniform(&mut rng, -15.0, -6.0),
+                w: if !dynamic && case % 2 == 1 { f64::NAN } else { log_uniform(&mut rng, -15.0, -6.0) },
+            };
+            let old = oracle::Old::of(&p, u0, w0, h, tol);
+            // The dispatched form (AVX2 where the processor has it) and the portable one.
+            for new in [TimeSeries::of(&p, u0, w0, h, tol), TimeSeries::of_in(&p, u0, w0, h, tol)] {
+                assert_eq!(
+                    new.u.map(f64::to_bits),
+                    old.u.map(f64::to_bits),
+                    "case {case}: {p:?} {u0} {w0} {h} {tol:?}"
+                );
+                assert_eq!((new.order, new.converged), (old.order, old.converged), "case {case}");
+            }
+            let new = TimeSeries::of(&p, u0, w0, h, tol);
+            converged += new.converged as usize;
+            orders[new.order] += 1;
+        }
+        // Both exits are exercised, at many orders.
+        assert!(converged > cases / 10 && converged < cases - cases / 10, "{converged} of {cases} converged");
+        assert!(orders.iter().filter(|&&c| c > 100).count() >= 6, "orders {orders:?}");
     }
 }
