@@ -307,7 +307,28 @@ impl TimeSeries {
     /// `int_0^s (u - c)` and `int_0^s (u - c)^2`, exact integrals of the polynomial: with
     /// `q_k = (u_k - c [k = 0]) s^k`, `s sum_k q_k / (k + 1)` and `s sum_(i,j) q_i q_j /
     /// (i + j + 1)`, the latter over `i <= j` (the Hilbert matrix is symmetric).
+    /// Compiled for AVX2 where the processor has it (a run-time check; the same operations,
+    /// none fused, so the same values bit for bit: unit test
+    /// `integrals_are_the_same_in_every_vector_width`).
     pub fn integrals(&self, s: f64, c: f64) -> (f64, f64) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2, checked just above.
+            return unsafe { self.integrals_avx2(s, c) };
+        }
+        self.integrals_in(s, c)
+    }
+
+    /// [`TimeSeries::integrals_in`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn integrals_avx2(&self, s: f64, c: f64) -> (f64, f64) {
+        self.integrals_in(s, c)
+    }
+
+    /// [`TimeSeries::integrals`].
+    #[inline(always)]
+    fn integrals_in(&self, s: f64, c: f64) -> (f64, f64) {
         let mut q = [0.0; ORDER + 1];
         let mut sk = 1.0;
         for (qk, uk) in q.iter_mut().zip(&self.u[..self.order + 1]) {
@@ -432,6 +453,23 @@ mod tests {
         let ts = TimeSeries::of(&p, 0.0, 0.1, 1e-4, tol);
         assert!(ts.order < 8, "order {} for a short step", ts.order);
         assert_eq!(ts.step_within(1e-4, tol, true), 1e-4);
+    }
+
+    /// The integrals compiled for AVX2 (where the processor has it) are the baseline
+    /// build's bit for bit, at every order and over steps and offsets of several scales.
+    #[test]
+    fn integrals_are_the_same_in_every_vector_width() {
+        for order in 0..=ORDER {
+            let mut u = [0.0; ORDER + 1];
+            for (k, uk) in u.iter_mut().enumerate().take(order + 1) {
+                *uk = (1.3f64).powi(-(k as i32)) * if k % 3 == 1 { -0.7 } else { 1.1 + 0.01 * k as f64 };
+            }
+            let ts = TimeSeries { u, order, converged: true };
+            for (s, c) in [(1e-4, 0.0), (0.033, 0.3), (0.5, -2.0), (1.0, 1e3)] {
+                let (a, b) = (ts.integrals(s, c), ts.integrals_in(s, c));
+                assert_eq!((a.0.to_bits(), a.1.to_bits()), (b.0.to_bits(), b.1.to_bits()), "order {order}, s {s}");
+            }
+        }
     }
 
     #[test]
