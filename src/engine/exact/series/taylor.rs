@@ -189,10 +189,9 @@ impl TimeSeries {
         let t = p.force;
         let inv = 1.0 / if DYNAMIC { p.mass } else { p.eta };
         let last = ORDER.min(p.degree + first);
-        // The velocity's bound of `within`, the same product at every order.
-        let hw = h * tol.w;
         // h^(n-1) for the newest coefficient u_n (times h at each stage after the first).
         let mut hn1 = if DYNAMIC { h } else { 1.0 };
+        let hw = h * tol.w;
         macro_rules! stage {
             ($k:literal) => {{
                 // u_n from C_k, k = n - 2 (dynamic) or n - 1 (overdamped).
@@ -217,12 +216,8 @@ impl TimeSeries {
                 } else {
                     -(drive + c + p.k * u[K]) * (inv * RECIP1[K])
                 };
-                // Self::within, on the same values in the same order.
-                if n >= MIN_ORDER {
-                    let (a, b) = (u[n - 1].abs() * hn1, u[n].abs() * hn1 * h);
-                    if a + b <= tol.u && (!DYNAMIC || (n - 1) as f64 * a + n as f64 * b <= hw) {
-                        return TimeSeries { u, order: n, converged: true };
-                    }
+                if n >= MIN_ORDER && Self::within(&u, n, h, hn1, hw, DYNAMIC, tol) {
+                    return TimeSeries { u, order: n, converged: true };
                 }
             }};
         }
@@ -245,11 +240,12 @@ impl TimeSeries {
 
     /// Whether the last two terms are within the tolerance over `h`: `|u_(n-1)| h^(n-1) +
     /// |u_n| h^n <= tol.u` and, for the dynamic plate, their derivative's `(n-1) |u_(n-1)|
-    /// h^(n-2) + n |u_n| h^(n-1) <= tol.w`; `hn1 = h^(n-1)`.
-    #[inline]
-    fn within(u: &[f64; ORDER + 1], n: usize, h: f64, hn1: f64, dynamic: bool, tol: Tol) -> bool {
+    /// h^(n-2) + n |u_n| h^(n-1) <= tol.w`; `hn1 = h^(n-1)`, `hw = h tol.w` (a caller testing
+    /// several orders forms it once).
+    #[inline(always)]
+    fn within(u: &[f64; ORDER + 1], n: usize, h: f64, hn1: f64, hw: f64, dynamic: bool, tol: Tol) -> bool {
         let (a, b) = (u[n - 1].abs() * hn1, u[n].abs() * hn1 * h);
-        a + b <= tol.u && (!dynamic || (n - 1) as f64 * a + n as f64 * b <= h * tol.w)
+        a + b <= tol.u && (!dynamic || (n - 1) as f64 * a + n as f64 * b <= hw)
     }
 
     /// The longest step, at most `h`, over which the last two terms stay within `tol`: if `h`
@@ -257,7 +253,7 @@ impl TimeSeries {
     /// `h <= (tol.w / (2 i |u_i|))^(1/(i-1))`, times a safety factor.
     pub fn step_within(&self, h: f64, tol: Tol, dynamic: bool) -> f64 {
         let n = self.order;
-        if Self::within(&self.u, n, h, h.powi(n as i32 - 1), dynamic, tol) {
+        if Self::within(&self.u, n, h, h.powi(n as i32 - 1), h * tol.w, dynamic, tol) {
             return h;
         }
         let mut hmax = h;
