@@ -22,6 +22,10 @@ pub struct CompareArgs {
     /// Replicas of the exact reference (default: 4 x --replicas).
     #[arg(long)]
     pub ref_replicas: Option<usize>,
+    /// `exact.rtol` of the exact points (default: the scene's). The reference keeps the
+    /// scene's, so the points' errors include what the looser tolerance costs.
+    #[arg(long, value_name = "RTOL", allow_hyphen_values = true)]
+    pub exact_rtol: Option<f64>,
     /// Output directory (default: out/<scene file stem>-compare/).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -92,7 +96,7 @@ pub(crate) fn compare_as(args: &CompareArgs, command: &str) -> ExitCode {
         return fail(EXIT_BAD_INPUT, "--threads = 0: must be at least 1");
     }
     let ref_replicas = args.ref_replicas.unwrap_or(args.replicas.saturating_mul(4));
-    let plan = match Plan::new(&scene, dts, args.replicas, ref_replicas) {
+    let plan = match Plan::new(&scene, dts, args.replicas, ref_replicas, args.exact_rtol) {
         Ok(p) => p,
         Err(e) => return fail(EXIT_BAD_INPUT, e),
     };

@@ -199,6 +199,9 @@ fn other_bad_arguments_are_refused() {
     expect_bad(&["--replicas", "x"], &["--replicas"]);
     expect_bad(&["--ref-replicas", "0"], &["--ref-replicas", "0"]);
     expect_bad(&["--threads", "0"], &["--threads", "0"]);
+    expect_bad(&["--exact-rtol", "0"], &["--exact-rtol", "exact.rtol", "0"]);
+    expect_bad(&["--exact-rtol", "0.5"], &["--exact-rtol", "exact.rtol", "0.5"]);
+    expect_bad(&["--exact-rtol", "x"], &["--exact-rtol"]);
     expect_bad(&["--set", "plate.k=-1"], &["plate.k", "-1"]);
     // Park-Miller blocks that do not fit in the generator's period.
     expect_bad(&["--dts", "1e-6", "--replicas", "2"], &["--replicas", "Park-Miller"]);

@@ -16,6 +16,12 @@
 //! deviation has its own bias, so the exact engine would appear biased against a reference
 //! computed for the scene's window.)
 //!
+//! **Tolerance of the exact points** (`--exact-rtol`, tilted law). The exact engine's one
+//! approximation is the bond-force series' stated error `exact.rtol` (relative to `kappa l0
+//! N`); the reference always runs at the scene's. Exact points at a looser tolerance are
+//! cheaper, and their errors against that reference include whatever bias the looser
+//! tolerance brings: the study shows what the tolerance costs instead of assuming it.
+//!
 //! **Errors and intervals.** For a point with mean `m` the error is `m - m_ref`. Its
 //! standard deviation under zero bias is the **floor** `sqrt(se^2 + se_ref^2)`: the error
 //! expected from sampling alone at that point's cost. The 95 % interval is
@@ -46,6 +52,7 @@ pub mod files;
 pub mod fit;
 pub mod report;
 
+use std::fmt::Write as _;
 use std::time::Instant;
 
 use super::execute::{Continuation, Interrupted, run_missing};
@@ -154,6 +161,9 @@ pub struct Plan {
     pub dts: Vec<f64>,
     pub replicas: usize,
     pub ref_replicas: usize,
+    /// `exact.rtol` of the exact points when it differs from the scene's (`--exact-rtol`);
+    /// the reference always runs at the scene's.
+    pub exact_rtol: Option<f64>,
     pub exact_counts: Vec<usize>,
     pub observables: Vec<Observable>,
     /// Per step of `dts`: the plate update's growth factor per step with every junction
@@ -171,7 +181,15 @@ fn quiet(scene: &Scene, extra: &[String]) -> Result<Scene, crate::scene::SceneEr
 
 impl Plan {
     /// Checks the parameters and builds every job (scene and seed). Nothing runs.
-    pub fn new(scene: &Scene, dts: Vec<f64>, replicas: usize, ref_replicas: usize) -> Result<Plan, PlanError> {
+    /// `exact_rtol`: the exact points' `exact.rtol` (`None`: the scene's); the reference
+    /// keeps the scene's, so the points' errors include what a looser tolerance costs.
+    pub fn new(
+        scene: &Scene,
+        dts: Vec<f64>,
+        replicas: usize,
+        ref_replicas: usize,
+        exact_rtol: Option<f64>,
+    ) -> Result<Plan, PlanError> {
         if dts.is_empty() {
             return Err(PlanError(
                 "--dts: the list is empty; give one or more steps > 0, e.g. --dts 1,0.5,0.25".into(),
@@ -191,6 +209,14 @@ impl Plan {
         let base = scene.run.seed;
         let mut jobs = Vec::new();
         let exact = quiet(scene, &["run.engine=exact".into()]).map_err(|e| PlanError(e.to_string()))?;
+        let exact_rtol = exact_rtol.filter(|&r| r.to_bits() != scene.exact.rtol.to_bits());
+        let exact_points = match exact_rtol {
+            None => exact.clone(),
+            Some(r) => {
+                let set = format!("exact.rtol={}", ryu::Buffer::new().format(r));
+                quiet(scene, &["run.engine=exact".into(), set]).map_err(|e| PlanError(format!("--exact-rtol: {e}")))?
+            }
+        };
         let with_seed = |s: &Scene, seed: u64| {
             let mut s = s.clone();
             s.run.seed = seed;
@@ -205,7 +231,7 @@ impl Plan {
         for (k, &count) in counts.iter().enumerate() {
             for r in 0..count {
                 let seed = seeds::pcg_seed(base, Role::Exact, k as u64, r as u64);
-                jobs.push(Job { role: Role::Exact, point: k, scene: with_seed(&exact, seed) });
+                jobs.push(Job { role: Role::Exact, point: k, scene: with_seed(&exact_points, seed) });
             }
         }
         for (j, &dt) in dts.iter().enumerate() {
@@ -238,6 +264,7 @@ impl Plan {
             dts,
             replicas,
             ref_replicas,
+            exact_rtol,
             exact_counts: counts,
             observables: Observable::for_scene(scene),
             plate_growth,
@@ -259,7 +286,12 @@ impl Plan {
     /// journal's record of what decides the runs and the files).
     pub fn arguments(&self) -> String {
         let dts: Vec<String> = self.dts.iter().map(|&d| ryu::Buffer::new().format(d).to_string()).collect();
-        format!("--dts {} --replicas {} --ref-replicas {}", dts.join(","), self.replicas, self.ref_replicas)
+        let mut a =
+            format!("--dts {} --replicas {} --ref-replicas {}", dts.join(","), self.replicas, self.ref_replicas);
+        if let Some(r) = self.exact_rtol {
+            let _ = write!(a, " --exact-rtol {}", ryu::Buffer::new().format(r));
+        }
+        a
     }
 
     /// As [`Plan::run`], running only the jobs not done in `from`, appending each finished
@@ -378,6 +410,7 @@ impl Plan {
             scene: self.scene.clone(),
             observables: self.observables.clone(),
             replicas: self.replicas,
+            exact_rtol: self.exact_rtol,
             reference,
             points,
         }
@@ -556,6 +589,8 @@ pub struct Study {
     pub observables: Vec<Observable>,
     /// Replicas per fixed point (and of the largest exact point).
     pub replicas: usize,
+    /// The exact points' `exact.rtol` when it differs from the scene's (the reference's).
+    pub exact_rtol: Option<f64>,
     pub reference: Reference,
     pub points: Vec<Point>,
 }
@@ -580,13 +615,36 @@ mod tests {
     fn bad_plans_name_their_argument() {
         let s = crate::test_scenes::fig1();
         for dts in [vec![], vec![-1.0], vec![0.0], vec![f64::NAN], vec![f64::INFINITY]] {
-            let e = Plan::new(&s, dts, 4, 4).unwrap_err();
+            let e = Plan::new(&s, dts, 4, 4, None).unwrap_err();
             assert!(e.0.starts_with("--dts"), "{e}");
         }
-        assert!(Plan::new(&s, vec![0.5], 1, 4).unwrap_err().0.starts_with("--replicas"));
-        assert!(Plan::new(&s, vec![0.5], 4, 1).unwrap_err().0.starts_with("--ref-replicas"));
+        assert!(Plan::new(&s, vec![0.5], 1, 4, None).unwrap_err().0.starts_with("--replicas"));
+        assert!(Plan::new(&s, vec![0.5], 4, 1, None).unwrap_err().0.starts_with("--ref-replicas"));
         // 1e-5 over 150 time units is 1.5e7 steps of 300 junctions: 4.5e9 draws per replica.
-        assert!(Plan::new(&s, vec![1e-5], 4, 4).unwrap_err().0.starts_with("--replicas"));
+        assert!(Plan::new(&s, vec![1e-5], 4, 4, None).unwrap_err().0.starts_with("--replicas"));
+    }
+
+    /// `--exact-rtol` reaches the exact points only: the reference keeps the scene's
+    /// tolerance, the arguments (the journal's record) name it, a value equal to the
+    /// scene's is no change, and a bad one names the flag and the field.
+    #[test]
+    fn exact_rtol_sets_the_exact_points_only() {
+        let s = crate::test_scenes::fig1();
+        let p = Plan::new(&s, vec![0.5], 2, 3, Some(1e-6)).unwrap();
+        let rtol =
+            |role: Role| -> Vec<f64> { p.jobs.iter().filter(|j| j.role == role).map(|j| j.scene.exact.rtol).collect() };
+        assert!(rtol(Role::Reference).iter().all(|&r| r == s.exact.rtol), "{:?}", rtol(Role::Reference));
+        assert_eq!(rtol(Role::Exact), vec![1e-6; 3]);
+        assert!(rtol(Role::Fixed).iter().all(|&r| r == s.exact.rtol));
+        assert!(p.arguments().ends_with(" --exact-rtol 1e-6"), "{}", p.arguments());
+        let same = Plan::new(&s, vec![0.5], 2, 3, Some(s.exact.rtol)).unwrap();
+        assert_eq!(same.exact_rtol, None);
+        assert_eq!(same.arguments(), Plan::new(&s, vec![0.5], 2, 3, None).unwrap().arguments());
+        for bad in [0.0, -1e-6, f64::NAN, 2.0] {
+            let e = Plan::new(&s, vec![0.5], 2, 3, Some(bad)).unwrap_err().0;
+            assert!(e.starts_with("--exact-rtol: ") && e.contains("exact.rtol"), "{bad}: {e}");
+            assert!(!e.contains('\n'), "{e}");
+        }
     }
 
     #[test]
@@ -594,7 +652,7 @@ mod tests {
         // Fig. 1, every junction attached: w2 = (150 + 30)/75 = 2.4, c = 1; at dt = 1 the
         // semi-implicit Euler matrix is [[-1.4, 0], [-2.4, 0]], radius 1.4; at dt = 0.5,
         // a complex pair of modulus sqrt(det) = sqrt(1 - 0.5).
-        let p = Plan::new(&crate::test_scenes::fig1(), vec![1.0, 0.5], 2, 2).unwrap();
+        let p = Plan::new(&crate::test_scenes::fig1(), vec![1.0, 0.5], 2, 2, None).unwrap();
         assert!((p.plate_growth[0] - 1.4).abs() < 1e-12);
         assert!((p.plate_growth[1] - 0.5f64.sqrt()).abs() < 1e-12);
     }

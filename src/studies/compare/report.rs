@@ -319,7 +319,7 @@ pub fn markdown(study: &Study, command: &str) -> String {
     let _ = writeln!(
         md,
         "Scene: N = {}, {:?} bonds, {:?} force law, V = {}, window [{}, {}]. Reference: exact engine, {} replicas \
-         ({} s). Fixed-step points: {} replicas each. Exact points: 1 to {} replicas of the same window. Error = \
+         ({} s). Fixed-step points: {} replicas each. Exact points: 1 to {} replicas of the same window{}. Error = \
          estimate - reference, with its 95 % interval; floor = its standard deviation from sampling alone. Wall \
          times are summed over replicas (one core).\n",
         j.n,
@@ -331,7 +331,16 @@ pub fn markdown(study: &Study, command: &str) -> String {
         study.reference.replicas,
         sig(study.reference.wall_seconds, 3),
         study.replicas,
-        study.replicas
+        study.replicas,
+        match study.exact_rtol {
+            Some(r) => format!(
+                ", at exact.rtol = {} (the reference at the scene's {}; their errors include what the looser \
+                 tolerance costs)",
+                ryu::Buffer::new().format(r),
+                ryu::Buffer::new().format(s.exact.rtol)
+            ),
+            None => String::new(),
+        }
     );
     let _ = writeln!(md, "## Reading\n");
     for l in reading(study) {
