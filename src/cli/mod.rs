@@ -65,7 +65,7 @@ pub enum Command {
         /// Random seed (overrides run.seed).
         #[arg(long)]
         seed: Option<u64>,
-        /// Output directory (default: out/<scene file stem>/).
+        /// Output directory (default: `out/<scene file stem>/`).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Write checkpoint.bin into the output directory at most every SECONDS of wall time, so that a killed run can be resumed.

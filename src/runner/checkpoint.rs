@@ -1,4 +1,4 @@
-//! Checkpoints of a run: writing and removing them ([`super::resume`] reads them).
+//! Checkpoints of a run: writing and removing them ([`super::resume()`] reads them).
 //!
 //! A checkpoint ([`crate::output::checkpoint`] for the file format) is taken at an
 //! output-grid stop, where the engine is between two advances. It records

@@ -17,7 +17,7 @@
 //!
 //! Long runs (docs/runs.md): outputs are streamed to `NAME.part` and flushed at line
 //! boundaries at least every [`FLUSH_EVERY`]; with [`RunOptions::checkpoint_every`] the
-//! runner writes `checkpoint.bin` at output-grid stops, from which [`resume`] continues a
+//! runner writes `checkpoint.bin` at output-grid stops, from which [`resume()`] continues a
 //! killed run to the same bytes.
 
 pub mod checkpoint;

@@ -1,6 +1,6 @@
-//! What a run is ([`RunPlan`]: its scene, where it writes, [`RunOptions`]) and where it starts
-//! ([`RunStart`]: `t = 0` or a checkpoint): plain data shared by [`super::run`],
-//! [`super::control`], [`super::checkpoint`] and [`super::resume`].
+//! What a run is (`RunPlan`: its scene, where it writes, [`RunOptions`]) and where it starts
+//! (`RunStart`: `t = 0` or a checkpoint): plain data shared by [`super::run`],
+//! [`super::control`], [`super::checkpoint`] and [`super::resume`](mod@super::resume).
 
 use std::path::Path;
 
@@ -12,17 +12,17 @@ use crate::observe::stats::RuptureForces;
 use crate::scene::Scene;
 
 /// How a run is carried out, beyond its scene. The default (no checkpoints, no progress,
-/// no stop flag) is [`run_scene`]'s.
+/// no stop flag) is [`run_scene`](super::run_scene)'s.
 #[derive(Clone, Debug, Default)]
 pub struct RunOptions {
     /// Write a checkpoint at output-grid stops, at most every this many seconds of wall
     /// time (> 0). Needs an output directory.
     pub checkpoint_every: Option<f64>,
     /// Show progress on stderr when stderr is a terminal and the run lasts more than
-    /// [`progress::SHOW_AFTER`].
+    /// [`SHOW_AFTER`](super::progress::SHOW_AFTER).
     pub progress: bool,
     /// Stop at the next grid stop once this flag is set: the run returns
-    /// [`RunError::Stopped`], after writing a checkpoint into the output directory (if it
+    /// [`RunError::Stopped`](super::RunError::Stopped), after writing a checkpoint into the output directory (if it
     /// has one) from which `stickslip resume` continues it.
     pub stop: Option<StopFlag>,
 }

@@ -5,7 +5,7 @@
 //!   (`stickslip compare`).
 //! - [`seeds`]: how each run's seed is derived from the scene's seed (one mixer for all).
 //! - [`stats`]: statistics across replicas (means, spreads, Student-t intervals).
-//! - [`format`]: numbers as text for reports.
+//! - [`format`](mod@format): numbers as text for reports.
 //! - [`journal`]: the journal of finished runs a study keeps in its output directory, and
 //!   [`execute`]: running the runs it does not hold yet, stoppable.
 //!

@@ -1,5 +1,5 @@
 //! Junction force laws (docs/model.md, "Equations", item 3): one file per law, each a type
-//! implementing [`ForceLaw`], and the one table of laws below ([`force_laws!`]): adding a law
+//! implementing [`ForceLaw`], and the one table of laws below (`force_laws!`): adding a law
 //! is its file plus its line in the table (docs/engines.md, "Adding a force law").
 //!
 //! A law states how the exact engine moves the plate under it ([`ForceLaw::Exact`]): the

@@ -2,7 +2,7 @@
 //! [`ExactSeries`](super::series::ExactSeries), [`ExactDirect`](super::ExactDirect)): each
 //! is an [`Exact`] engine, the [`Core`] it shares with the others plus a [`Kernel`] of its own.
 //!
-//! - [`Core`]: the junctions ([`Bags`](super::bags::Bags)), the channel clocks
+//! - [`Core`]: the junctions ([`super::bags::Bags`]), the channel clocks
 //!   ([`super::clocks`]), the frame ([`super::frame`]), the counters, the formation rate and
 //!   the generator;
 //! - [`junctions`]: formation, rupture, re-attachment, the frame's re-base

@@ -140,7 +140,7 @@ fn quad<const L: usize>(q: &[f64; ORDER + 1]) -> (f64, f64) {
 impl TimeSeries {
     /// The coefficients from `u(0) = u0` and `u'(0) = w0` (ignored when `M = 0`), up to the
     /// first order `n >= MIN_ORDER` at which the last two terms are within `tol` over `h`
-    /// ([`TimeSeries::within`]: the step `h` to the target then needs no cut), or `ORDER`.
+    /// (`TimeSeries::within`: the step `h` to the target then needs no cut), or `ORDER`.
     ///
     /// Compiled for AVX2 where the processor has it (a run-time check): its three-operand
     /// instructions save the register copies of SSE2's two-operand ones, and the operations
