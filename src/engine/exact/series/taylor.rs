@@ -8,7 +8,7 @@
 //! `M u'' + eta (u' + V) + S(y) + K u = 0`, `y(s) = y0 + e(s)`, `e(s) = u(s) - u(0) + V s`,
 //! gives the coefficients of `u(s) = sum_k u_k s^k` one after another:
 //!
-//! - `u_(k+2) = -(eta (k+1) u_(k+1) + eta V [k = 0] + C_k + K u_k) / (M (k+1) (k+2))`;
+//! - `u_(k+2) = -(eta V [k = 0] + C_k + K u_k + eta (k+1) u_(k+1)) / (M (k+1) (k+2))`;
 //! - overdamped (`M = 0`): `u_(k+1) = -(eta V [k = 0] + C_k + K u_k) / (eta (k+1))`;
 //!
 //! with `C_k = [S(y(s))]_k = sum_(j=1..k) t_j [e^j]_k` (`C_0 = t_0`), `[e^j]_k =
@@ -101,11 +101,13 @@ pub struct Plant<'a> {
 type Powers = [[f64; ORDER]; ORDER];
 
 /// Row `K` of the powers, `[e^j]_K = sum_(i=1..K-j+1) [e]_i [e^(j-1)]_(K-i)` for `2 <= j
-/// <= K` (rows below `K` and `[e]_1..[e]_K` known), and `C_K = sum_(j=1..K) t_j [e^j]_K`.
+/// <= K` (rows below `K` and `[e]_1..[e]_(K-1)` known: none of it needs the newest
+/// coefficient), and `sum_(j=2..K) t_j [e^j]_K`, the part of `C_K = sum_(j=1..K) t_j
+/// [e^j]_K` without `t_1 [e]_K` (the caller adds that last, off the other terms' chain).
 #[inline(always)]
 fn row<const K: usize>(pw: &mut Powers, t: &[f64; ORDER + 1]) -> f64 {
-    // Two partial sums of C_K: half the additions' latency chain.
-    let (mut c0, mut c1) = (t[1] * pw[1][K], 0.0);
+    // Two partial sums: half the additions' latency chain.
+    let (mut c0, mut c1) = (0.0, 0.0);
     for j in 2..K + 1 {
         let mut acc = 0.0;
         for i in 1..K - j + 2 {
@@ -208,18 +210,21 @@ impl TimeSeries {
                 if K > 0 {
                     hn1 *= h;
                 }
-                let c = if K == 0 {
-                    t[0]
+                // The sum `drive + C_K + K u_K (+ eta (K+1) u_(K+1))` with the terms in the
+                // order they become known: the newest coefficient's come last, so that each
+                // stage waits on the one before for a multiplication and an addition only.
+                let older = if K == 0 {
+                    p.eta * p.v + t[0] + p.k * u[0]
                 } else {
-                    pw[1][K] = if K == 1 { u[1] + p.v } else { u[K] };
-                    row::<K>(&mut pw, t)
+                    let e = if K == 1 { u[1] + p.v } else { u[K] };
+                    pw[1][K] = e;
+                    (row::<K>(&mut pw, t) + t[1] * e) + p.k * u[K]
                 };
-                let drive = if K == 0 { p.eta * p.v } else { 0.0 };
                 let kf = K as f64;
                 u[n] = if DYNAMIC {
-                    -(p.eta * (kf + 1.0) * u[K + 1] + drive + c + p.k * u[K]) * (inv * RECIP2[K])
+                    -(older + p.eta * (kf + 1.0) * u[K + 1]) * (inv * RECIP2[K])
                 } else {
-                    -(drive + c + p.k * u[K]) * (inv * RECIP1[K])
+                    -older * (inv * RECIP1[K])
                 };
                 if n >= MIN_ORDER && Self::within(&u, n, h, hn1, hw, DYNAMIC, tol) {
                     return TimeSeries { u, order: n, converged: true };
@@ -533,7 +538,9 @@ mod tests {
     }
 
     /// The recurrence as it was before its stages were unrolled (a triangle with computed
-    /// indices, dispatched per stage), kept verbatim as the oracle of bit-identity.
+    /// indices, dispatched per stage), kept as the oracle of bit-identity: verbatim but for
+    /// the order of each stage's sum, which follows the unrolled form's (the newest
+    /// coefficient's terms last).
     mod oracle {
         use super::super::{MIN_ORDER, ORDER, Plant, RECIP1, RECIP2, TimeSeries, Tol};
 
@@ -609,8 +616,8 @@ mod tests {
         /// `power_row` for a fixed `K` (`1 <= K < ORDER`).
         #[inline(always)]
         fn row<const K: usize>(pw: &mut Powers, t: &[f64; ORDER + 1]) -> f64 {
-            // Two partial sums of C_K: half the additions' latency chain.
-            let (mut c0, mut c1) = (t[1] * pw[at(1, K)], 0.0);
+            // Two partial sums: half the additions' latency chain (without `t_1 [e]_K`).
+            let (mut c0, mut c1) = (0.0, 0.0);
             for j in 2..K + 1 {
                 let mut acc = 0.0;
                 for i in 1..K - j + 2 {
@@ -653,18 +660,18 @@ mod tests {
                 for n in first..last + 1 {
                     // u_n from C_k, k = n - 2 (dynamic) or n - 1 (overdamped).
                     let k = n - first;
-                    let c = if k == 0 {
-                        t[0]
+                    let older = if k == 0 {
+                        p.eta * p.v + t[0] + p.k * u[0]
                     } else {
-                        pw.set(at(1, k), if k == 1 { u[1] + p.v } else { u[k] });
-                        power_row(k, &mut pw, t)
+                        let e = if k == 1 { u[1] + p.v } else { u[k] };
+                        pw.set(at(1, k), e);
+                        (power_row(k, &mut pw, t) + t[1] * e) + p.k * u[k]
                     };
-                    let drive = if k == 0 { p.eta * p.v } else { 0.0 };
                     let kf = k as f64;
                     u[n] = if dynamic {
-                        -(p.eta * (kf + 1.0) * u[k + 1] + drive + c + p.k * u[k]) * (inv * RECIP2[k])
+                        -(older + p.eta * (kf + 1.0) * u[k + 1]) * (inv * RECIP2[k])
                     } else {
-                        -(drive + c + p.k * u[k]) * (inv * RECIP1[k])
+                        -older * (inv * RECIP1[k])
                     };
                     let hn1 = hn;
                     hn *= h;
