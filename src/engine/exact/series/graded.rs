@@ -23,7 +23,8 @@
 //! removal subtracts exactly the coefficients that its `add` or the last re-base added: the
 //! series stays `A = sum_i D_i` with no residue.
 //!
-//! **Re-base** ([`direct_sums`]). Four junctions at a time through `phi_taylor4`, each lane
+//! **Re-base** ([`direct_sums`]). Eight junctions at a time (two batches of four, added in
+//! order) through `phi_taylor_lanes`, each lane
 //! to its own order (the four run to the highest of their orders, the terms beyond a lane's
 //! own added as zeros; sorting the junctions by order first would save some of those
 //! terms, but the sort cost more than it saved at a few hundred junctions). Sums per lane
@@ -33,7 +34,7 @@
 
 use std::sync::OnceLock;
 
-use super::sum::{BLOCK, LANES, PMAX, Q_D, dd_add, dd_add_all, phi_taylor, phi_taylor4, tails_at, two_sum};
+use super::sum::{BLOCK, LANES, PMAX, Q_D, dd_add, dd_add_all, phi_taylor, phi_taylor_lanes, tails_at, two_sum};
 use crate::physics::Tilted;
 
 /// `R/l0` beyond which no search is made (an order that needs more keeps the next one).
@@ -170,7 +171,7 @@ unsafe fn direct_sums_avx2(e: &[f64], base_off: f64, g: &Grades, law: &Tilted) -
     direct_sums_in(e, base_off, g, law)
 }
 
-/// Whether `phi_taylor4` takes `x` (module doc of [`super::sum`]: `max(|x|, l0)` in
+/// Whether `phi_taylor_lanes` takes `x` (module doc of [`super::sum`]: `max(|x|, l0)` in
 /// `[1e-150, 1e150]`).
 #[inline(always)]
 fn in_range(x: f64, l0: f64) -> bool {
@@ -197,18 +198,22 @@ pub(super) fn direct_sums_in(e: &[f64], base_off: f64, g: &Grades, law: &Tilted)
     };
     let (mut xh, mut xl) = ([0.0; LANES], [0.0; LANES]);
     let mut spread = [0.0; LANES];
-    let batches = e.chunks_exact(LANES);
-    let tail = batches.remainder();
-    let mut in_block = 0;
-    for e in batches {
+    // Batch `b` of `LANES` junctions: its offsets, orders, and whether `phi_taylor_lanes`
+    // takes them all.
+    let batch = |e: &[f64]| -> ([f64; LANES], [usize; LANES], bool) {
         let mut x = [0.0; LANES];
         let mut n = [0; LANES];
         for l in 0..LANES {
             x[l] = base_off - e[l];
             n[l] = g.order_at(x[l]) + 1;
         }
-        if x.iter().all(|&v| in_range(v, law.l0)) {
-            phi_taylor4(&law, x, n, &mut acc);
+        let ok = x.iter().all(|&v| in_range(v, law.l0));
+        (x, n, ok)
+    };
+    // One batch's terms, into the block sums.
+    let one = |acc: &mut [[f64; LANES]; PMAX], x: [f64; LANES], n: [usize; LANES], ok: bool| {
+        if ok {
+            phi_taylor_lanes(&law, x, n, acc);
         } else {
             let mut c = [0.0; PMAX];
             for (l, (&xv, &nl)) in x.iter().zip(&n).enumerate() {
@@ -218,17 +223,47 @@ pub(super) fn direct_sums_in(e: &[f64], base_off: f64, g: &Grades, law: &Tilted)
                 }
             }
         }
+    };
+    let mut sums = |x: [f64; LANES]| {
         for l in 0..LANES {
             let (s, err) = two_sum(xh[l], x[l]);
             xh[l] = s;
             xl[l] += err;
             spread[l] += x[l].abs();
         }
-        in_block += 1;
+    };
+    // Two batches at a time (the terms added batch after batch, as one at a time would: the
+    // same sums bit for bit), so that two junctions' chains of dependent steps share a
+    // vector of each kind; `BLOCK` is even, so a pair never straddles a fold.
+    const { assert!(BLOCK % 2 == 0) };
+    let pairs = e.chunks_exact(2 * LANES);
+    let rest = pairs.remainder();
+    let mut in_block = 0;
+    for e in pairs {
+        let (xa, na, oka) = batch(&e[..LANES]);
+        let (xb, nb, okb) = batch(&e[LANES..]);
+        if oka && okb {
+            let x: [f64; 2 * LANES] = std::array::from_fn(|l| if l < LANES { xa[l] } else { xb[l - LANES] });
+            let n: [usize; 2 * LANES] = std::array::from_fn(|l| if l < LANES { na[l] } else { nb[l - LANES] });
+            phi_taylor_lanes(&law, x, n, &mut acc);
+        } else {
+            one(&mut acc, xa, na, oka);
+            one(&mut acc, xb, nb, okb);
+        }
+        sums(xa);
+        sums(xb);
+        in_block += 2;
         if in_block == BLOCK {
             fold(&mut acc, &mut a, &mut al);
             in_block = 0;
         }
+    }
+    let batches = rest.chunks_exact(LANES);
+    let tail = batches.remainder();
+    for e in batches {
+        let (x, n, ok) = batch(e);
+        one(&mut acc, x, n, ok);
+        sums(x);
     }
     fold(&mut acc, &mut a, &mut al);
     let mut x0 = [0.0; 2];

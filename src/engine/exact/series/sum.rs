@@ -117,10 +117,10 @@
 //!   cancels exactly in the double-double accumulators (the high parts' `TwoSum` is exact;
 //!   only the low parts' own sums round, `O(eps^2 |A|)`).
 //! - *Re-base.* `rebase(y0)` rebuilds `A = sum_i D_i(y0)`, `X0 = sum_i x_i` and the spread
-//!   `sum_i |x_i|` from the offsets, O(N p): four junctions at a time through `phi_taylor4`
+//!   `sum_i |x_i|` from the offsets, O(N p): eight junctions at a time through `phi_taylor_lanes`
 //!   (`phi_taylor` on a structure of arrays, one pass, each lane to its own order, compiled
 //!   to packed SSE2 operations on baseline x86-64 and to AVX2 ones where the processor has
-//!   it; bit for bit `phi_taylor`'s values, unit tests `phi_taylor4_is_phi_taylor` and
+//!   it; bit for bit `phi_taylor`'s values, unit tests `phi_taylor_lanes_is_phi_taylor` and
 //!   `direct_sums_are_the_same_in_every_vector_width`), in `graded.rs`.
 //! - *Radius and order.* Only the junctions' own expansions are left, so `rho = l0/4`
 //!   (`q_d = rho/l0 = 1/4`: twice the bins' radius, half the re-bases) and `p` is the
@@ -289,22 +289,30 @@ pub fn phi_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
     }
 }
 
-/// `acc[k][l] += phi_k(x[l])` for `k < n[l]` and the four lanes `l`: [`phi_taylor`] on four
-/// points at once (structure of arrays, so that each step is one operation on a vector of
-/// lanes: two SSE2 instructions on baseline x86-64, one with AVX2), bit for bit the same
-/// values (the same operations in the same order, none fused). Every lane runs to the largest
-/// `n[l]`; a lane's terms beyond its own `n[l]` are added as `+0`, which leaves its sums
-/// unchanged (they start at `+0` and never become `-0`). Every `max(|x[l]|, l0)` must lie in
-/// `[1e-150, 1e150]` (the caller checks; outside, [`phi_taylor`] takes its `hypot` branch).
+/// [`phi_taylor`] on `W` points at once, a multiple of `LANES` (structure of arrays, so that
+/// each step is one operation on a vector of lanes): `acc[k][l % LANES] += phi_k(x[l])` for
+/// `k < n[l]`, the lanes added in order of `l` (so `W = 2 LANES` adds two batches in the
+/// order two calls with `W = LANES` would, bit for bit, with twice the independent work in
+/// flight to cover each lane's chain of dependent steps). Bit for bit [`phi_taylor`]'s
+/// values (the same operations in the same order, none fused). Every lane runs to the
+/// largest `n[l]`; a lane's terms beyond its own `n[l]` are added as `+0`, which leaves its
+/// sums unchanged (they start at `+0` and never become `-0`). Every `max(|x[l]|, l0)` must
+/// lie in `[1e-150, 1e150]` (the caller checks; outside, [`phi_taylor`] takes its `hypot`
+/// branch).
 #[inline(always)]
-pub(super) fn phi_taylor4(law: &Tilted, x: [f64; LANES], n: [usize; LANES], acc: &mut [[f64; LANES]; PMAX]) {
+pub(super) fn phi_taylor_lanes<const W: usize>(
+    law: &Tilted,
+    x: [f64; W],
+    n: [usize; W],
+    acc: &mut [[f64; LANES]; PMAX],
+) {
     let top = n.iter().copied().max().unwrap_or(0);
     debug_assert!(n.iter().all(|v| (1..=PMAX).contains(v)));
     // Whether coefficient `k` is kept, per lane, as a comparison of floats (one vector compare).
-    let last = [n[0] as f64, n[1] as f64, n[2] as f64, n[3] as f64];
+    let last: [f64; W] = std::array::from_fn(|l| n[l] as f64);
     let l0 = law.l0;
-    let (mut inv_u, mut inv_r, mut s, mut t) = ([0.0; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
-    for l in 0..LANES {
+    let (mut inv_u, mut inv_r, mut s, mut t) = ([0.0; W], [0.0; W], [0.0; W], [0.0; W]);
+    for l in 0..W {
         let u = x[l] * x[l] + l0 * l0;
         inv_u[l] = 1.0 / u;
         inv_r[l] = u.sqrt() * inv_u[l];
@@ -312,18 +320,18 @@ pub(super) fn phi_taylor4(law: &Tilted, x: [f64; LANES], n: [usize; LANES], acc:
         t[l] = -x[l] * inv_r[l];
     }
     let a = -law.kappa * l0;
-    for l in 0..LANES {
-        acc[0][l] += -a * t[l];
+    for l in 0..W {
+        acc[0][l % LANES] += -a * t[l];
     }
     // One pass, without `phi_taylor`'s array of `P_k`: at odd `k`, `phi_k` needs `P_(k-1)`
     // and `Q_k = P_k / t`, `phi_(k+1)` needs `Q_k` and `P_(k+1)`; then the two chains step
     // to `P_(k+3)` and `Q_(k+2)`. The same operations as `phi_taylor`'s two loops.
-    let mut pm = [1.0; LANES]; // P_(k-1)
-    let mut pp = [0.0; LANES]; // P_(k+1)
-    let mut qm = [0.0; LANES]; // Q_(k-2)
-    let mut qc = [1.0; LANES]; // Q_k
-    let (mut so, mut se) = ([0.0; LANES], [0.0; LANES]);
-    for l in 0..LANES {
+    let mut pm = [1.0; W]; // P_(k-1)
+    let mut pp = [0.0; W]; // P_(k+1)
+    let mut qm = [0.0; W]; // Q_(k-2)
+    let mut qc = [1.0; W]; // Q_k
+    let (mut so, mut se) = ([0.0; W], [0.0; W]);
+    for l in 0..W {
         pp[l] = 1.5 * s[l] - 0.5;
         so[l] = a * inv_r[l];
         se[l] = a * inv_u[l];
@@ -331,34 +339,34 @@ pub(super) fn phi_taylor4(law: &Tilted, x: [f64; LANES], n: [usize; LANES], acc:
     let mut k = 1;
     while k < top {
         let kf = k as f64;
-        for l in 0..LANES {
+        for l in 0..W {
             let v = so[l] * (pm[l] - s[l] * qc[l]);
-            acc[k][l] += if kf < last[l] { v } else { 0.0 };
+            acc[k][l % LANES] += if kf < last[l] { v } else { 0.0 };
         }
         if k + 1 == top {
             break;
         }
-        for l in 0..LANES {
+        for l in 0..W {
             let v = se[l] * (t[l] * (qc[l] - pp[l]));
-            acc[k + 1][l] += if kf + 1.0 < last[l] { v } else { 0.0 };
+            acc[k + 1][l % LANES] += if kf + 1.0 < last[l] { v } else { 0.0 };
         }
         if k + 2 >= top {
             break;
         }
         let [ae, be, ge] = LEGENDRE2[k + 1];
-        let (mut pn, mut qn) = ([0.0; LANES], [0.0; LANES]);
-        for l in 0..LANES {
+        let (mut pn, mut qn) = ([0.0; W], [0.0; W]);
+        for l in 0..W {
             so[l] *= inv_u[l];
             se[l] *= inv_u[l];
             pn[l] = (ae * s[l] - be) * pp[l] - ge * pm[l];
         }
         if k == 1 {
-            for l in 0..LANES {
+            for l in 0..W {
                 qn[l] = 2.5 * s[l] - 1.5;
             }
         } else {
             let [ao, bo, go] = LEGENDRE2[k];
-            for l in 0..LANES {
+            for l in 0..W {
                 qn[l] = (ao * s[l] - bo) * qc[l] - go * qm[l];
             }
         }
@@ -1555,11 +1563,11 @@ mod tests {
         }
     }
 
-    /// `phi_taylor4` gives `phi_taylor`'s values bit for bit (the same operations), for
+    /// `phi_taylor_lanes` gives `phi_taylor`'s values bit for bit (the same operations), for
     /// every number of coefficients, the same in every lane or not, at points over twelve decades of `|x|/l0` and both
     /// signs, several laws.
     #[test]
-    fn phi_taylor4_is_phi_taylor() {
+    fn phi_taylor_lanes_is_phi_taylor() {
         let mut xs = vec![0.0, -0.0, 1e-300];
         for i in 0..=120 {
             let r = 10f64.powf(-6.0 + 12.0 * i as f64 / 120.0) * (1.0 + 0.017 * i as f64);
@@ -1573,7 +1581,7 @@ mod tests {
                     // Every lane to `n`, or the lanes to different counts up to `n`.
                     let ns = if i % 2 == 0 { [n; LANES] } else { [n, 1.max(n / 2), 1.max(n / 3), n.min(2)] };
                     let mut acc = [[0.0; LANES]; PMAX];
-                    phi_taylor4(&law, x, ns, &mut acc);
+                    phi_taylor_lanes(&law, x, ns, &mut acc);
                     for (l, &xl) in x.iter().enumerate() {
                         let n = ns[l];
                         let mut c = [0.0; PMAX];
@@ -1583,6 +1591,24 @@ mod tests {
                             assert!(acc[k][l] == c[k], "n = {n}, x = {xl}, k = {k}: {} vs {}", acc[k][l], c[k]);
                         }
                     }
+                }
+                // Eight lanes add the same sums as two calls of four, bit for bit.
+                for (i, chunk) in xs.chunks_exact(2 * LANES).enumerate() {
+                    let x: [f64; 2 * LANES] = std::array::from_fn(|l| chunk[l] * l0);
+                    let ns: [usize; 2 * LANES] =
+                        std::array::from_fn(|l| if i % 2 == 0 { n } else { 1.max(n / (l + 1)) });
+                    let (mut two, mut eight) = ([[0.0; LANES]; PMAX], [[0.0; LANES]; PMAX]);
+                    two[3][1] = 0.25;
+                    eight[3][1] = 0.25;
+                    let (xa, xb): ([f64; LANES], [f64; LANES]) =
+                        (std::array::from_fn(|l| x[l]), std::array::from_fn(|l| x[l + LANES]));
+                    let (na, nb): ([usize; LANES], [usize; LANES]) =
+                        (std::array::from_fn(|l| ns[l]), std::array::from_fn(|l| ns[l + LANES]));
+                    phi_taylor_lanes(&law, xa, na, &mut two);
+                    phi_taylor_lanes(&law, xb, nb, &mut two);
+                    phi_taylor_lanes(&law, x, ns, &mut eight);
+                    let bits = |a: &[[f64; LANES]; PMAX]| a.map(|r| r.map(f64::to_bits));
+                    assert_eq!(bits(&two), bits(&eight), "n = {n}, batch {i}");
                 }
             }
         }
@@ -1653,7 +1679,7 @@ mod tests {
     }
 
     /// Direct mode's re-base (four junctions at a time, blocks folded into the double-double
-    /// series, a tail of fewer than four, and one batch with a point outside `phi_taylor4`'s
+    /// series, a tail of fewer than four, and one batch with a point outside `phi_taylor_lanes`'
     /// range) against the same series built junction by junction (`add`, double-double) at
     /// the same base: coefficients within the two round-off allowances, `X0` and the spread
     /// to a few ulps.
