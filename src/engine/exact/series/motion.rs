@@ -476,8 +476,12 @@ impl RosenbrockPlate {
                 ts = TimeSeries::of(&plant, u0, w0, full, tol);
             }
             self.degree_hint = ts.order + 1 - first;
-            if let Some(&bad) = ts.u[..=ts.order].iter().find(|c| !c.is_finite()) {
-                return Err(EngineError::NonFinite { t: ctx.frame.time(tau), quantity: "plate series", value: bad });
+            // Every coefficient enters the last one through a product or a sum (the
+            // recurrence's `eta (K+1) u_(K+1)` and `K u_K` terms are there even when `eta`
+            // or `K` is 0: `0 inf` is NaN), so a NaN or an infinity anywhere shows in it.
+            let last = ts.u[ts.order];
+            if !last.is_finite() {
+                return Err(EngineError::NonFinite { t: ctx.frame.time(tau), quantity: "plate series", value: last });
             }
             let mut h = if ts.converged { full } else { ts.step_within(full, tol, self.dynamic) };
             let b1 = ts.u[1] + p.v;

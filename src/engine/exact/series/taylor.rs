@@ -478,6 +478,33 @@ mod tests {
         }
     }
 
+    /// A NaN or an infinity in the state or in a force coefficient the series uses shows in
+    /// its last coefficient (what the plate step checks), whatever the plant's zeros.
+    #[test]
+    fn non_finite_inputs_reach_the_last_coefficient() {
+        let tol = Tol { u: 1e-12, w: 1e-12 };
+        for (mass, eta, k) in [(75.0, 75.0, 150.0), (0.0, 75.0, 150.0), (1.0, 0.0, 0.0), (0.0, 2.0, 0.0)] {
+            for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                for at in 0..5 {
+                    let mut force = [0.0; ORDER + 1];
+                    force[..3].copy_from_slice(&[1.0, 3.0, -0.5]);
+                    let (mut u0, mut w0) = (0.01, -0.2);
+                    match at {
+                        0 => u0 = bad,
+                        1 => w0 = bad,
+                        j => force[j - 2] = bad,
+                    }
+                    if at == 1 && mass == 0.0 {
+                        continue; // the overdamped plate has no velocity in its state
+                    }
+                    let p = Plant { mass, eta, k, v: 0.5, force: &force, degree: ORDER };
+                    let ts = TimeSeries::of(&p, u0, w0, 0.05, tol);
+                    assert!(!ts.u[ts.order].is_finite(), "M {mass}, eta {eta}, K {k}, {bad} at {at}: {:?}", ts.u);
+                }
+            }
+        }
+    }
+
     /// [`quad`] before its loops were exchanged: each row summed in turn.
     fn quad_rowwise<const L: usize>(q: &[f64; ORDER + 1]) -> (f64, f64) {
         let (mut i1, mut i2) = (0.0, 0.0);
