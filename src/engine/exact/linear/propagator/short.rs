@@ -38,6 +38,7 @@ use super::{Integrals, RECIP, TAIL, hilbert_fixed};
 pub(super) const DEGREE: usize = 7;
 /// Coefficients `c_0 .. c_D`.
 const LEN: usize = DEGREE + 1;
+const _: () = assert!(DEGREE == 7, "Short::state sums seven coefficients (estrin6)");
 /// Largest `rho tau` tried: beyond it `(rho tau)^(D-1)` alone exceeds `2^-56` by far.
 const RHO_TAU_MAX: f64 = 1.0 / 256.0;
 
@@ -94,7 +95,9 @@ impl Short {
     /// `None` otherwise, and for a non-finite state or `tau`.
     #[inline(always)]
     pub(super) fn coefficients(&self, tau: f64, v0: f64, f0: f64, b: f64) -> Option<[f64; LEN]> {
-        if !(tau <= self.h_max) {
+        // NaN is not within.
+        let within = tau <= self.h_max;
+        if !within {
             return None;
         }
         let mut c = [0.0; LEN];
