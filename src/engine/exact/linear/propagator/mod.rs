@@ -40,7 +40,11 @@
 //! See `docs/propagator.md` for the derivations, the integrals, the proof of
 //! [`Trajectory::bounds`] and the measured accuracy.
 
+mod short;
+
 use serde::{Deserialize, Serialize};
+
+use short::Short;
 
 /// Largest `rho tau` handled by the Taylor series (`rho` = largest root modulus).
 const TAYLOR_MAX: f64 = 1.0;
@@ -102,9 +106,40 @@ pub enum Branch {
 
 /// Coefficients of `M y'' + eta y' + k y = a + b tau`, with the solution branch chosen once.
 ///
-/// Fields not used by the branch are zero.
+/// Fields not used by the branch are zero. Written and read as its fields without the
+/// short path's constants, which are derived again from `M`, `eta`, `k`, `rho` when read.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(from = "PlateFields", into = "PlateFields")]
 pub struct LinearPlate {
+    fields: PlateFields,
+    /// The short path's constants ([`short`]).
+    short: Short,
+}
+
+impl std::ops::Deref for LinearPlate {
+    type Target = PlateFields;
+    #[inline(always)]
+    fn deref(&self) -> &PlateFields {
+        &self.fields
+    }
+}
+
+impl From<PlateFields> for LinearPlate {
+    fn from(fields: PlateFields) -> Self {
+        let short = Short::new(fields.mass, fields.eta, fields.k, fields.rho);
+        LinearPlate { fields, short }
+    }
+}
+
+impl From<LinearPlate> for PlateFields {
+    fn from(p: LinearPlate) -> Self {
+        p.fields
+    }
+}
+
+/// The classified plate as written: [`LinearPlate`] without the short path's constants.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlateFields {
     mass: f64,
     eta: f64,
     k: f64,
@@ -256,7 +291,14 @@ impl LinearPlate {
             "LinearPlate: mass, eta, k must be finite and >= 0 (got {mass}, {eta}, {k})"
         );
         assert!(mass > 0.0 || eta > 0.0, "LinearPlate: mass and eta are both zero");
-        let mut p = LinearPlate {
+        LinearPlate::from(PlateFields::classify(mass, eta, k))
+    }
+}
+
+impl PlateFields {
+    /// The classification of a valid plate (checked by [`LinearPlate::new`]).
+    fn classify(mass: f64, eta: f64, k: f64) -> PlateFields {
+        let mut p = PlateFields {
             mass,
             eta,
             k,
@@ -312,7 +354,9 @@ impl LinearPlate {
         }
         p
     }
+}
 
+impl LinearPlate {
     /// The branch chosen for this plate.
     pub fn branch(&self) -> Branch {
         self.branch
@@ -449,6 +493,12 @@ impl Trajectory {
         self.v0
     }
 
+    /// The short path's polynomial coefficients at `tau > 0`, if it is exact there ([`short`]).
+    #[inline(always)]
+    fn short(&self, tau: f64) -> Option<[f64; short::DEGREE + 1]> {
+        self.plate.short.coefficients(tau, self.v0, self.f0, self.b)
+    }
+
     #[inline]
     fn use_taylor(&self, tau: f64) -> bool {
         self.plate.mass > 0.0 && self.plate.rho * tau <= TAYLOR_MAX
@@ -569,6 +619,10 @@ impl Trajectory {
         if tau <= 0.0 {
             return (self.y0, self.v0);
         }
+        if let Some(c) = self.short(tau) {
+            let (u, du) = Short::state(&c, tau);
+            return (self.y0 + u, du);
+        }
         if self.use_taylor(tau) {
             let (u, du) = self.taylor_at(tau);
             return (self.y0 + u, du);
@@ -630,6 +684,12 @@ impl Trajectory {
     /// compute them.
     #[inline(always)]
     pub fn at_with_integrals(&self, h: f64, s: f64) -> (f64, f64, Integrals) {
+        if h > 0.0
+            && let Some(c) = self.short(h)
+        {
+            let (u, du) = Short::state(&c, h);
+            return (self.y0 + u, du, Short::integrals(&c, h, s));
+        }
         if h > 0.0 && self.use_taylor(h) {
             let (u, du, ints) = self.taylor_with_integrals(h, s);
             return (self.y0 + u, du, ints);
@@ -661,6 +721,9 @@ impl Trajectory {
         debug_assert!(h >= 0.0, "Trajectory::integrals: h must be >= 0");
         if h <= 0.0 {
             return Integrals { i1: 0.0, i2: 0.0 };
+        }
+        if let Some(c) = self.short(h) {
+            return Short::integrals(&c, h, s);
         }
         if self.use_taylor(h) {
             return self.taylor_with_integrals(h, s).2;

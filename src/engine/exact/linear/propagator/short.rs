@@ -1,0 +1,260 @@
+//! The short-step path of the propagator: the Taylor polynomial of `u = y - y0` to degree
+//! [`DEGREE`], its coefficients read off the initial state with constants of the plate.
+//!
+//! With `u(tau) = sum_n c_n tau^n` (`c_0 = 0`, `c_1 = v0`), the equation
+//! `M u'' + eta u' + k u = f0 + b tau` gives
+//!
+//! ```text
+//!     c_2 = (f0 - eta v0) / (2 M),     c_3 = (b - 2 eta c_2 - k v0) / (6 M),
+//!     c_n = -(eta c_{n-1} / n + k c_{n-2} / (n (n-1))) / M      (n >= 4),
+//! ```
+//!
+//! so every `c_n` is linear in the state: `c_n = F_n f0 + W_n v0 + G_n b`, with `F_n`, `W_n`,
+//! `G_n` obtained once per plate from the same recurrence. An evaluation is then three
+//! products per coefficient (independent of each other, so short in latency) and two sums
+//! in Estrin's order, with no division and no series loop.
+//!
+//! The truncation test is the Taylor path's own (`docs/propagator.md`): with `A = eta tau/M`,
+//! `B = k tau^2/M` and `t_n = c_n tau^n`, the next two terms are bounded by
+//! `e1 = A |t_D| / (D+1) + B |t_{D-1}| / ((D+1) D)` and `e2 = A e1 / (D+2) + B |t_D| / ((D+2)(D+1))`,
+//! and for `rho tau <= 1` the remainder weighted by the derivative index is below
+//! `4 (D + 3) (e1 + e2)`; the polynomial is used when that is at most `2^-56 (2 |t_2| + 3 |t_3|)`
+//! (a part of the Taylor path's `2^-56 sum_{n>=2} n |t_n|`, so never a looser test). Divided by
+//! `tau^2`:
+//!
+//! ```text
+//!     tau^(D-1) (Q + tau (p3 Q + p4 |c_D|)) <= 2^-56 (2 |c_2| + 3 |c_3| tau),
+//!     Q = p1 |c_D| + p2 |c_{D-1}|,
+//! ```
+//!
+//! `p1 = 4 (D+3) eta / ((D+1) M)`, `p2 = 4 (D+3) k / ((D+1) D M)`, `p3 = eta / ((D+2) M)`,
+//! `p4 = 4 (D+3) k / ((D+2)(D+1) M)`. When it fails (or `rho tau > 2^-8`, where it cannot
+//! hold) the caller takes the Taylor loop or the closed form, as before.
+
+use super::{Integrals, RECIP, TAIL, hilbert_fixed};
+
+/// Degree of the short polynomial: at `N = 1e6` (`rho tau ~ 1e-5`) the test holds with a
+/// margin of about `1e10`, at `N = 1e5` (`rho tau ~ 1e-4`) with about `1e4`.
+pub(super) const DEGREE: usize = 7;
+/// Coefficients `c_0 .. c_D`.
+const LEN: usize = DEGREE + 1;
+const _: () = assert!(DEGREE == 7, "Short::state sums seven coefficients (estrin6)");
+/// Largest `rho tau` tried: beyond it `(rho tau)^(D-1)` alone exceeds `2^-56` by far.
+const RHO_TAU_MAX: f64 = 1.0 / 256.0;
+
+/// The plate's constants of the short path (`M > 0`; for `M = 0` it is never taken).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Short {
+    /// `c_n = f[n] f0 + w[n] v0 + g[n] b` for `n = 2 ..= D` (entries 0 and 1 unused).
+    f: [f64; LEN],
+    w: [f64; LEN],
+    g: [f64; LEN],
+    /// `[p1, p2, p3, p4]` of the truncation test.
+    p: [f64; 4],
+    /// Longest step tried, `2^-8 / rho` (`-1`: never, for `M = 0`).
+    h_max: f64,
+}
+
+impl Short {
+    /// The constants of `M y'' + eta y' + k y` with largest root modulus `rho`.
+    pub(super) fn new(mass: f64, eta: f64, k: f64, rho: f64) -> Short {
+        if mass <= 0.0 {
+            return Short::never();
+        }
+        let (em, km) = (eta / mass, k / mass);
+        let (mut f, mut w, mut g) = ([0.0; LEN], [0.0; LEN], [0.0; LEN]);
+        f[2] = 0.5 / mass;
+        w[2] = -0.5 * em;
+        f[3] = -2.0 * eta * f[2] / (6.0 * mass);
+        w[3] = (-2.0 * eta * w[2] - k) / (6.0 * mass);
+        g[3] = 1.0 / (6.0 * mass);
+        for n in 4..LEN {
+            let (a, b) = (em * RECIP[n], km * RECIP[n] * RECIP[n - 1]);
+            f[n] = -(a * f[n - 1] + b * f[n - 2]);
+            w[n] = -(a * w[n - 1] + b * w[n - 2]);
+            g[n] = -(a * g[n - 1] + b * g[n - 2]);
+        }
+        let d = DEGREE as f64;
+        let weight = 4.0 * (d + 3.0);
+        let p = [
+            weight * em / (d + 1.0),
+            weight * km / ((d + 1.0) * d),
+            em / (d + 2.0),
+            weight * km / ((d + 2.0) * (d + 1.0)),
+        ];
+        Short { f, w, g, p, h_max: if rho > 0.0 { RHO_TAU_MAX / rho } else { f64::INFINITY } }
+    }
+
+    /// Constants that never take the short path.
+    pub(super) fn never() -> Short {
+        Short { f: [0.0; LEN], w: [0.0; LEN], g: [0.0; LEN], p: [0.0; 4], h_max: -1.0 }
+    }
+
+    /// The coefficients `c_0 .. c_D` of the trajectory from velocity `v0` under forcing
+    /// `f0 + b tau` at `tau`, if the polynomial is exact to round-off there (`tau >= 0`);
+    /// `None` otherwise, and for a non-finite state or `tau`.
+    #[inline(always)]
+    pub(super) fn coefficients(&self, tau: f64, v0: f64, f0: f64, b: f64) -> Option<[f64; LEN]> {
+        // NaN is not within.
+        let within = tau <= self.h_max;
+        if !within {
+            return None;
+        }
+        let mut c = [0.0; LEN];
+        c[1] = v0;
+        c[2] = self.f[2] * f0 + self.w[2] * v0;
+        let mut n = 3;
+        while n < LEN {
+            c[n] = (self.f[n] * f0 + self.w[n] * v0) + self.g[n] * b;
+            n += 1;
+        }
+        let [p1, p2, p3, p4] = self.p;
+        let (cd, cd1) = (c[DEGREE].abs(), c[DEGREE - 1].abs());
+        let q = p1 * cd + p2 * cd1;
+        let tail = pow(tau, DEGREE - 1) * (q + tau * (p3 * q + p4 * cd));
+        let scale = (2.0 * TAIL) * c[2].abs() + ((3.0 * TAIL) * c[3].abs()) * tau;
+        // NaN anywhere fails the test.
+        (tail <= scale).then_some(c)
+    }
+
+    /// `(u, u')` at `tau` from the coefficients, each sum in Estrin's order (pairs, then
+    /// pairs of pairs: a few multiply-adds deep, where Horner's order is seven).
+    #[inline(always)]
+    pub(super) fn state(c: &[f64; LEN], tau: f64) -> (f64, f64) {
+        let d = [c[1], 2.0 * c[2], 3.0 * c[3], 4.0 * c[4], 5.0 * c[5], 6.0 * c[6], 7.0 * c[7]];
+        let u = tau * estrin6(&[c[1], c[2], c[3], c[4], c[5], c[6], c[7]], tau);
+        (u, estrin6(&d, tau))
+    }
+
+    /// The integrals over `[0, h]` of the polynomial ([`Integrals`]): `i1 = h sum t_n/(n+1)`
+    /// and `i2 = h sum_{i,j>=1} a_i a_j/(i+j+1)`, `t_n = c_n h^n`, `a_1 = t_1 - s h`,
+    /// `a_n = t_n` (the Taylor path's forms).
+    #[inline(always)]
+    pub(super) fn integrals(c: &[f64; LEN], h: f64, s: f64) -> Integrals {
+        let mut t = [0.0; LEN];
+        let mut hn = h;
+        let mut i1 = 0.0;
+        let mut n = 1;
+        while n < LEN {
+            t[n] = c[n] * hn;
+            i1 += t[n] * RECIP[n + 1];
+            hn *= h;
+            n += 1;
+        }
+        t[1] -= s * h;
+        Integrals { i1: i1 * h, i2: hilbert_fixed::<LEN>(&t, h) }
+    }
+}
+
+/// `sum_{j=0}^{6} a_j x^j` in Estrin's order.
+#[inline(always)]
+fn estrin6(a: &[f64; 7], x: f64) -> f64 {
+    let x2 = x * x;
+    let x4 = x2 * x2;
+    let lo = (a[0] + a[1] * x) + (a[2] + a[3] * x) * x2;
+    let hi = (a[4] + a[5] * x) + a[6] * x2;
+    lo + hi * x4
+}
+
+/// `x^n` by repeated squaring (`n` a constant at the call site: unrolled).
+#[inline(always)]
+fn pow(x: f64, n: usize) -> f64 {
+    let (mut acc, mut base, mut e) = (1.0, x, n);
+    while e > 0 {
+        if e & 1 == 1 {
+            acc *= base;
+        }
+        base *= base;
+        e >>= 1;
+    }
+    acc
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{LinearPlate, Trajectory};
+    use super::*;
+    use crate::rng::{UniformSource, pcg};
+
+    /// `sum_n |t_n|` and `sum_n n |t_n| / tau` of the Taylor terms `t_n = c_n tau^n` (the
+    /// recurrence of the module's doc, 40 terms): the natural scales of `u` and `u' - v0`.
+    fn scales(tr: &Trajectory, tau: f64) -> (f64, f64) {
+        let (m, eta, k) = tr.plate.coefficients();
+        let mut c = [0.0; 40];
+        c[1] = tr.v0;
+        c[2] = (tr.f0 - eta * tr.v0) / (2.0 * m);
+        c[3] = (tr.b - 2.0 * eta * c[2] - k * tr.v0) / (6.0 * m);
+        for n in 4..40 {
+            c[n] = -(eta * c[n - 1] / n as f64 + k * c[n - 2] / (n * (n - 1)) as f64) / m;
+        }
+        let t: Vec<f64> = (0..40).map(|n| c[n] * tau.powi(n as i32)).collect();
+        let su: f64 = t.iter().map(|x| x.abs()).sum();
+        let sv: f64 = t.iter().enumerate().skip(2).map(|(n, x)| n as f64 * x.abs()).sum::<f64>() / tau;
+        (su, sv)
+    }
+
+    /// Random plates (under- and overdamped, stiff, soft), states and steps up to the short
+    /// path's limit: the polynomial, where it is taken, agrees with the Taylor loop to 1e-12
+    /// of the natural scales (state and integrals), and it is taken at the engine's steps.
+    #[test]
+    fn agrees_with_the_taylor_loop() {
+        let mut rng = pcg(11);
+        let mut r = |lo: f64, hi: f64| lo + (hi - lo) * rng.uniform();
+        let (mut taken, mut tried) = (0, 0);
+        for _ in 0..4000 {
+            let (m, eta, k) = (10f64.powf(r(-3.0, 6.0)), 10f64.powf(r(-3.0, 6.0)), 10f64.powf(r(-3.0, 7.0)));
+            let p = LinearPlate::new(m, eta, k);
+            let tr = p.trajectory(r(-1e3, 1e3), r(-2.0, 2.0), r(-1e3, 1e3) * k, r(-1.0, 1.0) * k);
+            let tau = 10f64.powf(r(-9.0, -2.4)) / p.rho();
+            let s = r(-1.0, 1.0);
+            tried += 1;
+            let Some(c) = tr.short(tau) else { continue };
+            taken += 1;
+            let (u, du) = Short::state(&c, tau);
+            let (ut, dut) = tr.taylor_at(tau);
+            let (su, sv) = scales(&tr, tau);
+            assert!((u - ut).abs() <= 1e-12 * su, "u {u} {ut} scale {su} (m {m} eta {eta} k {k} tau {tau})");
+            assert!((du - dut).abs() <= 1e-12 * (sv + tr.v0.abs()), "u' {du} {dut} (m {m} eta {eta} k {k})");
+            let i = Short::integrals(&c, tau, s);
+            let it = tr.taylor_with_integrals(tau, s).2;
+            let ws = su + s.abs() * tau;
+            assert!((i.i1 - it.i1).abs() <= 1e-12 * su * tau, "i1 {} {}", i.i1, it.i1);
+            assert!((i.i2 - it.i2).abs() <= 1e-12 * ws * ws * tau, "i2 {} {}", i.i2, it.i2);
+        }
+        assert!(taken > tried / 3, "short path taken {taken} of {tried} times");
+    }
+
+    /// The bench's plate at `N = 1e6` (`M = eta = 2.5e5`, `k = 5.5e5`) and its event spacing
+    /// (`tau ~ 1e-5`, up to 2e-4): the short path is taken, including at zero acceleration
+    /// (`f0 = eta v0`, `c_2 = 0`).
+    #[test]
+    fn is_taken_at_large_n() {
+        let p = LinearPlate::new(2.5e5, 2.5e5, 5.5e5);
+        for &(v0, a) in &[(0.5, 2.5e5 * 0.5 + 3.0), (0.5, 2.5e5 * 0.5), (0.49, 1.0e5)] {
+            let tr = p.trajectory(0.0, v0, a, 2.5e5);
+            for &tau in &[1e-7, 1e-6, 1e-5, 5e-5, 2e-4] {
+                assert!(tr.short(tau).is_some(), "v0 {v0} a {a} tau {tau}");
+            }
+        }
+    }
+
+    /// A plate without mass, a non-finite state and a step beyond the limit never take it.
+    #[test]
+    fn is_not_taken_outside_its_range() {
+        let tr = LinearPlate::new(0.0, 2.0, 3.0).trajectory(0.5, 0.0, 1.0, 1.0);
+        assert!(tr.short(1e-9).is_none());
+        let p = LinearPlate::new(1.0, 1.0, 1.0);
+        assert!(p.trajectory(0.5, f64::NAN, 1.0, 1.0).short(1e-9).is_none());
+        assert!(p.trajectory(0.5, 0.1, f64::INFINITY, 1.0).short(1e-9).is_none());
+        assert!(p.trajectory(0.5, 0.1, 1.0, 1.0).short(0.01).is_none());
+        assert!(p.trajectory(0.5, 0.1, 1.0, 1.0).short(f64::NAN).is_none());
+    }
+
+    /// Written and read back, a plate derives the same short-path constants.
+    #[test]
+    fn survives_serialization() {
+        let p = LinearPlate::new(2.5e5, 2.5e5, 5.5e5);
+        let back: LinearPlate = serde_json::from_str(&serde_json::to_string(&p).unwrap()).unwrap();
+        assert_eq!(p, back);
+    }
+}
