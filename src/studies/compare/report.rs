@@ -142,11 +142,18 @@ fn with_pct(error: f64, reference: f64) -> String {
     }
 }
 
-/// Mean cost of one exact replica (wall seconds), over the reference and the exact points.
+/// Mean cost of one exact replica (wall seconds), over the reference and the exact points;
+/// over the points alone when they run at another tolerance than the reference
+/// (`--exact-rtol`).
 fn exact_cost_per_replica(study: &Study) -> f64 {
     let exact = study.points.iter().filter(|p| p.engine == EngineKind::Exact);
-    let wall: f64 = exact.clone().map(|p| p.wall_seconds).sum::<f64>() + study.reference.wall_seconds;
-    let reps: usize = exact.map(|p| p.replicas).sum::<usize>() + study.reference.replicas;
+    // The reference's replicas cost what the points' do only at the same tolerance.
+    let (ref_wall, ref_reps) = match study.exact_rtol {
+        None => (study.reference.wall_seconds, study.reference.replicas),
+        Some(_) => (0.0, 0),
+    };
+    let wall: f64 = exact.clone().map(|p| p.wall_seconds).sum::<f64>() + ref_wall;
+    let reps: usize = exact.map(|p| p.replicas).sum::<usize>() + ref_reps;
     wall / reps as f64
 }
 
@@ -418,4 +425,38 @@ pub fn markdown(study: &Study, command: &str) -> String {
         md.push('\n');
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::studies::compare::{Point, Reference, Status};
+
+    /// The exact replica's cost counts the reference's replicas only when they ran at the
+    /// points' tolerance.
+    #[test]
+    fn the_reference_counts_in_the_exact_cost_only_at_the_same_tolerance() {
+        let point = |replicas: usize, wall: f64| Point {
+            engine: EngineKind::Exact,
+            dt: None,
+            replicas,
+            wall_seconds: wall,
+            cpu_seconds: wall,
+            status: Status::Ok,
+            diverged_replicas: 0,
+            plate_growth: None,
+            obs: Vec::new(),
+        };
+        let mut study = Study {
+            scene: crate::test_scenes::fig1(),
+            observables: Vec::new(),
+            replicas: 4,
+            exact_rtol: None,
+            reference: Reference { replicas: 10, wall_seconds: 5.0, cpu_seconds: 5.0, stats: Vec::new() },
+            points: vec![point(1, 0.25), point(2, 0.5), point(4, 1.0)],
+        };
+        assert_eq!(exact_cost_per_replica(&study), 6.75 / 17.0);
+        study.exact_rtol = Some(1e-6);
+        assert_eq!(exact_cost_per_replica(&study), 1.75 / 7.0);
+    }
 }
