@@ -430,7 +430,7 @@ pub fn markdown(study: &Study, command: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::studies::compare::{Point, Reference, Status};
+    use crate::studies::compare::Reference;
 
     /// The exact replica's cost counts the reference's replicas only when they ran at the
     /// points' tolerance.

@@ -258,6 +258,8 @@ pub(super) fn direct_sums_in(e: &[f64], base_off: f64, g: &Grades, law: &Tilted)
             in_block = 0;
         }
     }
+    // At most one batch is left over; the pairs leave `in_block` even, below `BLOCK`, so
+    // it joins the last block without a fold.
     let batches = rest.chunks_exact(LANES);
     let tail = batches.remainder();
     for e in batches {
