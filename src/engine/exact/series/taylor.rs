@@ -100,27 +100,45 @@ pub struct Plant<'a> {
 /// it.
 type Powers = [[f64; ORDER]; ORDER];
 
-/// Row `K` of the powers, `[e^j]_K = sum_(i=1..K-j+1) [e]_i [e^(j-1)]_(K-i)` for `2 <= j
+/// Row `K >= 2` of the powers, `[e^j]_K = sum_(i=1..K-j+1) [e]_i [e^(j-1)]_(K-i)` for `2 <= j
 /// <= K` (rows below `K` and `[e]_1..[e]_(K-1)` known: none of it needs the newest
-/// coefficient), and `sum_(j=2..K) t_j [e^j]_K`, the part of `C_K = sum_(j=1..K) t_j
-/// [e^j]_K` without `t_1 [e]_K` (the caller adds that last, off the other terms' chain).
+/// coefficient). Returns `sum_(j=3..K) t_j [e^j]_K` and `[e^2]_K`, the parts of `C_K =
+/// sum_(j=1..K) t_j [e^j]_K` without `t_1 [e]_K` and `t_2 [e^2]_K` (the caller adds those
+/// last).
+///
+/// Every sum takes its terms oldest first, so that the newest arrives at the end of a short
+/// chain instead of the start of a long one: `[e^2]_K` holds `[e]_(K-1)` (the stage before's
+/// coefficient) and `[e^j]_K` holds `[e^(j-1)]_(K-1)` (the row before's), each in the term
+/// `i = 1`, added last; `[e^2]_K` is symmetric, `2 sum_(2 <= i < K/2) [e]_i [e]_(K-i) (+
+/// [e]_(K/2)^2) + 2 [e]_1 [e]_(K-1)`; over `j`, the highest (oldest) rows first.
 #[inline(always)]
-fn row<const K: usize>(pw: &mut Powers, t: &[f64; ORDER + 1]) -> f64 {
-    // Two partial sums: half the additions' latency chain.
-    let (mut c0, mut c1) = (0.0, 0.0);
-    for j in 2..K + 1 {
+fn row<const K: usize>(pw: &mut Powers, t: &[f64; ORDER + 1]) -> (f64, f64) {
+    let e1 = pw[1][1];
+    let mut c = 0.0;
+    for j in (3..K + 1).rev() {
         let mut acc = 0.0;
-        for i in 1..K - j + 2 {
+        for i in 2..K - j + 1 {
             acc += pw[1][i] * pw[j - 1][K - i];
         }
-        pw[j][K] = acc;
-        if j % 2 == 0 {
-            c1 += t[j] * acc;
-        } else {
-            c0 += t[j] * acc;
+        if K - j + 1 >= 2 {
+            acc += pw[1][K - j + 1] * pw[j - 1][j - 1];
         }
+        acc += e1 * pw[j - 1][K - 1];
+        pw[j][K] = acc;
+        c += t[j] * acc;
     }
-    c0 + c1
+    let e2 = if K == 2 {
+        e1 * e1
+    } else {
+        let mut half = 0.0;
+        for i in (2..(K - 1) / 2 + 1).rev() {
+            half += pw[1][i] * pw[1][K - i];
+        }
+        let square = if K % 2 == 0 && K >= 4 { pw[1][K / 2] * pw[1][K / 2] } else { 0.0 };
+        (square + 2.0 * half) + (2.0 * e1) * pw[1][K - 1]
+    };
+    pw[2][K] = e2;
+    (c, e2)
 }
 
 /// `sum_(k<L) q_k / (k + 1)` and `sum_(i,j<L) q_i q_j / (i + j + 1)` (the upper triangle,
@@ -210,22 +228,25 @@ impl TimeSeries {
                 if K > 0 {
                     hn1 *= h;
                 }
-                // The sum `drive + C_K + K u_K (+ eta (K+1) u_(K+1))` with the terms in the
-                // order they become known: the newest coefficient's come last, so that each
-                // stage waits on the one before for a multiplication and an addition only.
+                // `u_n = scale (drive + C_K + K u_K (+ eta (K+1) u_(K+1)))`, the scale
+                // distributed over the terms and the terms in the order they become known:
+                // the newest coefficient's last, each with its constant factor, so that a
+                // stage waits on the one before for one multiplication and one addition.
+                let scale = -(inv * if DYNAMIC { RECIP2[K] } else { RECIP1[K] });
                 let older = if K == 0 {
-                    p.eta * p.v + t[0] + p.k * u[0]
+                    (p.eta * p.v + t[0] + p.k * u[0]) * scale
                 } else {
                     let e = if K == 1 { u[1] + p.v } else { u[K] };
                     pw[1][K] = e;
-                    (row::<K>(&mut pw, t) + t[1] * e) + p.k * u[K]
+                    if K == 1 {
+                        (t[1] * e + p.k * u[1]) * scale
+                    } else {
+                        let (c, e2) = row::<K>(&mut pw, t);
+                        (c * scale + (t[2] * scale) * e2) + ((t[1] + p.k) * scale) * e
+                    }
                 };
                 let kf = K as f64;
-                u[n] = if DYNAMIC {
-                    -(older + p.eta * (kf + 1.0) * u[K + 1]) * (inv * RECIP2[K])
-                } else {
-                    -older * (inv * RECIP1[K])
-                };
+                u[n] = if DYNAMIC { older + (p.eta * (kf + 1.0) * scale) * u[K + 1] } else { older };
                 if n >= MIN_ORDER && Self::within(&u, n, h, hn1, hw, DYNAMIC, tol) {
                     return TimeSeries { u, order: n, converged: true };
                 }
@@ -620,13 +641,13 @@ mod tests {
             k * (k - 1) / 2 + j - 1
         }
 
-        /// Row `k` of the powers, `[e^j]_k = sum_(i=1..k-j+1) [e]_i [e^(j-1)]_(k-i)` for `2 <= j
-        /// <= k` (rows below `k` and `[e]_1..[e]_k` known), and `C_k = sum_(j=1..k) t_j [e^j]_k`.
-        /// Dispatched to a copy per `k` whose loops have constant trip counts, so they unroll.
+        /// Row `k >= 2` of the powers, `[e^j]_k = sum_(i=1..k-j+1) [e]_i [e^(j-1)]_(k-i)` for
+        /// `2 <= j <= k` (rows below `k` and `[e]_1..[e]_k` known), with `sum_(j>=3) t_j
+        /// [e^j]_k` and `[e^2]_k`. Dispatched to a copy per `k` whose loops have constant trip
+        /// counts, so they unroll.
         #[inline]
-        fn power_row(k: usize, pw: &mut Powers, t: &[f64; ORDER + 1]) -> f64 {
+        fn power_row(k: usize, pw: &mut Powers, t: &[f64; ORDER + 1]) -> (f64, f64) {
             match k {
-                1 => row::<1>(pw, t),
                 2 => row::<2>(pw, t),
                 3 => row::<3>(pw, t),
                 4 => row::<4>(pw, t),
@@ -640,24 +661,36 @@ mod tests {
             }
         }
 
-        /// `power_row` for a fixed `K` (`1 <= K < ORDER`).
+        /// `power_row` for a fixed `K` (`2 <= K < ORDER`): the unrolled form's terms in its
+        /// order (oldest first, the symmetric `[e^2]_K` halved).
         #[inline(always)]
-        fn row<const K: usize>(pw: &mut Powers, t: &[f64; ORDER + 1]) -> f64 {
-            // Two partial sums: half the additions' latency chain (without `t_1 [e]_K`).
-            let (mut c0, mut c1) = (0.0, 0.0);
-            for j in 2..K + 1 {
+        fn row<const K: usize>(pw: &mut Powers, t: &[f64; ORDER + 1]) -> (f64, f64) {
+            let e1 = pw[at(1, 1)];
+            let mut c = 0.0;
+            for j in (3..K + 1).rev() {
                 let mut acc = 0.0;
-                for i in 1..K - j + 2 {
+                for i in 2..K - j + 1 {
                     acc += pw[at(1, i)] * pw[at(j - 1, K - i)];
                 }
-                pw.set(at(j, K), acc);
-                if j % 2 == 0 {
-                    c1 += t[j] * acc;
-                } else {
-                    c0 += t[j] * acc;
+                if K - j + 1 >= 2 {
+                    acc += pw[at(1, K - j + 1)] * pw[at(j - 1, j - 1)];
                 }
+                acc += e1 * pw[at(j - 1, K - 1)];
+                pw.set(at(j, K), acc);
+                c += t[j] * acc;
             }
-            c0 + c1
+            let e2 = if K == 2 {
+                e1 * e1
+            } else {
+                let mut half = 0.0;
+                for i in (2..(K - 1) / 2 + 1).rev() {
+                    half += pw[at(1, i)] * pw[at(1, K - i)];
+                }
+                let square = if K % 2 == 0 && K >= 4 { pw[at(1, K / 2)] * pw[at(1, K / 2)] } else { 0.0 };
+                (square + 2.0 * half) + (2.0 * e1) * pw[at(1, K - 1)]
+            };
+            pw.set(at(2, K), e2);
+            (c, e2)
         }
 
         pub struct Old;
@@ -687,19 +720,20 @@ mod tests {
                 for n in first..last + 1 {
                     // u_n from C_k, k = n - 2 (dynamic) or n - 1 (overdamped).
                     let k = n - first;
+                    let scale = -(inv * if dynamic { RECIP2[k] } else { RECIP1[k] });
                     let older = if k == 0 {
-                        p.eta * p.v + t[0] + p.k * u[0]
+                        (p.eta * p.v + t[0] + p.k * u[0]) * scale
+                    } else if k == 1 {
+                        let e = u[1] + p.v;
+                        pw.set(at(1, 1), e);
+                        (t[1] * e + p.k * u[1]) * scale
                     } else {
-                        let e = if k == 1 { u[1] + p.v } else { u[k] };
-                        pw.set(at(1, k), e);
-                        (power_row(k, &mut pw, t) + t[1] * e) + p.k * u[k]
+                        pw.set(at(1, k), u[k]);
+                        let (c, e2) = power_row(k, &mut pw, t);
+                        (c * scale + (t[2] * scale) * e2) + ((t[1] + p.k) * scale) * u[k]
                     };
                     let kf = k as f64;
-                    u[n] = if dynamic {
-                        -(older + p.eta * (kf + 1.0) * u[k + 1]) * (inv * RECIP2[k])
-                    } else {
-                        -older * (inv * RECIP1[k])
-                    };
+                    u[n] = if dynamic { older + (p.eta * (kf + 1.0) * scale) * u[k + 1] } else { older };
                     let hn1 = hn;
                     hn *= h;
                     if n >= MIN_ORDER && Old::within(&u, n, h, hn1, dynamic, tol) {
