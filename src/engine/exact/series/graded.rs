@@ -34,7 +34,7 @@
 
 use std::sync::OnceLock;
 
-use super::sum::{BLOCK, LANES, PMAX, Q_D, dd_add, dd_add_all, phi_taylor, phi_taylor_lanes, tails_at};
+use super::sum::{BLOCK, LANES, PMAX, Q_D, dd_add, dd_add_all, phi_taylor, phi_taylor_lanes, tails_at, two_sum};
 use crate::physics::Tilted;
 
 /// `R/l0` beyond which no search is made (an order that needs more keeps the next one).
@@ -225,15 +225,13 @@ pub(super) fn direct_sums_in(e: &[f64], base_off: f64, g: &Grades, law: &Tilted)
             }
         }
     };
-    // Per lane, written as whole-array steps so that they compile to vector operations:
-    // `TwoSum` of `xh` and `x` (Knuth's, as `two_sum`), its error into `xl`, `|x|` into `spread`.
     let mut sums = |x: [f64; LANES]| {
-        let s: [f64; LANES] = std::array::from_fn(|l| xh[l] + x[l]);
-        let bb: [f64; LANES] = std::array::from_fn(|l| s[l] - xh[l]);
-        let err: [f64; LANES] = std::array::from_fn(|l| (xh[l] - (s[l] - bb[l])) + (x[l] - bb[l]));
-        xh = s;
-        xl = std::array::from_fn(|l| xl[l] + err[l]);
-        spread = std::array::from_fn(|l| spread[l] + x[l].abs());
+        for l in 0..LANES {
+            let (s, err) = two_sum(xh[l], x[l]);
+            xh[l] = s;
+            xl[l] += err;
+            spread[l] += x[l].abs();
+        }
     };
     // Two batches at a time (the terms added batch after batch, as one at a time would: the
     // same sums bit for bit), so that two junctions' chains of dependent steps share a

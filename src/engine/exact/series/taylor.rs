@@ -587,8 +587,8 @@ mod tests {
 
     /// The recurrence as it was before its stages were unrolled (a triangle with computed
     /// indices, dispatched per stage), kept as the oracle of bit-identity: verbatim but for
-    /// the order of each stage's sum, which follows the unrolled form's (the newest
-    /// coefficient's terms last).
+    /// each stage's arithmetic, which is the unrolled form's term for term (the divisor in
+    /// each term's factor, `[e^2]_k` by its symmetry, every sum oldest term first).
     mod oracle {
         use super::super::{MIN_ORDER, ORDER, Plant, RECIP1, RECIP2, TimeSeries, Tol};
 
