@@ -390,8 +390,8 @@ pub fn tilted_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
     }
 }
 
-/// The first `M` coefficients of `sum_(k<=p) (a_k + al_k) z^k` re-centred at `z = t0`, by
-/// repeated synthetic division, in 256-bit vectors where the processor has AVX2 (the same
+/// The first `M` coefficients of `sum_(k<=p) (a_k + al_k) z^k` re-centred at `z = t0`, all
+/// side by side as polynomials in `t0` ([`recentred_in`]), in 256-bit vectors where the processor has AVX2 (the same
 /// operations, so the same values bit for bit; [`direct_sums`]).
 #[inline]
 fn recentred<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: usize, t0: f64) -> [f64; M] {
@@ -410,16 +410,62 @@ unsafe fn recentred_avx2<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: u
     recentred_in::<M>(a, al, p, t0)
 }
 
-/// [`recentred`]: `out[j] = sum_k C(k, j) (a_k + al_k) t0^(k-j)`, O(p M) in whole-array steps.
+/// Widest re-centring asked for ([`recentred`]'s `M`).
+const RECENTRED_MAX: usize = 12;
+
+/// `C(m + j, j)` at `[m][j]` (`m < PMAX + 3`: [`recentred_in`]'s chains read up to three
+/// rows past `p`; `j < RECENTRED_MAX`; exact in `f64`).
+const BINOM_SHIFT: [[f64; RECENTRED_MAX]; PMAX + 3] = {
+    let mut t = [[0.0; RECENTRED_MAX]; PMAX + 3];
+    let mut m = 0;
+    while m < PMAX + 3 {
+        let mut c = 1u64;
+        let mut j = 0;
+        while j < RECENTRED_MAX {
+            t[m][j] = c as f64;
+            // C(m + j + 1, j + 1) = C(m + j, j) (m + j + 1) / (j + 1), exact in integers.
+            c = c * (m + j + 1) as u64 / (j + 1) as u64;
+            j += 1;
+        }
+        m += 1;
+    }
+    t
+};
+
+/// [`recentred`]: `out[j] = sum_m C(m + j, j) A_(m+j) t0^m` (`A_k = a_k + al_k`, zero above
+/// `p`), all `j` side by side: a polynomial in `t0` with vector coefficients `B_m = (C(m +
+/// j, j) A_(m+j))_j`, so a multiply and an add per coefficient and lane with no lane
+/// crossing. It is evaluated as four Horner chains in `t0^4` (`m = 4i + r`, combined as `(c0
+/// + t0 c1) + t0^2 (c2 + t0 c3)`), independent of one another, for a quarter of one chain's
+/// latency. A term of degree `m` carries a relative rounding of about `(5m/4 + 6) eps`
+/// (`t0^4` itself two or three roundings, two per chain step, the product and the
+/// combination), within the `(2p + 4) eps` of a Horner evaluation that the round-off
+/// allowance charges (module doc) for `p >= 3`. O(p M).
 #[inline(always)]
 fn recentred_in<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: usize, t0: f64) -> [f64; M] {
-    let mut out = [0.0; M];
-    for k in (0..=p).rev() {
-        let prev = out;
-        for j in 1..M {
-            out[j] = prev[j] * t0 + prev[j - 1];
+    const { assert!(M <= RECENTRED_MAX) };
+    // Whole arrays (vector operations): the series keeps `a_k = al_k = 0` above `p`.
+    debug_assert!(a.iter().zip(al).skip(p + 1).all(|(h, l)| *h == 0.0 && *l == 0.0));
+    let mut sum = [0.0; PMAX + 3 + RECENTRED_MAX];
+    for k in 0..PMAX {
+        sum[k] = a[k] + al[k];
+    }
+    let t2 = t0 * t0;
+    let t4 = t2 * t2;
+    let mut c = [[0.0; M]; 4];
+    for i in (0..=p.min(PMAX - 1) / 4).rev() {
+        for (r, cr) in c.iter_mut().enumerate() {
+            let m = 4 * i + r;
+            let row = &BINOM_SHIFT[m];
+            let coef: &[f64; M] = sum[m..m + M].try_into().expect("M <= RECENTRED_MAX");
+            for j in 0..M {
+                cr[j] = cr[j] * t4 + row[j] * coef[j];
+            }
         }
-        out[0] = prev[0] * t0 + (a[k] + al[k]);
+    }
+    let mut out = [0.0; M];
+    for j in 0..M {
+        out[j] = (c[0][j] + t0 * c[1][j]) + t2 * (c[2][j] + t0 * c[3][j]);
     }
     out
 }
@@ -1362,7 +1408,7 @@ impl SeriesSum {
 
 impl SeriesSum {
     /// The series' normalised derivatives at `y`, `S^(j)(y) / j!` for `j < M`: the
-    /// polynomial re-centred at `t0 = y - base` by repeated synthetic division, `out[j] =
+    /// polynomial re-centred at `t0 = y - base` ([`recentred`]), `out[j] =
     /// sum_k C(k, j) A_k t0^(k-j)` (as [`SeriesSum::taylor_at`], to any order; 0 above `p`),
     /// O(p M) flops in whole-array steps. The linear part adds `kappa (X0 + n t0)` and
     /// `kappa n` to the first two. Within `radius()` of the base the values of the
@@ -1484,6 +1530,40 @@ mod tests {
         assert!(worst_norm_d <= OP_ROUNDOFF / 4.0, "norm at l0/4 {worst_norm_d}");
     }
 
+    /// The re-centring against the same sums in double-double arithmetic (`out[j] = sum_k
+    /// C(k, j) A_k t0^(k-j)`, term by term): within `(2p + 4) eps sum_k C(k, j) |A_k|
+    /// |t0|^(k-j)`, the Horner allowance of the round-off bound, for every order, every
+    /// coefficient asked for, and offsets across the disc (coefficients of mixed signs and
+    /// magnitudes from a fixed-seed generator).
+    #[test]
+    fn recentring_is_within_its_rounding_allowance() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+        let binom = |k: usize, j: usize| (0..j).fold(1.0, |c: f64, i| c * (k - i) as f64 / (i + 1) as f64);
+        for _ in 0..2_000 {
+            let p = rng.random_range(0..PMAX);
+            let (mut a, mut al) = ([0.0; PMAX], [0.0; PMAX]);
+            for k in 0..=p {
+                a[k] = rng.random_range(-1.0..1.0) * 4f64.powi(k as i32);
+                al[k] = a[k] * rng.random_range(-1.0..1.0) * 1e-17;
+            }
+            let t0 = rng.random_range(-0.25..0.25);
+            let got = recentred::<11>(&a, &al, p, t0);
+            for (j, &g) in got.iter().enumerate() {
+                let (mut exact, mut size) = (D::from(0.0), 0.0);
+                for k in j..=p {
+                    let term =
+                        D::from(binom(k, j)) * (D::from(a[k]) + D::from(al[k])) * D::from(t0).powi((k - j) as i32);
+                    exact += term;
+                    size += f64::from(term).abs();
+                }
+                let allowance = (2.0 * p as f64 + 4.0) * EPS * size;
+                let err = (g - f64::from(exact)).abs();
+                assert!(err <= allowance, "p {p}, j {j}, t0 {t0}: off by {err}, allowance {allowance}");
+            }
+        }
+    }
+
     /// The re-centring in 256-bit vectors (where the processor has AVX2) is the baseline
     /// build's bit for bit, for every size the plate asks for.
     #[test]
@@ -1495,6 +1575,10 @@ mod tests {
             al[k] = a[k] * 1e-17 * (k as f64 - 7.5);
         }
         for p in [0, 3, 17, PMAX - 1] {
+            // The series keeps its coefficients above `p` at zero (what `recentred` reads).
+            let (mut a, mut al) = (a, al);
+            a[p + 1..].fill(0.0);
+            al[p + 1..].fill(0.0);
             for t0 in [0.0, -0.2, 0.123456789, 0.25] {
                 assert_eq!(
                     recentred::<5>(&a, &al, p, t0).map(f64::to_bits),
