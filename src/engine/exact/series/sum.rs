@@ -391,8 +391,8 @@ pub fn tilted_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
 }
 
 /// The first `M` coefficients of `sum_(k<=p) (a_k + al_k) z^k` re-centred at `z = t0`, all
-/// side by side as polynomials in `t0` ([`recentred_in`]), in 256-bit vectors where the processor has AVX2 (the same
-/// operations, so the same values bit for bit; [`direct_sums`]).
+/// side by side as polynomials in `t0` ([`recentred_in`]), in 256-bit vectors where the
+/// processor has AVX2 (the same operations, so the same values bit for bit; [`direct_sums`]).
 #[inline]
 fn recentred<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: usize, t0: f64) -> [f64; M] {
     #[cfg(target_arch = "x86_64")]
@@ -1334,17 +1334,6 @@ impl SeriesSum {
     }
 }
 
-/// `C(k, 4)` for `k < PMAX` (exact in `f64`).
-const BINOM4: [f64; PMAX] = {
-    let mut t = [0.0; PMAX];
-    let mut k = 4;
-    while k < PMAX {
-        t[k] = (k * (k - 1) * (k - 2) * (k - 3) / 24) as f64;
-        k += 1;
-    }
-    t
-};
-
 /// The cubic Taylor polynomial of the series about a point `at`,
 /// `S(z) ~ c0 + c1 e + c2 e^2 + c3 e^3`, `e = z - at` ([`SeriesSum::taylor_at`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -1399,7 +1388,7 @@ impl SeriesSum {
         let rho = (y - self.base).abs() + d;
         let mut r4 = 0.0;
         for k in (4..=self.p).rev() {
-            r4 = r4 * rho + BINOM4[k] * (self.a[k] + self.al[k]).abs();
+            r4 = r4 * rho + BINOM_SHIFT[k - 4][4] * (self.a[k] + self.al[k]).abs();
         }
         let r4 = r4 * (1.0 + 4.0 * (self.p as f64 + 1.0) * EPS);
         (self.derivatives_at::<4>(y), r4)
