@@ -6,6 +6,7 @@
 //! process by `SIGPIPE`, quietly ([`stdout`]).
 
 mod compare;
+mod cpu;
 mod resume;
 mod run;
 mod signals;
@@ -114,6 +115,9 @@ fn clap_one_line(e: &clap::Error) -> String {
 
 /// Entry point of the binary. Restores the default action of `SIGPIPE` ([`stdout`]).
 pub fn main() -> ExitCode {
+    if let Err(m) = cpu::check() {
+        return fail(EXIT_RUN_FAILED, m);
+    }
     stdout::restore_sigpipe();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
