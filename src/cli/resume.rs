@@ -1,13 +1,15 @@
 //! `stickslip resume DIR`: continues a killed run from the checkpoint in its output
 //! directory, or a killed study from its journal ([`super::study_resume`]) (docs/runs.md).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use super::run::{draw_plot, prepare_out_dir, summary_lines};
 use super::stdout::emit;
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, fail};
+use crate::output::Summary;
 use crate::runner::{self, Resumed, RunOptions};
+use crate::scene::Scene;
 
 #[derive(clap::Args, Debug)]
 pub struct ResumeArgs {
@@ -42,10 +44,23 @@ pub(crate) fn resume(args: &ResumeArgs) -> ExitCode {
         }
     }
     match runner::resume(&args.dir, &opts) {
-        Ok(Resumed::Finished) => emit(&format!(
-            "the run in {} is finished (summary.json is there, no checkpoint is left): nothing to resume\n",
-            args.dir.display()
-        )),
+        Ok(Resumed::Finished) => match plot_left_undrawn(&args.dir) {
+            // Killed after its results were in place but before its plot was drawn.
+            Some(scene) => {
+                if let Err(e) = draw_plot(&scene, &args.dir) {
+                    return fail(EXIT_RUN_FAILED, e);
+                }
+                emit(&format!(
+                    "the run in {} is finished (summary.json is there, no checkpoint is left); its trace.svg was \
+                     missing and is drawn now\n",
+                    args.dir.display()
+                ))
+            }
+            None => emit(&format!(
+                "the run in {} is finished (summary.json is there, no checkpoint is left): nothing to resume\n",
+                args.dir.display()
+            )),
+        },
         Ok(Resumed::Completed { from_t, summary }) => {
             if let Err(e) = draw_plot(&summary.parameters, &args.dir) {
                 return fail(EXIT_RUN_FAILED, e);
@@ -55,6 +70,18 @@ pub(crate) fn resume(args: &ResumeArgs) -> ExitCode {
         Err(e) if e.is_bad_input() => fail(EXIT_BAD_INPUT, e),
         Err(e) => fail(EXIT_RUN_FAILED, e),
     }
+}
+
+/// The scene of a finished run in `dir` whose plot is asked for (`output.plot`) and not
+/// there, with its `trace.csv` in place: a run killed between its last result and its
+/// plot. `None` otherwise, and when `summary.json` cannot be read.
+fn plot_left_undrawn(dir: &Path) -> Option<Scene> {
+    if dir.join("trace.svg").exists() || !dir.join("trace.csv").is_file() {
+        return None;
+    }
+    let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
+    let summary: Summary = serde_json::from_str(&text).ok()?;
+    summary.parameters.output.plot.then_some(summary.parameters)
 }
 
 #[cfg(test)]

@@ -242,6 +242,11 @@ fn kill_and_resume(case: &Case, kills: usize) {
             let out = run(&resume, &[]);
             let stdout = String::from_utf8_lossy(&out.stdout);
             assert!(stdout.starts_with("resumed from the checkpoint at t = "), "{stdout}");
+        } else if !dir.join("trace.svg").exists() {
+            // The last kill landed after the results were in place, before the plot.
+            let out = run(&resume, &[]);
+            let stdout = String::from_utf8_lossy(&out.stdout);
+            assert!(stdout.contains("is drawn now"), "{stdout}");
         }
         // trace.svg: drawn by default with trace.csv.
         let mut expected = vec!["summary.json", "trace.csv", "trace.svg"];
@@ -271,6 +276,28 @@ fn killed_and_resumed_fixed_engine() {
 #[test]
 fn killed_and_resumed_exact_linear_strong() {
     kill_and_resume(&LINEAR_STRONG, 1);
+}
+
+/// A run killed after its results were in place but before its plot was drawn: `resume`
+/// draws the plot (the bytes an uninterrupted run draws) and says so; then there is nothing
+/// left to do.
+#[test]
+fn resume_draws_a_plot_left_undrawn() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    let mut args = strings(&["run"]);
+    args.extend(scene_args(tmp.path(), &LINEAR_WEAK, 200.0));
+    args.extend(strings(&["--out", dir.to_str().unwrap()]));
+    run(&args, &[]);
+    let svg = std::fs::read(dir.join("trace.svg")).unwrap();
+    std::fs::remove_file(dir.join("trace.svg")).unwrap();
+    let resume = strings(&["resume", dir.to_str().unwrap()]);
+    let out = run(&resume, &[]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("its trace.svg was missing and is drawn now"), "{stdout}");
+    assert!(std::fs::read(dir.join("trace.svg")).unwrap() == svg, "the plot differs from the run's own");
+    let out = run(&resume, &[]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("nothing to resume"));
 }
 
 #[test]
