@@ -29,7 +29,10 @@ pub struct CompareArgs {
     /// Output directory (default: out/<scene file stem>-compare/).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Worker threads (default: one per core). Results do not depend on it.
+    /// Replicas run at a time (default: 1). Estimates do not depend on it; costs do: replicas
+    /// side by side share the machine (caches, memory, and the core itself on a host that
+    /// runs two virtual processors on one), which slows each by an amount that depends on
+    /// the engine, so the costs of a study meant for comparison are taken one at a time.
     #[arg(long)]
     pub threads: Option<usize>,
 }
@@ -105,10 +108,11 @@ pub(crate) fn compare_as(args: &CompareArgs, command: &str) -> ExitCode {
         s.run.engine = engine;
         s
     });
-    let threads = match crate::estimate::check::study_threads(engines.iter(), args.threads, "compare") {
-        Ok(t) => t,
-        Err(e) => return fail(EXIT_BAD_INPUT, e),
-    };
+    let threads =
+        match crate::estimate::check::study_threads(engines.iter(), Some(args.threads.unwrap_or(1)), "compare") {
+            Ok(t) => t,
+            Err(e) => return fail(EXIT_BAD_INPUT, e),
+        };
     let out = args.out.clone().unwrap_or_else(|| Path::new("out").join(format!("{}-compare", scene.name)));
     let created = match prepare_out_dir(&out) {
         Ok(c) => c,

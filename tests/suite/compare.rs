@@ -68,6 +68,24 @@ fn without_timing(csv: &str) -> Vec<Vec<String>> {
         .collect()
 }
 
+/// Without `--threads` the replicas run one at a time, and `compare.md` says how many ran at
+/// a time either way (a cost depends on it; the estimates do not).
+#[test]
+fn compare_md_states_how_many_replicas_ran_at_a_time() {
+    let dir = tiny_dir();
+    let mut args = ARGS.to_vec();
+    args.extend_from_slice(&["8", "--out", "default"]);
+    let o = run_in(dir.path(), &args);
+    assert!(o.status.success(), "compare failed: {}", String::from_utf8_lossy(&o.stderr));
+    let md = std::fs::read_to_string(dir.path().join("default/compare.md")).unwrap();
+    assert!(md.contains("replicas run one at a time"), "{md}");
+    study(dir.path(), "two", "2");
+    let md = std::fs::read_to_string(dir.path().join("two/compare.md")).unwrap();
+    assert!(md.contains("replicas run 2 at a time"), "{md}");
+    let csv = |d: &str| std::fs::read_to_string(dir.path().join(d).join("compare.csv")).unwrap();
+    assert_eq!(without_timing(&csv("default")), without_timing(&csv("two")));
+}
+
 #[test]
 fn tiny_study_writes_three_files_reports_divergence_and_ignores_the_thread_count() {
     let dir = tiny_dir();

@@ -32,7 +32,16 @@
 //! the degrees of freedom are `ref_replicas - 1`.
 //!
 //! **Wall time** of a point is the sum of its replicas' measured wall times: its cost on
-//! one core, whatever the number of threads.
+//! one core, as a campaign of such replicas would pay it. Two things would distort it, by
+//! amounts that differ between the engines (measured on the Fig. 1 scene: docs/results.md,
+//! "Fig. 1 scene (strong bonds, tilted law)"), and the study avoids both:
+//! - *replicas side by side* share the machine (caches, memory, and on a host that runs two
+//!   virtual processors on one core, the core): replicas run one at a time unless the
+//!   caller asks for more threads, and `compare.md` states how many ran at a time;
+//! - *a replica that follows the other engine's* starts on caches and branch history that
+//!   engine left behind: jobs run in runs of consecutive replicas of one point
+//!   (`RUN_LENGTH`), the runs in a pseudo-random order (so that a change of machine load
+//!   still spreads over all points).
 //!
 //! **Guards.** A fixed point in which any replica diverges (`EngineError::Diverged`, or a
 //! non-finite state) is reported as `diverged` with the number of diverged replicas. A
@@ -144,6 +153,9 @@ pub enum StudyError {
     #[error(transparent)]
     Interrupted(#[from] Interrupted),
 }
+
+/// Consecutive jobs run one after the other ([`Plan::run_from`]).
+const RUN_LENGTH: usize = 16;
 
 /// One simulation of a study.
 #[derive(Clone, Debug)]
@@ -303,11 +315,14 @@ impl Plan {
             .build()
             .map_err(|e| StudyError::Threads(e.to_string()))?;
         let obs = &self.observables;
-        // Jobs run in a fixed pseudo-random order, so that a change of machine load during
-        // the study (other processes) spreads over all points instead of hitting one; the
-        // outcomes are put back in job order.
+        // Jobs run in runs of `RUN_LENGTH` consecutive jobs (replicas of one point, mostly),
+        // the runs in a fixed pseudo-random order: a change of machine load during the study
+        // (other processes) spreads over all points instead of hitting one, and a replica
+        // follows replicas of its own engine, as in any campaign of replicas, instead of
+        // starting on caches and branch history that the other engine left behind (module
+        // doc). The outcomes are put back in job order.
         let mut order: Vec<usize> = (0..self.jobs.len()).collect();
-        order.sort_by_key(|&i| seeds::mix(i as u64));
+        order.sort_by_key(|&i| (seeds::mix((i / RUN_LENGTH) as u64), i));
         let outcomes = run_missing(&pool, &order, &self.seeds(), from, None, |i, opts| run_job(&self.jobs[i], opts))?;
         // The first failure in job order, so the message does not depend on scheduling.
         let mut results = Vec::with_capacity(outcomes.len());
@@ -324,10 +339,10 @@ impl Plan {
                 Ok(record) => results.push((job, record.outcome(obs))),
             }
         }
-        Ok(self.aggregate(&results))
+        Ok(self.aggregate(&results, pool.current_num_threads()))
     }
 
-    fn aggregate(&self, results: &[(&Job, Outcome)]) -> Study {
+    fn aggregate(&self, results: &[(&Job, Outcome)], threads: usize) -> Study {
         let pick = |role: Role, point: usize| -> Vec<&Outcome> {
             results.iter().filter(|(j, _)| j.role == role && j.point == point).map(|(_, o)| o).collect()
         };
@@ -413,6 +428,7 @@ impl Plan {
             exact_rtol: self.exact_rtol,
             reference,
             points,
+            threads,
         }
     }
 }
@@ -593,6 +609,8 @@ pub struct Study {
     pub exact_rtol: Option<f64>,
     pub reference: Reference,
     pub points: Vec<Point>,
+    /// Replicas run at a time (the thread pool's size).
+    pub threads: usize,
 }
 
 #[cfg(test)]

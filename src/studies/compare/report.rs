@@ -328,7 +328,7 @@ pub fn markdown(study: &Study, command: &str) -> String {
         "Scene: N = {}, {:?} bonds, {:?} force law, V = {}, window [{}, {}]. Reference: exact engine, {} replicas \
          ({} s). Fixed-step points: {} replicas each. Exact points: 1 to {} replicas of the same window{}. Error = \
          estimate - reference, with its 95 % interval; floor = its standard deviation from sampling alone. Wall \
-         times are summed over replicas (one core).\n",
+         times are summed over replicas (one core){}.\n",
         j.n,
         j.bond,
         j.force_law,
@@ -347,6 +347,15 @@ pub fn markdown(study: &Study, command: &str) -> String {
                 ryu::Buffer::new().format(s.exact.rtol)
             ),
             None => String::new(),
+        },
+        if study.threads == 1 {
+            ", replicas run one at a time".to_string()
+        } else {
+            format!(
+                ", replicas run {} at a time (side by side they share the machine, and each replica's time includes \
+                 what that costs it)",
+                study.threads
+            )
         }
     );
     let _ = writeln!(md, "## Reading\n");
@@ -454,6 +463,7 @@ mod tests {
             exact_rtol: None,
             reference: Reference { replicas: 10, wall_seconds: 5.0, cpu_seconds: 5.0, stats: Vec::new() },
             points: vec![point(1, 0.25), point(2, 0.5), point(4, 1.0)],
+            threads: 1,
         };
         assert_eq!(exact_cost_per_replica(&study), 6.75 / 17.0);
         study.exact_rtol = Some(1e-6);
