@@ -29,10 +29,9 @@ pub struct CompareArgs {
     /// Output directory (default: out/<scene file stem>-compare/).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Replicas run at a time (default: 1). Estimates do not depend on it; costs do: replicas
-    /// side by side share the machine (caches, memory, and the core itself on a host that
-    /// runs two virtual processors on one), which slows each by an amount that depends on
-    /// the engine, so the costs of a study meant for comparison are taken one at a time.
+    /// Replicas run at a time (default: 1). Estimates do not depend on it; costs may:
+    /// replicas side by side share the machine (caches, memory, and the core itself on a
+    /// host that runs two virtual processors on one), so by default each is timed alone.
     #[arg(long)]
     pub threads: Option<usize>,
 }

@@ -32,16 +32,15 @@
 //! the degrees of freedom are `ref_replicas - 1`.
 //!
 //! **Wall time** of a point is the sum of its replicas' measured wall times: its cost on
-//! one core, as a campaign of such replicas would pay it. Two things would distort it, by
-//! amounts that differ between the engines (measured on the Fig. 1 scene: docs/results.md,
-//! "Fig. 1 scene (strong bonds, tilted law)"), and the study avoids both:
-//! - *replicas side by side* share the machine (caches, memory, and on a host that runs two
-//!   virtual processors on one core, the core): replicas run one at a time unless the
-//!   caller asks for more threads, and `compare.md` states how many ran at a time;
-//! - *a replica that follows the other engine's* starts on caches and branch history that
-//!   engine left behind: jobs run in runs of consecutive replicas of one point
-//!   (`RUN_LENGTH`), the runs in a pseudo-random order (so that a change of machine load
-//!   still spreads over all points).
+//! one core, as a campaign of such replicas would pay it. Jobs run in runs of consecutive
+//! replicas of one point (`RUN_LENGTH`), the runs in a pseudo-random order (so that a change
+//! of machine load still spreads over all points): a replica that follows one of the other
+//! engine starts on caches and branch history that engine left behind, which cost the
+//! exact engine's replicas more than the fixed-step ones (measured on the Fig. 1 scene:
+//! docs/results.md, "Fig. 1 scene (strong bonds, tilted law)"). Replicas run one at a time
+//! unless the caller asks for more threads (side by side they share the machine, which can
+//! slow them; on the project machine two at a time measured the same), and `compare.md`
+//! states how many ran at a time.
 //!
 //! **Guards.** A fixed point in which any replica diverges (`EngineError::Diverged`, or a
 //! non-finite state) is reported as `diverged` with the number of diverged replicas. A
