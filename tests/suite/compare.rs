@@ -69,7 +69,7 @@ fn without_timing(csv: &str) -> Vec<Vec<String>> {
 }
 
 /// Without `--threads` the replicas run one at a time, and `compare.md` says how many ran at
-/// a time either way (a cost depends on it; the estimates do not).
+/// a time either way (a cost may depend on it; the estimates do not).
 #[test]
 fn compare_md_states_how_many_replicas_ran_at_a_time() {
     let dir = tiny_dir();
