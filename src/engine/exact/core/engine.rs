@@ -111,7 +111,10 @@ impl<K: Kernel> Engine for Exact<K> {
         }
     }
 
+    /// The core's counters, with `events` the ruptures and formations so far (summed here,
+    /// not after every event).
     fn counters(&self) -> Counters {
-        self.core.counters.clone()
+        let c = &self.core.counters;
+        Counters { events: Some(c.ruptures + c.formations), ..c.clone() }
     }
 }

@@ -71,12 +71,11 @@ pub fn rebase<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K, obs:
 }
 
 /// After an event at the current time (`fired`: the channel that fired, if one did):
-/// counters, re-base, a new piece, new rates. Always inlined: it runs after every event,
+/// re-base, a new piece, new rates. Always inlined: it runs after every event,
 /// its call cost a twentieth of one, and inlined `fired` is a constant.
 #[inline(always)]
 pub fn after_event<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K, fired: Option<usize>, obs: &mut O) {
     core.events_since_rebase += 1;
-    core.counters.events = Some(core.counters.ruptures + core.counters.formations);
     maybe_rebase(core, k, obs);
     k.open_piece(core);
     refresh_clocks(core, k, fired);

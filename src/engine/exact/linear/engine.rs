@@ -262,7 +262,9 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
     type Queue = Q;
     const IS_WEAK: bool = R::IS_WEAK;
     const KINEMATIC: bool = M::KINEMATIC;
-    const HORIZON: bool = true;
+    /// Only weak bonds bound their rates over a horizon (strong bonds' rate is constant
+    /// between events: the channel would stay at `+inf`).
+    const HORIZON: bool = R::IS_WEAK;
 
     fn start(&mut self, core: &mut Core<Q>) {
         for (slot, a) in core.bags.attached.iter().enumerate() {
