@@ -19,6 +19,7 @@ use crate::rng::Pcg64;
 /// so even a damaged `head` read from a checkpoint cannot index out of range).
 pub const AHEAD: usize = 4;
 const MASK: usize = AHEAD - 1;
+const DRIFT: usize = 4;
 
 /// A queue of [`AHEAD`] pre-drawn uniform picks: the front one is used next, the back one
 /// [`AHEAD`] uses later, so its memory can be prefetched several events before it is needed.
@@ -64,7 +65,11 @@ impl Pick {
         let n = bag.len();
         let h = self.head as usize & MASK;
         prefetch_ptr(bag.as_ptr().wrapping_add(index(self.q[h], n)));
-        prefetch_ptr(bag.as_ptr().wrapping_add(index(self.q[(h + MASK) & MASK], n)));
+        let back = self.q[(h + MASK) & MASK];
+        let (lo, hi) = (index(back, n.saturating_sub(DRIFT)), index(back, n + DRIFT));
+        prefetch_ptr(bag.as_ptr().wrapping_add(lo));
+        prefetch_ptr(bag.as_ptr().wrapping_add((lo + hi) / 2));
+        prefetch_ptr(bag.as_ptr().wrapping_add(hi));
     }
 }
 
