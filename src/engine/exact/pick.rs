@@ -5,10 +5,9 @@
 //! drawn in order as earlier picks are used; the index is `floor(u n / 2^64)` for the bag
 //! size `n` at the time of use (a widening multiply: every index has probability within
 //! `n / 2^64` of `1/n`, far below double-precision round-off). After every event the lines
-//! at the indices of the front and the back pick, for the current size, are prefetched, so
-//! a miss overlaps the work of several events (one event is shorter than a memory access
-//! at N = 1e6). The picks are independent uniforms whatever their order of drawing, so this
-//! changes no distribution.
+//! the front and the back pick can choose are prefetched, so a miss overlaps the work of
+//! several events (one event is shorter than a memory access at N = 1e6). The picks are
+//! independent uniforms whatever their order of drawing, so this changes no distribution.
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -19,6 +18,8 @@ use crate::rng::Pcg64;
 /// so even a damaged `head` read from a checkpoint cannot index out of range).
 pub const AHEAD: usize = 4;
 const MASK: usize = AHEAD - 1;
+/// How far the bag's size is allowed for to drift before the back pick is used: its index
+/// `floor(u n / 2^64)` moves with `n`, by `u` elements per unit of `n`.
 const DRIFT: usize = 4;
 
 /// A queue of [`AHEAD`] pre-drawn uniform picks: the front one is used next, the back one
@@ -53,9 +54,12 @@ impl Pick {
         self.head = ((h + 1) & MASK) as u8;
         i
     }
-    /// Prefetches the elements of `bag` that the front pick and the back pick would choose
-    /// now (the bag's size changes by about one per event, which moves an index by at
-    /// most one element per event).
+    /// Prefetches the element of `bag` that the front pick would choose now (used within
+    /// an event or two: the size moves by one per event, the index by at most one element),
+    /// and the lines the back pick can choose at sizes `n - DRIFT ..= n + DRIFT` (their two
+    /// ends and their middle: up to `2 DRIFT` elements, a line or two). The back pick is
+    /// used [`AHEAD`] picks later, when the size has drifted by a few: prefetched at `n`
+    /// alone, it missed the line it was used on about half the time.
     /// The addresses are formed without a bounds check (a prefetch never faults, and the
     /// indices are below `n` anyway; an empty bag prefetches its dangling base, harmlessly).
     /// By reference: the picks are read in place (by value, the queue was copied to the
