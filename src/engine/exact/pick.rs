@@ -58,8 +58,9 @@ impl Pick {
     /// an event or two: the size moves by one per event, the index by at most one element),
     /// and the lines the back pick can choose at sizes `n - DRIFT ..= n + DRIFT` (their two
     /// ends and their middle: up to `2 DRIFT` elements, a line or two). The back pick is
-    /// used [`AHEAD`] picks later, when the size has drifted by a few: prefetched at `n`
-    /// alone, it missed the line it was used on about half the time.
+    /// used [`AHEAD`] picks later, when the size has drifted by a few, which moves it to
+    /// a neighbouring line whenever it crosses a line's edge (docs/performance.md has the
+    /// A/B against prefetching at `n` alone).
     /// The addresses are formed without a bounds check (a prefetch never faults, and the
     /// indices are below `n` anyway; an empty bag prefetches its dangling base, harmlessly).
     /// By reference: the picks are read in place (by value, the queue was copied to the
