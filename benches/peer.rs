@@ -14,10 +14,11 @@
 //! (`testkit::scaled_linear`, the scene of `benches/exact.rs`, one engine per row warmed up
 //! to `t = 20`, then `1e6 / N` time units per iteration, about 1e5 events). After each `N` the bench prints the
 //! median events per second of each row over its samples, and the engine's ratio to the
-//! peer. It then measures the ratio in *paired rounds*: fresh systems warmed up to `t = 20`,
-//! then [`ROUNDS`] rounds each timing one span of rebop and one of each engine back to
-//! back, so that the host's slow and fast spells (other tenants) fall on both sides of each
-//! ratio; it prints the median of the rounds' ratios with their quartiles.
+//! peer. It then measures each engine's ratio in *paired rounds*: a fresh engine and a fresh
+//! rebop system warmed up to `t = 20`, then [`ROUNDS`] rounds each timing one span of rebop
+//! and one of the engine back to back, so that the host's slow and fast spells (other
+//! tenants) fall on both sides of each ratio; it prints the median of the rounds' ratios
+//! with their quartiles, and the rounds' median rates.
 //!
 //! ```text
 //! cargo bench -p stickslip-peer --bench peer                 # N = 1e3, 1e6, 1e7
