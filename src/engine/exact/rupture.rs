@@ -382,7 +382,11 @@ impl RuptureModel for WeakRupture {
         }
         let (m, p) = self.terms();
         let u = rng.uniform() * (m + p);
-        let slot = if u < m { self.tree.find(0, u / self.e_hi) } else { self.tree.find(1, (u - m) / self.e_lo) };
+        let slot = if u < m {
+            self.tree.find_prefetching(0, u / self.e_hi, attached)
+        } else {
+            self.tree.find_prefetching(1, (u - m) / self.e_lo, attached)
+        };
         let slot = slot.min(attached.len() - 1);
         // The junction is read only if the candidate is accepted: start loading it now.
         super::pick::prefetch(&attached[slot]);

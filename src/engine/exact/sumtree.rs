@@ -152,7 +152,14 @@ impl SumTree2 {
     /// uniform `u`. Never returns a slot of zero weight when the total is positive (a `u`
     /// at or beyond the total by round-off lands on the last non-empty child).
     #[inline]
-    pub fn find(&self, k: usize, mut u: f64) -> usize {
+    pub fn find(&self, k: usize, u: f64) -> usize {
+        self.find_prefetching::<()>(k, u, &[])
+    }
+    /// [`SumTree2::find`], which also requests the entries of `records` (one per slot) of the
+    /// sixteen slots under the node a level above the bottom, when it gets there: the
+    /// chosen slot's entry then loads while the bottom line does.
+    #[inline]
+    pub fn find_prefetching<T>(&self, k: usize, mut u: f64, records: &[T]) -> usize {
         // Every child of a node above the bottom level is in the tree (true by construction;
         // checked once here so that a tree read from a damaged checkpoint cannot make the
         // unchecked reads below leave the buffer).
@@ -165,6 +172,16 @@ impl SumTree2 {
             if node < self.first_bottom {
                 // SAFETY: a node above the bottom level has its four children in the tree.
                 unsafe { self.prefetch_children(node) };
+                // A node whose children are at the bottom: its sixteen slots' records (the
+                // first slot of child `j` is `(4 node + 1 + j - first_bottom) 4`; above this
+                // level the difference wraps to beyond any `records`).
+                let first_slot = (ARITY * node + 1).wrapping_sub(self.first_bottom).wrapping_mul(ARITY);
+                if size_of::<T>() > 0 && first_slot < records.len() {
+                    let base = records.as_ptr().wrapping_add(first_slot);
+                    for j in 0..ARITY {
+                        super::pick::prefetch_ptr(base.wrapping_add(j * ARITY));
+                    }
+                }
             }
             // SAFETY: the descent starts at the root and goes to a child only from a node
             // above the bottom level (checked below), whose children are in the tree (the
@@ -242,6 +259,28 @@ mod tests {
         t.set(3, [0.0, 0.0]);
         assert_eq!(t.total(), [3.0, 4.0]);
         assert_eq!(t.find(0, 3.0), 2);
+    }
+
+    /// The prefetching descent chooses what `find` chooses, whatever the records' length
+    /// (shorter than the tree, equal, longer, empty).
+    #[test]
+    fn prefetching_find_equals_find() {
+        use crate::rng::UniformSource;
+        let mut rng = crate::rng::pcg(12);
+        let mut t = SumTree2::new(300);
+        for s in 0..250 {
+            let e = (4.0 * rng.uniform() - 2.0).exp();
+            t.set(s, [1.0 / e, e]);
+        }
+        let total = t.total();
+        for len in [0, 7, 250, 300, 1000] {
+            let records = vec![0u64; len];
+            for _ in 0..2000 {
+                let k = usize::from(rng.uniform() < 0.5);
+                let u = rng.uniform() * total[k];
+                assert_eq!(t.find_prefetching(k, u, &records), t.find(k, u));
+            }
+        }
     }
 
     #[test]
