@@ -61,8 +61,9 @@ impl Pick {
     /// used [`AHEAD`] picks later, when the size has drifted by a few, which moves it to
     /// a neighbouring line whenever it crosses a line's edge (docs/performance.md has the
     /// A/B against prefetching at `n` alone).
-    /// The addresses are formed without a bounds check (a prefetch never faults, and the
-    /// indices are below `n` anyway; an empty bag prefetches its dangling base, harmlessly).
+    /// The addresses are formed without a bounds check (a prefetch never faults; the back
+    /// pick's range reaches up to `DRIFT` elements past the end, and an empty bag
+    /// prefetches its dangling base, harmlessly).
     /// By reference: the picks are read in place (by value, the queue was copied to the
     /// stack to be indexed).
     #[inline(always)]

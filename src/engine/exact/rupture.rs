@@ -387,9 +387,9 @@ impl RuptureModel for WeakRupture {
         } else {
             self.tree.find_prefetching(1, (u - m) / self.e_lo, attached)
         };
+        // The descent has requested the junction's record (read only if the candidate is
+        // accepted).
         let slot = slot.min(attached.len() - 1);
-        // The junction is read only if the candidate is accepted: start loading it now.
-        super::pick::prefetch(&attached[slot]);
         // Accept with r_i / b_i = exp(a|y-c|) / (exp(a(y_hi-c)) + exp(a(c-y_lo))), from the
         // leaf weights [exp(-a c), exp(a c)] just read by the descent (no access to the
         // junction, at most one exponential): exp(a(y-c)) = exp(a y) w0, exp(a(c-y)) = w1 / exp(a y).

@@ -164,6 +164,9 @@ impl SumTree2 {
         // checked once here so that a tree read from a damaged checkpoint cannot make the
         // unchecked reads below leave the buffer).
         assert!(ARITY * self.first_bottom < self.lines.len(), "SumTree2: inconsistent shape");
+        // The first node of the level above the bottom (`first_bottom = 4 f + 1`); a tree of
+        // one level has none (`usize::MAX`: no node reaches it).
+        let above_bottom = if self.first_bottom > 0 { (self.first_bottom - 1) / ARITY } else { usize::MAX };
         let mut node = 0;
         loop {
             // The next line is one of this node's four children (256 contiguous bytes):
@@ -172,14 +175,15 @@ impl SumTree2 {
             if node < self.first_bottom {
                 // SAFETY: a node above the bottom level has its four children in the tree.
                 unsafe { self.prefetch_children(node) };
-                // A node whose children are at the bottom: its sixteen slots' records (the
-                // first slot of child `j` is `(4 node + 1 + j - first_bottom) 4`; above this
-                // level the difference wraps to beyond any `records`).
-                let first_slot = (ARITY * node + 1).wrapping_sub(self.first_bottom).wrapping_mul(ARITY);
-                if size_of::<T>() > 0 && first_slot < records.len() {
-                    let base = records.as_ptr().wrapping_add(first_slot);
-                    for j in 0..ARITY {
-                        super::pick::prefetch_ptr(base.wrapping_add(j * ARITY));
+                // A node whose children are at the bottom: the records of its sixteen slots,
+                // from `(4 node + 1 - first_bottom) 4` on, a line (64 bytes) at a time.
+                if node >= above_bottom && size_of::<T>() > 0 {
+                    let first_slot = (ARITY * node + 1 - self.first_bottom) * ARITY;
+                    if first_slot < records.len() {
+                        let base = records.as_ptr().wrapping_add(first_slot).cast::<u8>();
+                        for offset in (0..ARITY * ARITY * size_of::<T>()).step_by(64) {
+                            super::pick::prefetch_ptr(base.wrapping_add(offset));
+                        }
                     }
                 }
             }
