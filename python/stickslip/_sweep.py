@@ -136,13 +136,19 @@ def run_sweep(
         index = {f.key: i for f, i in zip(futures, todo)}
         # Each run is journaled as soon as it is back, so a client that dies loses only
         # the runs in flight.
+        # A future can come back here already lost again (its worker died after finishing
+        # it, and Dask is computing it anew): ``result()`` waits for the new result rather
+        # than reading the status once.
         for f in as_completed(futures):
-            if f.status == "finished":
-                summaries[index[f.key]] = f.result()
-                if journal is not None:
-                    journal.append(index[f.key], summaries[index[f.key]])
+            try:
+                summary = f.result()
+            except Exception:
+                continue  # reported below, in the order of the runs
+            summaries[index[f.key]] = summary
+            if journal is not None:
+                journal.append(index[f.key], summary)
         for i, f in zip(todo, futures):
-            if f.status == "error":
+            if summaries[i] is None:
                 point, replica, s = runs[i]
                 # The first failed run in the order of the runs, with the CLI's message
                 # (SweepError::Run).

@@ -1,6 +1,6 @@
 """stickslip.sweep on Dask distributed against `stickslip sweep`: the same tables, byte for
 byte, on a LocalCluster of two worker processes, in 2-D, when a worker process dies in
-the middle of the sweep, and when the sweep is continued from its journal (a killed CLI
+the middle of the sweep or after finishing a run the client has not yet read, and when the sweep is continued from its journal (a killed CLI
 sweep continued by Python, a killed Python client's sweep called again)."""
 
 from __future__ import annotations
@@ -76,6 +76,35 @@ def test_a_worker_killed_mid_sweep_changes_nothing(cli, repo, tmp_path, client):
     table = stickslip.sweep(repo / SCENE, "plate.v", VALUES, 2, client, out=str(tmp_path / "py"), run_task=task, **SET)
     assert marker.exists(), "no worker was killed"
     assert set(client.scheduler_info()["workers"]) != before, "the dead worker was not replaced"
+    assert_same_tables(c, tmp_path / "py", table)
+
+
+def test_a_result_lost_before_the_client_reads_it_is_computed_again(cli, repo, tmp_path, client, monkeypatch):
+    # The race a killed worker opens: a run finishes, and its worker dies before the sweep's
+    # loop reads the result, so the future reaches the loop "lost" (Dask is computing it
+    # again). Made certain here: the first finished run's worker process is ended, and the
+    # future handed on only once Dask has marked it lost.
+    import distributed
+
+    real = distributed.as_completed
+    seen = []
+
+    def losing_as_completed(futures):
+        for f in real(futures):
+            if not seen:
+                (holder,) = client.who_has([f])[f.key]
+                client.run(os._exit, 1, workers=[holder], on_error="ignore")  # the nanny restarts it
+                deadline = time.monotonic() + 60
+                while f.status == "finished":
+                    assert time.monotonic() < deadline, "the killed worker's result was not lost"
+                    time.sleep(0.001)
+                seen.append(f.status)
+            yield f
+
+    monkeypatch.setattr(distributed, "as_completed", losing_as_completed)
+    c = cli_sweep(cli, tmp_path / "cli", "--param", "plate.v", "--values", "0.3,1,3", "--replicas", "2")
+    table = stickslip.sweep(repo / SCENE, "plate.v", VALUES, 2, client, out=str(tmp_path / "py"), **SET)
+    assert seen and seen[0] != "finished"
     assert_same_tables(c, tmp_path / "py", table)
 
 
