@@ -3,6 +3,7 @@
 
 use std::mem::size_of;
 
+use crate::engine::exact::BinnedRupture;
 use crate::engine::exact::bags::{Attached, Detached};
 use crate::engine::exact::sumtree::SumTree2;
 use crate::engine::exact::{self};
@@ -88,19 +89,25 @@ pub fn engine_parts(scene: &Scene) -> Vec<Part> {
         return vec![part("junction states and extensions", FIXED_PER_JUNCTION)];
     }
     let mut parts = vec![part("attached and detached bags", BAGS_PER_JUNCTION)];
-    let bytes = tree_bytes(scene);
+    let (what, bytes) = rupture_bytes(scene);
     if bytes > 0 {
-        parts.push(Part { what: "rupture sum tree", bytes, per_junction: bytes as f64 / n.max(1) as f64 });
+        parts.push(Part { what, bytes, per_junction: bytes as f64 / n.max(1) as f64 });
     }
     parts
 }
 
-/// Bytes of the weak-bond rupture sum tree: weak bonds in the exact engine rupture by
-/// thinning against it, except in the direct method.
-fn tree_bytes(scene: &Scene) -> u64 {
-    let m = Method::of(scene);
-    let uses_tree = scene.junctions.bond == BondKind::Weak && matches!(m, Method::ClosedForm | Method::Series);
-    if uses_tree { SumTree2::bytes_for(scene.junctions.n) } else { 0 }
+/// The weak-bond rupture model's buffers in the exact engine, and their bytes: the closed
+/// form thins against bins of anchors (at most, with a growing vector's slack, twice a
+/// member per junction), the series method against a sum tree, the direct method needs none.
+fn rupture_bytes(scene: &Scene) -> (&'static str, u64) {
+    if scene.junctions.bond != BondKind::Weak {
+        return ("", 0);
+    }
+    match Method::of(scene) {
+        Method::ClosedForm => ("rupture bins", BinnedRupture::bytes_for(scene.junctions.n)),
+        Method::Series => ("rupture sum tree", SumTree2::bytes_for(scene.junctions.n)),
+        Method::Fixed | Method::Direct => ("", 0),
+    }
 }
 
 /// Buffers that do not grow with `N`, beyond [`BASELINE_BYTES`]: the series engine's bins
@@ -112,12 +119,17 @@ pub fn fixed_buffers(scene: &Scene, checkpoints: bool) -> u64 {
 
 /// Bytes of `checkpoint.bin` (MessagePack, structs as maps): per junction at most a bag
 /// entry with its field names (31 bytes), the fixed engine's state byte and extension (10),
-/// and a sum tree node (77 bytes per 64-byte node); plus 4 KiB of header and plate state.
+/// and a sum tree node (77 bytes per 64-byte node) or the rupture bins
+/// ([`BinnedRupture::encoded_bytes_for`]); plus 4 KiB of header and plate state.
 pub fn checkpoint_bytes(scene: &Scene) -> u64 {
     let n = scene.junctions.n as u64;
     let junctions = match Method::of(scene) {
         Method::Fixed => 10 * n,
         _ => 31 * n,
     };
-    junctions + tree_bytes(scene) / 64 * 77 + 4096
+    let rupture = match rupture_bytes(scene) {
+        ("rupture bins", _) => BinnedRupture::encoded_bytes_for(scene.junctions.n),
+        (_, b) => b / 64 * 77,
+    };
+    junctions + rupture + 4096
 }

@@ -19,11 +19,12 @@ pub struct Attached {
     /// Anchor: the junction's extension is `y - c`.
     pub c: f64,
     pub id: u32,
-    /// The series engine's handle of the junction in its `SeriesSum` (the bin it was
-    /// counted in, or in direct mode its slot in the offsets' table:
-    /// [`crate::engine::exact::series::SeriesSum::add`]); 0 in the other engines. It fills
-    /// what would be padding (the struct stays 16 bytes), so a rupture reads it with the
-    /// anchor in one random memory access.
+    /// The engine's handle of the junction: in the series engine, in its `SeriesSum` (the
+    /// bin it was counted in, or in direct mode its slot in the offsets' table:
+    /// [`crate::engine::exact::series::SeriesSum::add`]); with weak bonds in the linear
+    /// engine, its position in its rupture bin ([`crate::engine::exact::binned`]); 0
+    /// otherwise. It fills what would be padding (the struct stays 16 bytes), so a rupture
+    /// reads it with the anchor in one random memory access.
     #[serde(default)]
     pub bin: u32,
 }

@@ -415,7 +415,7 @@ impl<L: ForceLaw, B: Bond> Kernel for DirectKernel<L, B> {
 
     /// Whether the junction's rupture rate at extension `x` stays below the cap.
     #[inline]
-    fn attached(&mut self, _slot: usize, _c: f64, x: f64, _y: f64) -> bool {
+    fn attached(&mut self, _core: &mut Core<Self::Queue>, _slot: usize, _c: f64, x: f64, _y: f64) -> bool {
         !(B::IS_WEAK && self.bond.k_off(self.law.tension(x)) > self.rate_cap())
     }
 }

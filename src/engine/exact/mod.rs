@@ -16,10 +16,12 @@
 //! clock per junction.
 
 pub mod bags;
+pub mod binned;
 pub mod clocks;
 pub mod core;
 pub mod direct;
 pub mod frame;
+pub mod horizon;
 pub mod linear;
 pub mod motion;
 pub mod pick;
@@ -35,6 +37,7 @@ use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};
 use crate::scene::{Scene, TiltedMethod};
 
 pub use self::core::{Core, Exact, Kernel};
+pub use binned::BinnedRupture;
 pub use clocks::{ArrayQueue, ChannelQueue, PqQueue};
 pub use direct::{DirectKernel, ExactDirect};
 pub use linear::{ExactLinear, LinearKernel};
@@ -50,7 +53,7 @@ pub fn strong_linear<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<StrongRuptur
 }
 
 /// The exact engine for a `linear`-law scene with weak bonds.
-pub fn weak_linear<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<WeakRupture, Q> {
+pub fn weak_linear<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<BinnedRupture, Q> {
     weak_linear_with::<Q, Dynamic>(scene)
 }
 
@@ -61,9 +64,12 @@ pub fn strong_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> Exa
 
 /// [`weak_linear`] with plate motion `M` ([`Kinematic`] for `plate.kinematic`): the rupture
 /// envelope's exponent is `beta dx c` with the linear law's thinning slope `c = kappa`.
-pub fn weak_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> ExactLinear<WeakRupture, Q, M> {
+pub fn weak_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> ExactLinear<BinnedRupture, Q, M> {
     let j = &scene.junctions;
-    ExactLinear::new(scene, &Linear::from_scene(scene), |_| WeakRupture::new(j.k0, j.beta_dx() * j.kappa, j.n))
+    ExactLinear::try_new(scene, &Linear::from_scene(scene), |rng| {
+        BinnedRupture::try_new(j.k0, j.beta_dx() * j.kappa, rng)
+    })
+    .unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// The method the exact engine uses for law `L` in `scene`: the law's own
@@ -151,9 +157,9 @@ impl<L: LinearLaw, V: EngineVisitor> BondVisitor for ClosedForm<'_, L, V> {
     /// sensitivity `s = beta dx` and the law's thinning slope `c = kappa`.
     fn visit<B: Bond>(self, bond: B) -> Self::Output {
         let Self { scene, law, visitor } = self;
-        let (k0, n) = (bond.k0(), scene.junctions.n);
+        let k0 = bond.k0();
         let a = bond.force_sensitivity() * law.thinning_slope();
-        let weak = |_: &mut _| WeakRupture::try_new(k0, a, n);
+        let weak = |rng: &mut _| BinnedRupture::try_new(k0, a, rng);
         let strong = |rng: &mut _| Ok(StrongRupture::new(k0, rng));
         Ok(match (B::IS_WEAK, scene.plate.kinematic) {
             (true, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::try_new(scene, &law, weak)?),

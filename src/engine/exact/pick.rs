@@ -32,7 +32,7 @@ pub struct Pick {
 
 /// The index in `0..n` of the 64-bit uniform `u`: `floor(u n / 2^64)` (`n >= 1`).
 #[inline]
-fn index(u: u64, n: usize) -> usize {
+pub fn index(u: u64, n: usize) -> usize {
     ((u128::from(u) * n as u128) >> 64) as usize
 }
 

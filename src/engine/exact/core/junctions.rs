@@ -38,7 +38,7 @@ pub fn form<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K, obs: &
     core.counters.formations += 1;
     emit(obs, core.time(), EventKind::Formation, d.id, x, |x| k.tension(x));
     let slot = core.bags.n_attached() - 1;
-    if !k.attached(slot, c, x, y) {
+    if !k.attached(core, slot, c, x, y) {
         rupture(core, k, slot, obs);
     }
 }
@@ -63,7 +63,7 @@ pub fn rebase<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K, obs:
     let (dtau, dy) = (core.tau, k.y(core));
     core.shift(dtau, dy);
     k.shifted(core, dtau, dy);
-    let mut over = k.rebuild(&core.bags.attached);
+    let mut over = k.rebuild(&mut core.bags.attached);
     over.sort_unstable_by(|a, b| b.cmp(a));
     for slot in over {
         rupture(core, k, slot, obs);

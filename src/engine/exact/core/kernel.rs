@@ -135,7 +135,7 @@ pub trait Kernel: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send 
     }
     /// A junction attached into `slot` with anchor `c`, extension `x`, the plate at `y`.
     /// Returns `false` if its rupture rate overflows (it ruptures at once).
-    fn attached(&mut self, slot: usize, c: f64, x: f64, y: f64) -> bool;
+    fn attached(&mut self, core: &mut Core<Self::Queue>, slot: usize, c: f64, x: f64, y: f64) -> bool;
     /// The junction `a` left `slot` by `swap_remove` (the one in `last` moved into it).
     #[inline]
     fn detached(&mut self, _core: &mut Core<Self::Queue>, _slot: usize, _last: usize, _a: &Attached) {}
@@ -146,7 +146,7 @@ pub trait Kernel: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send 
     }
     /// After a re-base: everything recomputed from `attached`; the slots whose rate overflows.
     #[inline]
-    fn rebuild(&mut self, _attached: &[Attached]) -> Vec<usize> {
+    fn rebuild(&mut self, _attached: &mut [Attached]) -> Vec<usize> {
         Vec::new()
     }
     /// Prefetches the memory the next picks will touch.

@@ -267,8 +267,9 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
     const HORIZON: bool = R::IS_WEAK;
 
     fn start(&mut self, core: &mut Core<Q>) {
-        for (slot, a) in core.bags.attached.iter().enumerate() {
-            self.rupture.attached(slot, a.c, 0.0);
+        for slot in 0..core.bags.n_attached() {
+            let c = core.bags.attached[slot].c;
+            self.rupture.attached(&mut core.bags.attached, slot, c, 0.0);
         }
         self.open_piece(core);
         // At rest at t = 0; for M = 0 the velocity follows from the forces. A kinematic
@@ -393,14 +394,13 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
     }
 
     #[inline]
-    fn attached(&mut self, slot: usize, c: f64, _x: f64, y: f64) -> bool {
-        self.rupture.attached(slot, c, y)
+    fn attached(&mut self, core: &mut Core<Q>, slot: usize, c: f64, _x: f64, y: f64) -> bool {
+        self.rupture.attached(&mut core.bags.attached, slot, c, y)
     }
 
     #[inline]
-    fn detached(&mut self, core: &mut Core<Q>, slot: usize, last: usize, _a: &Attached) {
-        let moved = (slot != last).then(|| core.bags.attached[slot].c);
-        self.rupture.detached(slot, last, moved);
+    fn detached(&mut self, core: &mut Core<Q>, slot: usize, last: usize, a: &Attached) {
+        self.rupture.detached(&mut core.bags.attached, slot, last, a);
     }
 
     #[inline]
@@ -408,7 +408,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
         self.rupture.needs_rebase(self.y, core.tau)
     }
 
-    fn rebuild(&mut self, attached: &[Attached]) -> Vec<usize> {
+    fn rebuild(&mut self, attached: &mut [Attached]) -> Vec<usize> {
         self.rupture.rebuild(attached)
     }
 

@@ -312,7 +312,7 @@ impl<K: Kinetics, P: Motion> Kernel for SeriesKernel<K, P> {
     }
 
     #[inline]
-    fn attached(&mut self, slot: usize, c: f64, _x: f64, y: f64) -> bool {
+    fn attached(&mut self, _core: &mut Core<ArrayQueue>, slot: usize, c: f64, _x: f64, y: f64) -> bool {
         self.kinetics.attached(slot, c, y)
     }
 
@@ -331,7 +331,7 @@ impl<K: Kinetics, P: Motion> Kernel for SeriesKernel<K, P> {
         self.kinetics.needs_rebase(self.y(core))
     }
 
-    fn rebuild(&mut self, attached: &[Attached]) -> Vec<usize> {
+    fn rebuild(&mut self, attached: &mut [Attached]) -> Vec<usize> {
         self.kinetics.rebuild(attached)
     }
 }

@@ -185,14 +185,14 @@ impl Kinetics for WeakKinetics {
     }
     #[inline]
     fn attached(&mut self, slot: usize, c: f64, y: f64) -> bool {
-        self.envelope.attached(slot, c, y)
+        self.envelope.weigh(slot, c, y)
     }
     #[inline]
     fn detached(&mut self, slot: usize, last: usize) {
-        self.envelope.detached(slot, last, None);
+        self.envelope.unweigh(slot, last);
     }
     fn rebuild(&mut self, attached: &[Attached]) -> Vec<usize> {
-        self.envelope.rebuild(attached)
+        self.envelope.reweigh(attached)
     }
     #[inline]
     fn needs_rebase(&self, y: f64) -> bool {

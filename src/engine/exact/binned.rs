@@ -1,0 +1,527 @@
+//! Weak-bond rupture for the `linear` force law by *binned* thinning: the attached junctions
+//! are kept in bins of their anchor's exponent `a c`, a bin of width `h` in `a c`, so that
+//! every member `i` of bin `j` has `exp(-a c_i) <= U0_j = exp(-j h)` and
+//! `exp(a c_i) <= U1_j = exp((j + 1) h)` (each with a relative margin far above round-off).
+//! Over a horizon with bounds `y_lo <= y <= y_hi` ([`Horizon`]) junction `i` of bin `j`
+//! ruptures at `r_i = k0 exp(a |y - c_i|) <= b_j = k0 (exp(a y_hi) U0_j + exp(-a y_lo) U1_j)`,
+//! so candidates arrive at `B = k0 (exp(a y_hi) sum_j n_j U0_j + exp(-a y_lo) sum_j n_j U1_j)`
+//! (`n_j` the bin's count); a candidate picks a term, then a bin `j` with probability
+//! `n_j Uk_j / sum`, then a *uniform* member of the bin, and is accepted with probability
+//! `r_i / b_j` (the test of [`accept`], from the member's own weights). The accepted
+//! candidates are exactly the ruptures (Lewis & Shedler 1979), as with the sum tree of
+//! [`super::rupture::WeakRupture`]; the bins' bound is at most `exp(h)` looser, so
+//! a candidate is accepted a little less often.
+//!
+//! What this buys: the member is a uniform pick from a bag, like a strong bond's, so a
+//! candidate's uniforms are drawn a few candidates ahead ([`Ticket`]) and the memory it will
+//! read is requested while earlier candidates run: its member, then the member's record in
+//! the attached bag. A candidate touches one random memory location (the member) instead of
+//! a descent of `log4 N` lines, and the bins' sums are recomputed from their integer counts
+//! after every event (no running additions that drift). The occupied bins are few (the
+//! anchors of attached junctions span a few units of `a c`: a junction stretched far
+//! ruptures at once) and are scanned in a small table.
+//!
+//! A member stores `exp(a c)` and its slot in the attached bag; the junction's record
+//! stores its position in its bin ([`Attached::bin`]), so a rupture, which has read the
+//! record, finds and removes the member in O(1); the bin is a function of `c`. The bins'
+//! buffers grow as vectors do (with spare buffers kept for reuse, [`SPARES`]): at most
+//! about two members' bytes per junction ([`BinnedRupture::bytes_for`]).
+
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+
+use super::bags::{Attached, count};
+use super::horizon::Horizon;
+use super::motion::PlatePath;
+use super::pick::{index, prefetch_ptr};
+use super::rupture::{EXPONENT_CAP, Plan, RuptureModel, accept};
+use crate::engine::alloc::{self, AllocError};
+use crate::rng::{Pcg64, UniformSource};
+
+/// Bin width in the exponent `a c`: the bound is at most `2^(1/4)` (19%) above a member's own.
+const H: f64 = std::f64::consts::LN_2 / 4.0;
+/// Relative margin of the bins' bounds over their members' weights (the bin of `c` is
+/// `floor(c a / h)`, whose round-off moves `a c` by far less).
+const MARGIN: f64 = 1.0 + 1e-9;
+/// Bins on either side of zero: `|a c| <= EXPONENT_CAP` for every binned junction.
+const HALF: usize = (EXPONENT_CAP / H) as usize + 2;
+/// The position of a junction in no bin (its rate overflows: it ruptures at once).
+pub const UNBINNED: u32 = u32::MAX;
+
+/// A binned junction: `exp(a c)` and its slot in the attached bag.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[repr(C)]
+struct Member {
+    e: f64,
+    slot: u32,
+}
+
+/// The members of one bin and its bounds `[U0_j, U1_j]`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+struct Bin {
+    members: Vec<Member>,
+    bound: [f64; 2],
+}
+
+/// Candidates drawn ahead (a power of two, taken modulo with a mask).
+const AHEAD: usize = 4;
+/// How far a bin's count may drift before the back ticket is used.
+const DRIFT: usize = 4;
+
+/// A candidate's two uniforms, drawn [`AHEAD`] candidates before its use: `u` chooses the
+/// term and the bin, `pick` the member (`floor(pick n / 2^64)` of the bin's `n` at the
+/// time of use). Both are independent of everything before their use, so the bin their
+/// candidate will choose, and its member, can be prefetched while earlier candidates run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+struct Ticket {
+    u: f64,
+    pick: u64,
+    /// The bin the ticket chose when its member was prefetched (a hint for the second
+    /// prefetch only: the candidate chooses afresh).
+    #[serde(skip)]
+    hint: u32,
+}
+
+impl Ticket {
+    fn draw(rng: &mut Pcg64) -> Ticket {
+        let u = rng.uniform();
+        Ticket { u, pick: rng.next_u64(), hint: u32::MAX }
+    }
+}
+
+/// Emptied bins' buffers kept for reuse, at most (a bin that fills again takes one instead
+/// of new memory, which the system would have to clear).
+const SPARES: usize = 2;
+
+/// Weak bonds with the linear law: thinning against a bound per bin of anchors.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BinnedRupture {
+    pub k0: f64,
+    /// `a = beta dx kappa`.
+    pub a: f64,
+    /// `a / h`: the bin of anchor `c` is `floor(c a / h)`.
+    scale: f64,
+    /// Bin `j` at index `j + HALF`.
+    bins: Vec<Bin>,
+    /// The occupied bins lie in `lo..hi` (indices).
+    lo: usize,
+    hi: usize,
+    /// Running sums `sum_{lo <= i <= j} n_i Uk_i` over `lo..hi` (recomputed after a change of
+    /// counts, [`BinnedRupture::plan`]); their last entry is the total.
+    cumulative: Vec<[f64; 2]>,
+    /// The next [`AHEAD`] candidates' tickets; `head` is the next one's.
+    tickets: [Ticket; AHEAD],
+    head: u8,
+    /// Emptied buffers for reuse (capacity only: no state).
+    #[serde(skip)]
+    spare: Vec<Vec<Member>>,
+    /// The current horizon's bounds and their factors.
+    h: Horizon,
+}
+
+impl BinnedRupture {
+    /// The model with rate `k0 exp(a |x|)`, no junction binned; draws the first tickets.
+    pub fn try_new(k0: f64, a: f64, rng: &mut Pcg64) -> Result<BinnedRupture, AllocError> {
+        let mut bins: Vec<Bin> = alloc::with_capacity(2 * HALF + 1, "the rupture bins")?;
+        bins.extend((0..2 * HALF + 1).map(|i| {
+            let j = i as f64 - HALF as f64;
+            Bin { members: Vec::new(), bound: [(-j * H).exp() * MARGIN, ((j + 1.0) * H).exp() * MARGIN] }
+        }));
+        let tickets = std::array::from_fn(|_| Ticket::draw(rng));
+        Ok(BinnedRupture {
+            k0,
+            a,
+            scale: a / H,
+            bins,
+            lo: HALF,
+            hi: HALF,
+            cumulative: Vec::new(),
+            tickets,
+            head: 0,
+            spare: Vec::new(),
+            h: Horizon::default(),
+        })
+    }
+    /// Bytes for `n` junctions at most: the bin table, and members for all `n` with the
+    /// slack of growing vectors and the spares (twice).
+    pub fn bytes_for(n: usize) -> u64 {
+        ((2 * HALF + 1) * size_of::<Bin>()) as u64 + 2 * (n * size_of::<Member>()) as u64
+    }
+    /// Bytes of the model in a checkpoint (MessagePack, structs as maps) for `n` junctions at
+    /// most: a member with its field names (22 bytes) per junction, and at most 64 bytes
+    /// per bin of the table.
+    pub fn encoded_bytes_for(n: usize) -> u64 {
+        22 * n as u64 + 64 * (2 * HALF + 1) as u64
+    }
+    /// The bin index of anchor `c` (`|a c| <= EXPONENT_CAP`).
+    #[inline]
+    fn bin_of(&self, c: f64) -> usize {
+        let t = c * self.scale;
+        // floor(t) by truncation, for t of either sign.
+        let mut j = t as i64;
+        if (j as f64) > t {
+            j -= 1;
+        }
+        (j + HALF as i64) as usize
+    }
+    /// Recomputes the running sums over the occupied bins from their counts.
+    fn sum_up(&mut self) {
+        self.cumulative.clear();
+        let mut acc = [0.0f64; 2];
+        for bin in &self.bins[self.lo..self.hi] {
+            let (n, u) = (count(bin.members.len()), bin.bound);
+            acc = [acc[0] + n * u[0], acc[1] + n * u[1]];
+            self.cumulative.push(acc);
+        }
+    }
+    /// `[W0, W1]`, the bins' bound sums.
+    #[inline]
+    fn totals(&self) -> [f64; 2] {
+        self.cumulative.last().copied().unwrap_or([0.0; 2])
+    }
+    /// The bin (index) of term `k` where the running sum first exceeds `v` (`0 <= v <
+    /// total`); an empty bin is never chosen (its sum equals its predecessor's), and a `v`
+    /// at the total by round-off lands on the last occupied bin.
+    #[inline]
+    fn find(&self, k: usize, v: f64) -> usize {
+        let c = &self.cumulative;
+        // The first entry above v: counted without branches over a few bins (the common
+        // case), by bisection over many.
+        let i = if c.len() <= 32 {
+            c.iter().map(|c| usize::from(c[k] <= v)).sum()
+        } else {
+            c.partition_point(|c| c[k] <= v)
+        };
+        if i < self.cumulative.len() {
+            return self.lo + i;
+        }
+        // Round-off: the last bin of positive weight.
+        let mut i = self.cumulative.len() - 1;
+        while i > 0 && self.cumulative[i - 1][k] == self.cumulative[i][k] {
+            i -= 1;
+        }
+        self.lo + i
+    }
+    /// The bin a candidate with uniform `u` would choose now, if any junction is binned.
+    #[inline]
+    fn bin_for(&self, u: f64) -> Option<usize> {
+        let (m, p) = self.h.terms(self.totals());
+        // Also `None` for a NaN total.
+        if (m + p).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            return None;
+        }
+        let u = u * (m + p);
+        Some(if u < m { self.find(0, u / self.h.e_hi) } else { self.find(1, (u - m) / self.h.e_lo) })
+    }
+    /// Adds the junction in `slot` with anchor `c` to its bin, and records its position.
+    fn insert(&mut self, attached: &mut [Attached], slot: usize, c: f64) {
+        let j = self.bin_of(c);
+        let bin = &mut self.bins[j];
+        attached[slot].bin = bin.members.len() as u32;
+        let m = Member { e: (self.a * c).exp(), slot: slot as u32 };
+        if bin.members.len() == bin.members.capacity() {
+            grow(&mut bin.members, &mut self.spare);
+        }
+        bin.members.push(m);
+        if self.lo == self.hi {
+            (self.lo, self.hi) = (j, j + 1);
+        } else {
+            self.lo = self.lo.min(j);
+            self.hi = self.hi.max(j + 1);
+        }
+    }
+    /// The anchor's bin and the members' slots agree with the attached bag (tests).
+    #[cfg(test)]
+    fn check(&self, attached: &[Attached]) {
+        let mut count = 0;
+        for (i, bin) in self.bins.iter().enumerate() {
+            assert!(
+                bin.members.is_empty() || (self.lo <= i && i < self.hi),
+                "bin {i} outside {}..{}",
+                self.lo,
+                self.hi
+            );
+            for (p, m) in bin.members.iter().enumerate() {
+                let a = &attached[m.slot as usize];
+                assert_eq!(a.bin as usize, p);
+                assert_eq!(self.bin_of(a.c), i);
+                assert_eq!(m.e, (self.a * a.c).exp());
+                count += 1;
+            }
+        }
+        let unbinned = attached.iter().filter(|a| a.bin == UNBINNED).count();
+        assert_eq!(count + unbinned, attached.len());
+    }
+}
+
+/// Makes room in the full `members`: a spare buffer at least twice as large if there is one,
+/// else a new one advised onto huge pages before it is written (a large bin is read at
+/// random, as a bag is); the old buffer becomes a spare.
+#[cold]
+#[inline(never)]
+fn grow(members: &mut Vec<Member>, spare: &mut Vec<Vec<Member>>) {
+    let need = (2 * members.capacity()).max(8);
+    let mut grown = match spare.iter().position(|v| v.capacity() >= need) {
+        Some(i) => spare.swap_remove(i),
+        None => {
+            let v = Vec::with_capacity(need);
+            super::bags::advise_huge_pages(&v);
+            v
+        }
+    };
+    grown.extend_from_slice(members);
+    keep(spare, std::mem::replace(members, grown));
+}
+
+/// Keeps the buffer `v` (emptied) as a spare if there is room, or in place of a smaller one.
+fn keep(spare: &mut Vec<Vec<Member>>, mut v: Vec<Member>) {
+    v.clear();
+    if v.capacity() == 0 {
+        return;
+    }
+    if spare.len() < SPARES {
+        spare.push(v);
+    } else if let Some(small) = spare.iter_mut().min_by_key(|s| s.capacity()) {
+        if small.capacity() < v.capacity() {
+            *small = v;
+        }
+    }
+}
+
+impl RuptureModel for BinnedRupture {
+    const IS_WEAK: bool = true;
+    #[inline]
+    fn attached(&mut self, attached: &mut [Attached], slot: usize, c: f64, y: f64) -> bool {
+        if self.a * (y - c).abs() > EXPONENT_CAP || self.a * c.abs() > EXPONENT_CAP {
+            attached[slot].bin = UNBINNED;
+            return false;
+        }
+        self.insert(attached, slot, c);
+        true
+    }
+    #[inline]
+    fn detached(&mut self, attached: &mut [Attached], slot: usize, last: usize, a: &Attached) {
+        // The junction that moved from `last` into `slot`: its member now points at `slot`.
+        if slot != last {
+            let moved = attached[slot];
+            if moved.bin != UNBINNED {
+                let j = self.bin_of(moved.c);
+                self.bins[j].members[moved.bin as usize].slot = slot as u32;
+            }
+        }
+        if a.bin == UNBINNED {
+            return;
+        }
+        let j = self.bin_of(a.c);
+        let bin = &mut self.bins[j];
+        let p = a.bin as usize;
+        bin.members.swap_remove(p);
+        if let Some(m) = bin.members.get(p) {
+            attached[m.slot as usize].bin = p as u32;
+        }
+        if bin.members.is_empty() {
+            // An emptied bin's buffer becomes a spare (the anchors drift through the bins).
+            keep(&mut self.spare, std::mem::take(&mut bin.members));
+            while self.lo < self.hi && self.bins[self.lo].members.is_empty() {
+                self.lo += 1;
+            }
+            while self.hi > self.lo && self.bins[self.hi - 1].members.is_empty() {
+                self.hi -= 1;
+            }
+        }
+    }
+    fn plan<P: PlatePath>(&mut self, traj: &P, n_att: usize) -> Plan {
+        self.sum_up();
+        let w = self.totals();
+        self.h.plan(traj, n_att, self.k0, self.a, w)
+    }
+    #[inline]
+    fn pick<P: PlatePath>(&mut self, rng: &mut Pcg64, traj: &P, s: f64, attached: &[Attached]) -> Option<usize> {
+        if self.h.immediate {
+            return Some(attached.len() - 1);
+        }
+        let h = self.head as usize & (AHEAD - 1);
+        let t = self.tickets[h];
+        self.tickets[h] = Ticket::draw(rng);
+        self.head = ((h + 1) & (AHEAD - 1)) as u8;
+        let j = self.bin_for(t.u).expect("a rupture candidate with no binned junction");
+        let bin = &self.bins[j];
+        let m = bin.members[index(t.pick, bin.members.len())];
+        let (e_hi, e_lo) = (self.h.e_hi, self.h.e_lo);
+        let u = bin.bound;
+        self.request(attached);
+        let ub = rng.uniform() * (e_hi * u[0] + e_lo * u[1]);
+        accept(ub, [1.0 / m.e, m.e], e_hi, e_lo, || (self.a * traj.position(s)).exp()).then_some(m.slot as usize)
+    }
+    fn rebuild(&mut self, attached: &mut [Attached]) -> Vec<usize> {
+        for i in self.lo..self.hi {
+            self.bins[i].members.clear();
+        }
+        (self.lo, self.hi) = (HALF, HALF);
+        let mut over = Vec::new();
+        for slot in 0..attached.len() {
+            let c = attached[slot].c;
+            if self.a * c.abs() > EXPONENT_CAP {
+                attached[slot].bin = UNBINNED;
+                over.push(slot);
+            } else {
+                self.insert(attached, slot, c);
+            }
+        }
+        for i in 0..self.bins.len() {
+            if self.bins[i].members.is_empty() {
+                keep(&mut self.spare, std::mem::take(&mut self.bins[i].members));
+            }
+        }
+        over
+    }
+    #[inline]
+    fn needs_rebase(&self, y: f64, tau: f64) -> bool {
+        self.h.needs_rebase(self.a, y, tau)
+    }
+    /// Nothing: [`BinnedRupture::pick`] requests its memory at every candidate (a rejected
+    /// candidate is no event).
+    #[inline(always)]
+    fn prefetch(&self, _attached: &[Attached]) {}
+}
+
+impl BinnedRupture {
+    /// Requests the memory of later candidates, in two stages a few candidates apart: the
+    /// member the back ticket (used [`AHEAD`] candidates from now) would pick, in the bin it
+    /// would choose now, at the bin's sizes `n - DRIFT ..= n + DRIFT` (both ends and the
+    /// middle of the range: a line or two); and the attached record of the member the
+    /// second ticket would pick in the bin it chose then (its member, requested two
+    /// candidates ago, is read now). The addresses need not be valid (a prefetch never
+    /// faults).
+    #[inline(always)]
+    fn request(&mut self, attached: &[Attached]) {
+        let b = (self.head as usize + AHEAD - 1) & (AHEAD - 1);
+        let back = self.tickets[b];
+        if let Some(j) = self.bin_for(back.u) {
+            self.tickets[b].hint = j as u32;
+            let bin = &self.bins[j];
+            let n = bin.members.len();
+            let base = bin.members.as_ptr();
+            let (lo, hi) = (index(back.pick, n.saturating_sub(DRIFT)), index(back.pick, n + DRIFT));
+            prefetch_ptr(base.wrapping_add(lo));
+            prefetch_ptr(base.wrapping_add((lo + hi) / 2));
+            prefetch_ptr(base.wrapping_add(hi));
+        }
+        let second = self.tickets[(self.head as usize + 1) & (AHEAD - 1)];
+        if let Some(bin) = self.bins.get(second.hint as usize) {
+            if let Some(m) = bin.members.get(index(second.pick, bin.members.len())) {
+                prefetch_ptr(attached.as_ptr().wrapping_add(m.slot as usize));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::exact::motion::Drive;
+    use crate::rng::pcg;
+
+    fn record(c: f64, id: u32) -> Attached {
+        Attached { c, id, bin: 0 }
+    }
+
+    /// Every member's weights lie under its bin's bounds, and within `exp(h)` of them, for
+    /// anchors across the whole range and on either side of every bin's edges.
+    #[test]
+    fn bins_bound_their_members_tightly() {
+        let mut rng = pcg(1);
+        for a in [1e-3, 0.1, 1.0, 37.0] {
+            let r = BinnedRupture::try_new(1.0, a, &mut rng).unwrap();
+            let mut anchors: Vec<f64> = (0..20_000).map(|_| (rng.uniform() - 0.5) * 2.0 * EXPONENT_CAP / a).collect();
+            for j in -50i32..50 {
+                let edge = f64::from(j) * H / a;
+                anchors.extend([edge, edge.next_up(), edge.next_down()]);
+            }
+            for c in anchors {
+                let u = r.bins[r.bin_of(c)].bound;
+                let e = (a * c).exp();
+                let w = [1.0 / e, e];
+                assert!(w[0] <= u[0] && w[1] <= u[1], "a {a} c {c}: {w:?} above {u:?}");
+                let loose = H.exp() * MARGIN * (1.0 + 1e-12);
+                assert!(u[0] <= w[0] * loose && u[1] <= w[1] * loose, "a {a} c {c}: {u:?} loose over {w:?}");
+            }
+        }
+    }
+
+    /// The bookkeeping of bins, members and the records' positions stays consistent through
+    /// random attachments and `swap_remove` detachments (as the core makes them), junctions
+    /// whose rate overflows (in no bin), and re-bases.
+    #[test]
+    fn bookkeeping_survives_attachments_detachments_and_rebuilds() {
+        let mut rng = pcg(2);
+        let a = 0.7;
+        let mut r = BinnedRupture::try_new(1.0, a, &mut rng).unwrap();
+        let mut attached: Vec<Attached> = Vec::new();
+        for step in 0..20_000u32 {
+            let x = rng.uniform();
+            if attached.is_empty() || x < 0.5 {
+                // Mostly near the plate; one in fifty beyond the rate's cap.
+                let c = if rng.uniform() < 0.02 { 2.0 * EXPONENT_CAP / a } else { (rng.uniform() - 0.5) * 40.0 };
+                attached.push(record(c, step));
+                let slot = attached.len() - 1;
+                let binned = r.attached(&mut attached, slot, c, 0.0);
+                assert_eq!(binned, a * c.abs() <= EXPONENT_CAP);
+            } else if x < 0.995 {
+                let slot = index(rng.next_u64(), attached.len());
+                let last = attached.len() - 1;
+                let gone = attached.swap_remove(slot);
+                r.detached(&mut attached, slot, last, &gone);
+            } else {
+                let dy = (rng.uniform() - 0.5) * 10.0;
+                attached.iter_mut().for_each(|j| j.c -= dy);
+                let over = r.rebuild(&mut attached);
+                assert!(over.iter().all(|&s| a * attached[s].c.abs() > EXPONENT_CAP));
+            }
+            r.check(&attached);
+        }
+        assert!(r.spare.len() <= SPARES);
+    }
+
+    /// With the plate held at `y`, the accepted candidates pick junction `i` with probability
+    /// `r_i / sum r` (`r_i = exp(a |y - c_i|)`): chi-square over the junctions; and the
+    /// accepted fraction is `sum r / B` (a binomial proportion, 4.4 standard errors).
+    #[test]
+    fn candidates_pick_junctions_in_proportion_to_their_rates() {
+        let mut rng = pcg(3);
+        let (a, y) = (1.3, 0.4);
+        let anchors = [-2.0, -1.1, -0.5, -0.2, 0.0, 0.1, 0.35, 0.4, 0.9, 1.5, 2.2, 3.0];
+        let mut r = BinnedRupture::try_new(1.0, a, &mut rng).unwrap();
+        let mut attached: Vec<Attached> = anchors.iter().enumerate().map(|(i, &c)| record(c, i as u32)).collect();
+        for (slot, &c) in anchors.iter().enumerate() {
+            assert!(r.attached(&mut attached, slot, c, y));
+        }
+        let drive = Drive { y0: y, v: 0.0 };
+        let plan = r.plan(&drive, anchors.len());
+        let rates: Vec<f64> = anchors.iter().map(|&c| (a * (y - c).abs()).exp()).collect();
+        let total: f64 = rates.iter().sum();
+        let draws = 400_000;
+        let mut counts = vec![0u64; anchors.len()];
+        for _ in 0..draws {
+            if let Some(slot) = r.pick(&mut rng, &drive, 0.0, &attached) {
+                counts[slot] += 1;
+            }
+        }
+        let accepted: u64 = counts.iter().sum();
+        let chi2: f64 = counts
+            .iter()
+            .zip(&rates)
+            .map(|(&n, &ri)| {
+                let expected = accepted as f64 * ri / total;
+                (n as f64 - expected).powi(2) / expected
+            })
+            .sum();
+        // 11 degrees of freedom: 31.26 is the 0.999 quantile.
+        assert!(chi2 < 31.26, "chi2 {chi2}, counts {counts:?}");
+        let p = total / plan.rate;
+        let se = (p * (1.0 - p) / draws as f64).sqrt();
+        let got = accepted as f64 / draws as f64;
+        assert!((got - p).abs() < 4.4 * se, "accepted {got}, expected {p} +- {se}");
+        assert!(p > 0.5, "the bins' bound is loose: acceptance {p}");
+    }
+}
