@@ -1,14 +1,15 @@
 //! Exact engine throughput: events per second at N = 1e3, 1e5, 1e6 (and 1e7 for the linear
 //! law) for strong and weak bonds (linear law and the letter's tilted law; the tilted law
-//! also at N = 300, the letter's own scene, and 1e4), and the event-queue comparison
-//! (hand-written scan vs the `priority-queue` crate). Run: `cargo bench --bench exact`
-//! (`-- linear` or `-- tilted` for one law).
+//! also at N = 300, the letter's own scene, and 1e4), weak bonds' bins against a sum tree
+//! (`exact/weak-linear-tree`), and the event-queue comparison (hand-written scan vs the
+//! `priority-queue` crate). Run: `cargo bench --bench exact` (`-- linear` or `-- tilted` for
+//! one law).
 
 use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use stickslip::engine::Engine;
-use stickslip::engine::exact::{ArrayQueue, ChannelQueue, PqQueue, strong_linear, weak_linear};
+use stickslip::engine::exact::{ArrayQueue, ChannelQueue, PqQueue, strong_linear, weak_linear, weak_linear_tree};
 use stickslip::observe::{Nothing, Observer};
 use stickslip::runner::{Simulation, core_observers};
 use stickslip_testkit::{scaled_linear, scaled_tilted};
@@ -100,6 +101,15 @@ fn sizes(c: &mut Criterion) {
     }
 }
 
+/// Weak bonds' rupture candidates drawn from a sum tree of the junctions' weights, the
+/// comparison for the bins of `exact/weak-linear` (the same process and scene).
+fn weak_tree(c: &mut Criterion) {
+    for n in [1_000_000, 10_000_000] {
+        let s = scaled_linear(n, "weak");
+        bench_engine(c, "exact/weak-linear-tree", n, || weak_linear_tree::<ArrayQueue>(&s));
+    }
+}
+
 /// The letter's tilted law (scaled Fig. 1, `exact.tilted` at its default, `series`); N = 300
 /// is the letter's Fig. 1 itself.
 fn tilted(c: &mut Criterion) {
@@ -135,5 +145,5 @@ fn queues(c: &mut Criterion) {
     both::<PqQueue>(c, "priority-queue");
 }
 
-criterion_group!(benches, sizes, tilted, with_statistics, queues);
+criterion_group!(benches, sizes, weak_tree, tilted, with_statistics, queues);
 criterion_main!(benches);

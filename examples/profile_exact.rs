@@ -7,17 +7,18 @@
 //! cargo build --profile perf --example profile_exact
 //! target/perf/examples/profile_exact strong 1000000 100          # engine alone
 //! target/perf/examples/profile_exact weak 1000000 50 --stats     # with the run's statistics
+//! target/perf/examples/profile_exact weak-tree 1000000 50        # weak bonds from a sum tree
 //! /usr/bin/time -v target/perf/examples/profile_exact strong 100000000 1   # N = 1e8 (about 4 GB)
 //! valgrind --tool=callgrind target/perf/examples/profile_exact strong 1000000 10
 //! ```
 
 use stickslip::engine::Engine;
-use stickslip::engine::exact::{ArrayQueue, strong_linear, weak_linear};
+use stickslip::engine::exact::{ArrayQueue, strong_linear, weak_linear, weak_linear_tree};
 use stickslip::observe::{Nothing, Observer};
 use stickslip::runner::core_observers;
 use stickslip_testkit::scaled_linear;
 
-const USAGE: &str = "usage: profile_exact strong|weak N SPAN [--stats]";
+const USAGE: &str = "usage: profile_exact strong|weak|weak-tree N SPAN [--stats]";
 
 /// Warm-up to `t = 20`, then `span` more: `(events, seconds)` of the second part. Prints
 /// the warm-up's wall time.
@@ -39,20 +40,22 @@ fn time<E: Engine, O: Observer>(mut engine: E, obs: &mut O, span: f64) -> (u64, 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (bond, n, span) = match args.as_slice() {
-        [b, n, s, ..] if b == "strong" || b == "weak" => match (n.parse::<usize>(), s.parse::<f64>()) {
-            (Ok(n), Ok(s)) if n > 0 && s > 0.0 => (b.as_str(), n, s),
-            _ => {
-                eprintln!("{USAGE}");
-                std::process::exit(2);
+        [b, n, s, ..] if ["strong", "weak", "weak-tree"].contains(&b.as_str()) => {
+            match (n.parse::<usize>(), s.parse::<f64>()) {
+                (Ok(n), Ok(s)) if n > 0 && s > 0.0 => (b.as_str(), n, s),
+                _ => {
+                    eprintln!("{USAGE}");
+                    std::process::exit(2);
+                }
             }
-        },
+        }
         _ => {
             eprintln!("{USAGE}");
             std::process::exit(2);
         }
     };
     let stats = args.iter().any(|a| a == "--stats");
-    let scene = scaled_linear(n, bond);
+    let scene = scaled_linear(n, if bond == "strong" { "strong" } else { "weak" });
     // Set-up: the engine built (junction buffers and the initial state drawn).
     let setup = std::time::Instant::now();
     let (events, seconds) = match (bond, stats) {
@@ -63,6 +66,16 @@ fn main() {
         }
         ("strong", true) => {
             let e = strong_linear::<ArrayQueue>(&scene);
+            eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
+            time(e, &mut core_observers(&scene), span)
+        }
+        ("weak-tree", false) => {
+            let e = weak_linear_tree::<ArrayQueue>(&scene);
+            eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
+            time(e, &mut Nothing, span)
+        }
+        ("weak-tree", true) => {
+            let e = weak_linear_tree::<ArrayQueue>(&scene);
             eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
             time(e, &mut core_observers(&scene), span)
         }

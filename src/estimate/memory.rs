@@ -3,10 +3,10 @@
 
 use std::mem::size_of;
 
-use crate::engine::exact::BinnedRupture;
 use crate::engine::exact::bags::{Attached, Detached};
 use crate::engine::exact::sumtree::SumTree2;
 use crate::engine::exact::{self};
+use crate::engine::exact::{BINNED_FROM, BinnedRupture};
 use crate::physics::ExactMethod;
 use crate::scene::laws::{LawVisitor, with_force_law};
 use crate::scene::{BondKind, EngineKind, Scene};
@@ -97,14 +97,18 @@ pub fn engine_parts(scene: &Scene) -> Vec<Part> {
 }
 
 /// The weak-bond rupture model's buffers in the exact engine, and their bytes: the closed
-/// form thins against bins of anchors (at most, with a growing vector's slack, twice a
-/// member per junction), the series method against a sum tree, the direct method needs none.
+/// form thins against bins of anchors from [`BINNED_FROM`] junctions on (two members per
+/// junction), against a sum tree below, as the series method does; the direct method
+/// needs none.
 fn rupture_bytes(scene: &Scene) -> (&'static str, u64) {
     if scene.junctions.bond != BondKind::Weak {
         return ("", 0);
     }
     match Method::of(scene) {
-        Method::ClosedForm => ("rupture bins", BinnedRupture::bytes_for(scene.junctions.n)),
+        Method::ClosedForm if scene.junctions.n >= BINNED_FROM => {
+            ("rupture bins", BinnedRupture::bytes_for(scene.junctions.n))
+        }
+        Method::ClosedForm => ("rupture sum tree", SumTree2::bytes_for(scene.junctions.n)),
         Method::Series => ("rupture sum tree", SumTree2::bytes_for(scene.junctions.n)),
         Method::Fixed | Method::Direct => ("", 0),
     }

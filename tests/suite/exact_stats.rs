@@ -82,15 +82,22 @@ fn fixed_step_at_the_letters_dt_fails_the_single_bond_test() {
 /// This exercises thinning with the sum tree over many junctions.
 #[test]
 fn many_weak_bonds_lifetimes_and_waiting_times() {
+    many_weak_bonds(200, 2500.0);
+}
+
+/// The same with `N = 1e5` junctions, whose rupture candidates come from bins of anchors
+/// (`BINNED_FROM`).
+#[test]
+fn many_weak_bonds_in_bins_lifetimes_and_waiting_times() {
+    assert!(stickslip::engine::exact::BINNED_FROM <= 100_000);
+    many_weak_bonds(100_000, 300.0);
+}
+
+fn many_weak_bonds(n: usize, t_end: f64) {
+    let (n, t) = (format!("junctions.n={n}"), format!("run.t_end={t_end}"));
     let s = scene(
         SINGLE_WEAK_BOND,
-        &[
-            "junctions.n=200",
-            "junctions.kon0=0.1",
-            "junctions.reattach=unstretched",
-            "junctions.initial=detached",
-            "run.t_end=2500",
-        ],
+        &[&n, "junctions.kon0=0.1", "junctions.reattach=unstretched", "junctions.initial=detached", &t],
     );
     let ev = events_of(&s);
     let t_end = s.run.t_end;

@@ -66,6 +66,19 @@ fn exact_engine_rupture_times_follow_the_exact_survival() {
     assert!(d < crit, "KS D = {d:.5} >= critical {crit:.5} (n = {n})");
 }
 
+/// The same at `N = 2e5`, where the engine draws its rupture candidates from bins of
+/// anchors (`BINNED_FROM`) instead of the sum tree.
+#[test]
+fn binned_engine_rupture_times_follow_the_exact_survival() {
+    assert!(stickslip::engine::exact::BINNED_FROM <= 200_000);
+    let mut t = rupture_times(&["junctions.n=200000"]);
+    let n = t.len();
+    let d = ks_statistic(&mut t, |t| 1.0 - survival(t));
+    let crit = ks_critical(n, ALPHA);
+    eprintln!("exact engine, bins: KS D = {d:.5}, critical {crit:.5} (n = {n})");
+    assert!(d < crit, "KS D = {d:.5} >= critical {crit:.5} (n = {n})");
+}
+
 /// The fixed-step scheme's rupture law at step `dt`: a junction attached at `x = 0` at
 /// `t = 0` ruptures at step `j >= 0` (reported at `t = j dt`) with probability
 /// `p_j = min(1, k(V j dt) dt)`, so `P(T <= j dt) = 1 - prod_{i<=j} (1 - p_i)`.

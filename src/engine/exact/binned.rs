@@ -24,8 +24,9 @@
 //! A member stores `exp(a c)` and its slot in the attached bag; the junction's record
 //! stores its position in its bin ([`Attached::bin`]), so a rupture, which has read the
 //! record, finds and removes the member in O(1); the bin is a function of `c`. The bins'
-//! buffers grow as vectors do (with spare buffers kept for reuse, [`SPARES`]): at most
-//! about two members' bytes per junction ([`BinnedRupture::bytes_for`]).
+//! buffers grow by doubling and shrink by half when a quarter full, and emptied ones are
+//! kept for reuse ([`SPARES`]): about a member's bytes per junction in runs, at most five
+//! ([`BinnedRupture::bytes_for`]).
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -38,6 +39,14 @@ use super::rupture::{EXPONENT_CAP, Plan, RuptureModel, accept};
 use crate::engine::alloc::{self, AllocError};
 use crate::rng::{Pcg64, UniformSource};
 
+/// The number of junctions from which a run draws weak bonds' rupture candidates from bins
+/// (below it, from the sum tree of [`super::rupture::WeakRupture`]). Below it the tree
+/// stays in the processor's caches, picks with each junction's own bound, and needs no
+/// sum over the occupied bins after every event: on the bench's scene the two are level at
+/// `N = 1e5` and the tree is 1.1x faster at `1e3` and `1e4`, and on a creep scene
+/// (`N = 300`, anchors spread over 50 bins) 1.3x (docs/performance.md). From `1e6` on, the
+/// bins are 1.4x to 1.9x faster.
+pub const BINNED_FROM: usize = 100_000;
 /// Bin width in the exponent `a c`: the bound is at most `2^(1/4)` (19%) above a member's own.
 const H: f64 = std::f64::consts::LN_2 / 4.0;
 /// Relative margin of the bins' bounds over their members' weights (the bin of `c` is
@@ -90,7 +99,8 @@ impl Ticket {
 }
 
 /// Emptied bins' buffers kept for reuse, at most (a bin that fills again takes one instead
-/// of new memory, which the system would have to clear).
+/// of new memory, which the system would have to clear), and together at most a member per
+/// junction.
 const SPARES: usize = 2;
 
 /// Weak bonds with the linear law: thinning against a bound per bin of anchors.
@@ -106,22 +116,23 @@ pub struct BinnedRupture {
     /// The occupied bins lie in `lo..hi` (indices).
     lo: usize,
     hi: usize,
-    /// Running sums `sum_{lo <= i <= j} n_i Uk_i` over `lo..hi` (recomputed after a change of
-    /// counts, [`BinnedRupture::plan`]); their last entry is the total.
+    /// Running sums `sum_{lo <= i <= j} n_i Uk_i` over `lo..hi`, recomputed from the counts
+    /// by [`BinnedRupture::plan`] after every event (never accumulated across events); their
+    /// last entry is `[W0, W1]`.
     cumulative: Vec<[f64; 2]>,
     /// The next [`AHEAD`] candidates' tickets; `head` is the next one's.
     tickets: [Ticket; AHEAD],
     head: u8,
-    /// Emptied buffers for reuse (capacity only: no state).
-    #[serde(skip)]
-    spare: Vec<Vec<Member>>,
+    /// Emptied buffers for reuse (capacity only: no state), at most `n` members together.
+    spare: Spares,
     /// The current horizon's bounds and their factors.
     h: Horizon,
 }
 
 impl BinnedRupture {
-    /// The model with rate `k0 exp(a |x|)`, no junction binned; draws the first tickets.
-    pub fn try_new(k0: f64, a: f64, rng: &mut Pcg64) -> Result<BinnedRupture, AllocError> {
+    /// The model for `n` junctions with rate `k0 exp(a |x|)`, none binned; draws the first
+    /// tickets.
+    pub fn try_new(k0: f64, a: f64, n: usize, rng: &mut Pcg64) -> Result<BinnedRupture, AllocError> {
         let mut bins: Vec<Bin> = alloc::with_capacity(2 * HALF + 1, "the rupture bins")?;
         bins.extend((0..2 * HALF + 1).map(|i| {
             let j = i as f64 - HALF as f64;
@@ -138,20 +149,23 @@ impl BinnedRupture {
             cumulative: Vec::new(),
             tickets,
             head: 0,
-            spare: Vec::new(),
+            spare: Spares { buffers: Vec::new(), limit: n },
             h: Horizon::default(),
         })
     }
-    /// Bytes for `n` junctions at most: the bin table, and members for all `n` with the
-    /// slack of growing vectors and the spares (twice).
+    /// Bytes for `n` junctions: the bin table, and a member per junction (what runs reach:
+    /// 16.5 to 17.6 bytes per junction at `N = 1e6` and `1e7` on the bench's scene, where a
+    /// third of the junctions are attached; the buffers grow by doubling, shrink by half
+    /// when a quarter full, and the spares hold at most a member per junction, so no run
+    /// holds more than five members per junction).
     pub fn bytes_for(n: usize) -> u64 {
-        ((2 * HALF + 1) * size_of::<Bin>()) as u64 + 2 * (n * size_of::<Member>()) as u64
+        ((2 * HALF + 1) * (size_of::<Bin>() + size_of::<[f64; 2]>())) as u64 + (n * size_of::<Member>()) as u64
     }
     /// Bytes of the model in a checkpoint (MessagePack, structs as maps) for `n` junctions at
-    /// most: a member with its field names (22 bytes) per junction, and at most 64 bytes
-    /// per bin of the table.
+    /// most: a member with its field names (22 bytes) per junction, and at most 96 bytes
+    /// per bin of the table (its bounds, and its running sums when occupied).
     pub fn encoded_bytes_for(n: usize) -> u64 {
-        22 * n as u64 + 64 * (2 * HALF + 1) as u64
+        22 * n as u64 + 96 * (2 * HALF + 1) as u64
     }
     /// The bin index of anchor `c` (`|a c| <= EXPONENT_CAP`).
     #[inline]
@@ -192,12 +206,12 @@ impl BinnedRupture {
         } else {
             c.partition_point(|c| c[k] <= v)
         };
-        if i < self.cumulative.len() {
+        if i < c.len() {
             return self.lo + i;
         }
         // Round-off: the last bin of positive weight.
-        let mut i = self.cumulative.len() - 1;
-        while i > 0 && self.cumulative[i - 1][k] == self.cumulative[i][k] {
+        let mut i = c.len() - 1;
+        while i > 0 && c[i - 1][k] == c[i][k] {
             i -= 1;
         }
         self.lo + i
@@ -233,7 +247,7 @@ impl BinnedRupture {
     /// The anchor's bin and the members' slots agree with the attached bag (tests).
     #[cfg(test)]
     fn check(&self, attached: &[Attached]) {
-        let mut count = 0;
+        let mut members = 0;
         for (i, bin) in self.bins.iter().enumerate() {
             assert!(
                 bin.members.is_empty() || (self.lo <= i && i < self.hi),
@@ -246,45 +260,69 @@ impl BinnedRupture {
                 assert_eq!(a.bin as usize, p);
                 assert_eq!(self.bin_of(a.c), i);
                 assert_eq!(m.e, (self.a * a.c).exp());
-                count += 1;
+                members += 1;
             }
         }
         let unbinned = attached.iter().filter(|a| a.bin == UNBINNED).count();
-        assert_eq!(count + unbinned, attached.len());
+        assert_eq!(members + unbinned, attached.len());
+    }
+}
+
+/// Emptied buffers kept for reuse: at most [`SPARES`], of at most `limit` members together
+/// (a checkpoint keeps the limit, not the buffers).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+struct Spares {
+    #[serde(skip)]
+    buffers: Vec<Vec<Member>>,
+    limit: usize,
+}
+
+impl Spares {
+    /// Keeps the buffer `v` (emptied) if it fits, in place of a smaller one if need be.
+    fn keep(&mut self, mut v: Vec<Member>) {
+        v.clear();
+        let held: usize = self.buffers.iter().map(Vec::capacity).sum();
+        if v.capacity() == 0 || v.capacity() > self.limit {
+            return;
+        }
+        if self.buffers.len() < SPARES && held + v.capacity() <= self.limit {
+            self.buffers.push(v);
+        } else if let Some(i) = (0..self.buffers.len()).min_by_key(|&i| self.buffers[i].capacity()) {
+            let small = self.buffers[i].capacity();
+            if small < v.capacity() && held - small + v.capacity() <= self.limit {
+                self.buffers[i] = v;
+            }
+        }
+    }
+    /// A kept buffer of at least `need` members, if there is one.
+    fn take(&mut self, need: usize) -> Option<Vec<Member>> {
+        let i = self.buffers.iter().position(|v| v.capacity() >= need)?;
+        Some(self.buffers.swap_remove(i))
     }
 }
 
 /// Makes room in the full `members`: a spare buffer at least twice as large if there is one,
 /// else a new one advised onto huge pages before it is written (a large bin is read at
-/// random, as a bag is); the old buffer becomes a spare.
+/// random, as a bag is). The old buffer is freed.
 #[cold]
 #[inline(never)]
-fn grow(members: &mut Vec<Member>, spare: &mut Vec<Vec<Member>>) {
+fn grow(members: &mut Vec<Member>, spare: &mut Spares) {
     let need = (2 * members.capacity()).max(8);
-    let mut grown = match spare.iter().position(|v| v.capacity() >= need) {
-        Some(i) => spare.swap_remove(i),
-        None => {
-            let v = Vec::with_capacity(need);
-            super::bags::advise_huge_pages(&v);
-            v
-        }
-    };
+    let mut grown = spare.take(need).unwrap_or_else(|| {
+        let v = Vec::with_capacity(need);
+        super::bags::advise_huge_pages(&v);
+        v
+    });
     grown.extend_from_slice(members);
-    keep(spare, std::mem::replace(members, grown));
+    *members = grown;
 }
 
-/// Keeps the buffer `v` (emptied) as a spare if there is room, or in place of a smaller one.
-fn keep(spare: &mut Vec<Vec<Member>>, mut v: Vec<Member>) {
-    v.clear();
-    if v.capacity() == 0 {
-        return;
-    }
-    if spare.len() < SPARES {
-        spare.push(v);
-    } else if let Some(small) = spare.iter_mut().min_by_key(|s| s.capacity()) {
-        if small.capacity() < v.capacity() {
-            *small = v;
-        }
+/// Halves the buffer of `members` once they fill less than a quarter of it (amortised O(1)
+/// per removal; a bin keeps at most four times its members' memory).
+#[inline]
+fn shrink(members: &mut Vec<Member>) {
+    if members.capacity() >= 64 && 4 * members.len() < members.capacity() {
+        members.shrink_to(members.capacity() / 2);
     }
 }
 
@@ -319,9 +357,10 @@ impl RuptureModel for BinnedRupture {
         if let Some(m) = bin.members.get(p) {
             attached[m.slot as usize].bin = p as u32;
         }
+        shrink(&mut bin.members);
         if bin.members.is_empty() {
             // An emptied bin's buffer becomes a spare (the anchors drift through the bins).
-            keep(&mut self.spare, std::mem::take(&mut bin.members));
+            self.spare.keep(std::mem::take(&mut bin.members));
             while self.lo < self.hi && self.bins[self.lo].members.is_empty() {
                 self.lo += 1;
             }
@@ -354,7 +393,8 @@ impl RuptureModel for BinnedRupture {
         accept(ub, [1.0 / m.e, m.e], e_hi, e_lo, || (self.a * traj.position(s)).exp()).then_some(m.slot as usize)
     }
     fn rebuild(&mut self, attached: &mut [Attached]) -> Vec<usize> {
-        for i in self.lo..self.hi {
+        let before = self.lo..self.hi;
+        for i in before.clone() {
             self.bins[i].members.clear();
         }
         (self.lo, self.hi) = (HALF, HALF);
@@ -368,9 +408,11 @@ impl RuptureModel for BinnedRupture {
                 self.insert(attached, slot, c);
             }
         }
-        for i in 0..self.bins.len() {
+        // Bins emptied by the shift give their buffers to the spares (only bins occupied
+        // before can hold one: a re-base every `N / 4` events must not visit the whole table).
+        for i in before {
             if self.bins[i].members.is_empty() {
-                keep(&mut self.spare, std::mem::take(&mut self.bins[i].members));
+                self.spare.keep(std::mem::take(&mut self.bins[i].members));
             }
         }
         over
@@ -432,7 +474,7 @@ mod tests {
     fn bins_bound_their_members_tightly() {
         let mut rng = pcg(1);
         for a in [1e-3, 0.1, 1.0, 37.0] {
-            let r = BinnedRupture::try_new(1.0, a, &mut rng).unwrap();
+            let r = BinnedRupture::try_new(1.0, a, 64, &mut rng).unwrap();
             let mut anchors: Vec<f64> = (0..20_000).map(|_| (rng.uniform() - 0.5) * 2.0 * EXPONENT_CAP / a).collect();
             for j in -50i32..50 {
                 let edge = f64::from(j) * H / a;
@@ -456,7 +498,7 @@ mod tests {
     fn bookkeeping_survives_attachments_detachments_and_rebuilds() {
         let mut rng = pcg(2);
         let a = 0.7;
-        let mut r = BinnedRupture::try_new(1.0, a, &mut rng).unwrap();
+        let mut r = BinnedRupture::try_new(1.0, a, 64, &mut rng).unwrap();
         let mut attached: Vec<Attached> = Vec::new();
         for step in 0..20_000u32 {
             let x = rng.uniform();
@@ -480,7 +522,8 @@ mod tests {
             }
             r.check(&attached);
         }
-        assert!(r.spare.len() <= SPARES);
+        assert!(r.spare.buffers.len() <= SPARES);
+        assert!(r.spare.buffers.iter().map(Vec::capacity).sum::<usize>() <= 64);
     }
 
     /// With the plate held at `y`, the accepted candidates pick junction `i` with probability
@@ -491,7 +534,7 @@ mod tests {
         let mut rng = pcg(3);
         let (a, y) = (1.3, 0.4);
         let anchors = [-2.0, -1.1, -0.5, -0.2, 0.0, 0.1, 0.35, 0.4, 0.9, 1.5, 2.2, 3.0];
-        let mut r = BinnedRupture::try_new(1.0, a, &mut rng).unwrap();
+        let mut r = BinnedRupture::try_new(1.0, a, 64, &mut rng).unwrap();
         let mut attached: Vec<Attached> = anchors.iter().enumerate().map(|(i, &c)| record(c, i as u32)).collect();
         for (slot, &c) in anchors.iter().enumerate() {
             assert!(r.attached(&mut attached, slot, c, y));

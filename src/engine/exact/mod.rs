@@ -37,7 +37,7 @@ use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};
 use crate::scene::{Scene, TiltedMethod};
 
 pub use self::core::{Core, Exact, Kernel};
-pub use binned::BinnedRupture;
+pub use binned::{BINNED_FROM, BinnedRupture};
 pub use clocks::{ArrayQueue, ChannelQueue, PqQueue};
 pub use direct::{DirectKernel, ExactDirect};
 pub use linear::{ExactLinear, LinearKernel};
@@ -52,9 +52,18 @@ pub fn strong_linear<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<StrongRuptur
     strong_linear_with::<Q, Dynamic>(scene)
 }
 
-/// The exact engine for a `linear`-law scene with weak bonds.
+/// The exact engine for a `linear`-law scene with weak bonds, its rupture candidates drawn
+/// from bins of anchors (what a run uses from [`BINNED_FROM`] junctions on).
 pub fn weak_linear<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<BinnedRupture, Q> {
     weak_linear_with::<Q, Dynamic>(scene)
+}
+
+/// [`weak_linear`] with the candidates drawn from a sum tree of the junctions' weights
+/// ([`WeakRupture`]) instead of bins: the same process, another random stream (what a run
+/// uses below [`BINNED_FROM`] junctions, and the bench's comparison for the bins).
+pub fn weak_linear_tree<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<WeakRupture, Q> {
+    let j = &scene.junctions;
+    ExactLinear::new(scene, &Linear::from_scene(scene), |_| WeakRupture::new(j.k0, j.beta_dx() * j.kappa, j.n))
 }
 
 /// [`strong_linear`] with plate motion `M` ([`Kinematic`] for `plate.kinematic`).
@@ -67,7 +76,7 @@ pub fn strong_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> Exa
 pub fn weak_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> ExactLinear<BinnedRupture, Q, M> {
     let j = &scene.junctions;
     ExactLinear::try_new(scene, &Linear::from_scene(scene), |rng| {
-        BinnedRupture::try_new(j.k0, j.beta_dx() * j.kappa, rng)
+        BinnedRupture::try_new(j.k0, j.beta_dx() * j.kappa, j.n, rng)
     })
     .unwrap_or_else(|e| panic!("{e}"))
 }
@@ -154,16 +163,25 @@ struct ClosedForm<'a, L, V> {
 impl<L: LinearLaw, V: EngineVisitor> BondVisitor for ClosedForm<'_, L, V> {
     type Output = Result<V::Output, EngineError>;
     /// Weak bonds: the rupture envelope `k0 exp(a |x|)`, `a = s c` from the bond's force
-    /// sensitivity `s = beta dx` and the law's thinning slope `c = kappa`.
+    /// sensitivity `s = beta dx` and the law's thinning slope `c = kappa`; its candidates
+    /// drawn from bins of anchors from [`BINNED_FROM`] junctions on, from a sum tree below.
     fn visit<B: Bond>(self, bond: B) -> Self::Output {
         let Self { scene, law, visitor } = self;
-        let k0 = bond.k0();
+        let (k0, n) = (bond.k0(), scene.junctions.n);
         let a = bond.force_sensitivity() * law.thinning_slope();
-        let weak = |rng: &mut _| BinnedRupture::try_new(k0, a, rng);
+        let binned = |rng: &mut _| BinnedRupture::try_new(k0, a, n, rng);
+        let tree = |_: &mut _| WeakRupture::try_new(k0, a, n);
         let strong = |rng: &mut _| Ok(StrongRupture::new(k0, rng));
+        let bins = n >= BINNED_FROM;
         Ok(match (B::IS_WEAK, scene.plate.kinematic) {
-            (true, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::try_new(scene, &law, weak)?),
-            (true, false) => visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::try_new(scene, &law, weak)?),
+            (true, true) if bins => {
+                visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::try_new(scene, &law, binned)?)
+            }
+            (true, false) if bins => {
+                visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::try_new(scene, &law, binned)?)
+            }
+            (true, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::try_new(scene, &law, tree)?),
+            (true, false) => visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::try_new(scene, &law, tree)?),
             (false, true) => visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::try_new(scene, &law, strong)?),
             (false, false) => visitor.visit(ExactLinear::<_, DefaultQueue, Dynamic>::try_new(scene, &law, strong)?),
         })
