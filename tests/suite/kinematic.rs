@@ -70,7 +70,7 @@ fn exact_engine_rupture_times_follow_the_exact_survival() {
 /// anchors (`BINNED_FROM`) instead of the sum tree.
 #[test]
 fn binned_engine_rupture_times_follow_the_exact_survival() {
-    assert!(stickslip::engine::exact::BINNED_FROM <= 200_000);
+    const { assert!(stickslip::engine::exact::BINNED_FROM <= 200_000) };
     let mut t = rupture_times(&["junctions.n=200000"]);
     let n = t.len();
     let d = ks_statistic(&mut t, |t| 1.0 - survival(t));
