@@ -104,7 +104,7 @@ fn sizes(c: &mut Criterion) {
 /// Weak bonds' rupture candidates drawn from a sum tree of the junctions' weights, the
 /// comparison for the bins of `exact/weak-linear` (the same process and scene).
 fn weak_tree(c: &mut Criterion) {
-    for n in [1_000_000, 10_000_000] {
+    for n in [1_000, 100_000, 1_000_000, 10_000_000] {
         let s = scaled_linear(n, "weak");
         bench_engine(c, "exact/weak-linear-tree", n, || weak_linear_tree::<ArrayQueue>(&s));
     }

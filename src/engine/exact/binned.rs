@@ -40,12 +40,13 @@ use crate::engine::alloc::{self, AllocError};
 use crate::rng::{Pcg64, UniformSource};
 
 /// The number of junctions from which a run draws weak bonds' rupture candidates from bins
-/// (below it, from the sum tree of [`super::rupture::WeakRupture`]). Below it the tree
-/// stays in the processor's caches, picks with each junction's own bound, and needs no
-/// sum over the occupied bins after every event: on the bench's scene the two are level at
-/// `N = 1e5` and the tree is 1.1x faster at `1e3` and `1e4`, and on a creep scene
-/// (`N = 300`, anchors spread over 50 bins) 1.3x (docs/performance.md). From `1e6` on, the
-/// bins are 1.4x to 1.9x faster.
+/// (below it, from the sum tree of [`super::rupture::WeakRupture`]). Below it the tree stays
+/// in the processor's caches (2 MB at `1e5`), bounds each junction by its own weight, and
+/// needs no pass over the occupied bins after every event, so it is the cheaper one where
+/// the anchors spread over many bins: `scenarios/creep.toml` (`N = 300`, about 50 occupied
+/// bins) runs 1.2x faster with it. On the bench's narrow spread the bins gain 1.03x at
+/// `N = 1e3`, 1.15x at `1e4`, 1.3x at `1e5`, and 1.5x and 2x at `1e6` and `1e7`, where the
+/// tree waits on memory (docs/performance.md).
 pub const BINNED_FROM: usize = 100_000;
 /// Bin width in the exponent `a c`: the bound is at most `2^(1/4)` (19%) above a member's own.
 const H: f64 = std::f64::consts::LN_2 / 4.0;
