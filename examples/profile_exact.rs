@@ -12,6 +12,9 @@
 //! valgrind --tool=callgrind target/perf/examples/profile_exact strong 1000000 10
 //! ```
 
+use std::time::Instant;
+
+use stickslip::Scene;
 use stickslip::engine::Engine;
 use stickslip::engine::exact::{ArrayQueue, strong_linear, weak_linear, weak_linear_tree};
 use stickslip::observe::{Nothing, Observer};
@@ -37,6 +40,13 @@ fn time<E: Engine, O: Observer>(mut engine: E, obs: &mut O, span: f64) -> (u64, 
     (engine.counters().events.expect("the exact engine counts events") - before, seconds)
 }
 
+/// Prints the set-up time (since `setup`), then [`time`]s `engine` with the run's observers
+/// (`stats`) or none.
+fn measure<E: Engine>(engine: E, scene: &Scene, stats: bool, setup: Instant, span: f64) -> (u64, f64) {
+    eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
+    if stats { time(engine, &mut core_observers(scene), span) } else { time(engine, &mut Nothing, span) }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (bond, n, span) = match args.as_slice() {
@@ -57,38 +67,11 @@ fn main() {
     let stats = args.iter().any(|a| a == "--stats");
     let scene = scaled_linear(n, if bond == "strong" { "strong" } else { "weak" });
     // Set-up: the engine built (junction buffers and the initial state drawn).
-    let setup = std::time::Instant::now();
-    let (events, seconds) = match (bond, stats) {
-        ("strong", false) => {
-            let e = strong_linear::<ArrayQueue>(&scene);
-            eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
-            time(e, &mut Nothing, span)
-        }
-        ("strong", true) => {
-            let e = strong_linear::<ArrayQueue>(&scene);
-            eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
-            time(e, &mut core_observers(&scene), span)
-        }
-        ("weak-tree", false) => {
-            let e = weak_linear_tree::<ArrayQueue>(&scene);
-            eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
-            time(e, &mut Nothing, span)
-        }
-        ("weak-tree", true) => {
-            let e = weak_linear_tree::<ArrayQueue>(&scene);
-            eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
-            time(e, &mut core_observers(&scene), span)
-        }
-        (_, false) => {
-            let e = weak_linear::<ArrayQueue>(&scene);
-            eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
-            time(e, &mut Nothing, span)
-        }
-        (_, true) => {
-            let e = weak_linear::<ArrayQueue>(&scene);
-            eprintln!("set-up: {:.2} s", setup.elapsed().as_secs_f64());
-            time(e, &mut core_observers(&scene), span)
-        }
+    let setup = Instant::now();
+    let (events, seconds) = match bond {
+        "strong" => measure(strong_linear::<ArrayQueue>(&scene), &scene, stats, setup, span),
+        "weak-tree" => measure(weak_linear_tree::<ArrayQueue>(&scene), &scene, stats, setup, span),
+        _ => measure(weak_linear::<ArrayQueue>(&scene), &scene, stats, setup, span),
     };
     println!("{bond} N = {n}: {events} events in {seconds:.3} s = {:.3} M events/s", events as f64 / seconds / 1e6);
 }
