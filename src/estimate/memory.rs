@@ -97,8 +97,8 @@ pub fn engine_parts(scene: &Scene) -> Vec<Part> {
 }
 
 /// The weak-bond rupture model's buffers in the exact engine, and their bytes: the closed
-/// form thins against bins of anchors from [`BINNED_FROM`] junctions on (two members per
-/// junction), against a sum tree below, as the series method does; the direct method
+/// form thins against bins of anchors from [`BINNED_FROM`] junctions on
+/// ([`BinnedRupture::bytes_for`]), against a sum tree below, as the series method does; the direct method
 /// needs none.
 fn rupture_bytes(scene: &Scene) -> (&'static str, u64) {
     if scene.junctions.bond != BondKind::Weak {

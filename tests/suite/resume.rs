@@ -41,6 +41,24 @@ const LINEAR_WEAK: Case = Case {
     sets: &["run.engine=exact", "junctions.force_law=linear", "junctions.bond=weak", "run.t_warmup=100"],
     t_end: 20000.0,
 };
+/// Weak bonds with the linear law at `N = 1e5`, whose rupture candidates come from bins
+/// (`BINNED_FROM`): the bins, their tickets drawn ahead and running sums go through the
+/// checkpoint.
+const LINEAR_WEAK_BINS: Case = Case {
+    name: "exact, linear law, weak bonds, N = 1e5 (bins)",
+    sets: &[
+        "run.engine=exact",
+        "junctions.force_law=linear",
+        "junctions.bond=weak",
+        "junctions.n=100000",
+        "plate.k=50000",
+        "plate.mass=25000",
+        "plate.eta=25000",
+        "junctions.initial=stationary",
+        "run.t_warmup=1",
+    ],
+    t_end: 20.0,
+};
 const TILTED: Case = Case {
     name: "exact, tilted law, weak bonds, events.csv",
     sets: &["run.engine=exact", "junctions.bond=weak", "output.events=true", "run.t_warmup=10"],
@@ -303,6 +321,12 @@ fn resume_draws_a_plot_left_undrawn() {
 #[test]
 fn killed_twice_and_resumed_exact_linear_weak() {
     kill_and_resume(&LINEAR_WEAK, 2);
+}
+
+#[test]
+fn killed_and_resumed_exact_linear_weak_in_bins() {
+    const { assert!(stickslip::engine::exact::BINNED_FROM <= 100_000) };
+    kill_and_resume(&LINEAR_WEAK_BINS, 1);
 }
 
 #[test]

@@ -25,7 +25,7 @@
 //! stores its position in its bin ([`Attached::bin`]), so a rupture, which has read the
 //! record, finds and removes the member in O(1); the bin is a function of `c`. The bins'
 //! buffers grow by doubling and shrink by half when a quarter full, and emptied ones are
-//! kept for reuse ([`SPARES`]): about a member's bytes per junction in runs, at most five
+//! kept for reuse ([`SPARES`]): about a member's bytes per junction in runs
 //! ([`BinnedRupture::bytes_for`]).
 
 use rand::Rng;
@@ -154,13 +154,12 @@ impl BinnedRupture {
             h: Horizon::default(),
         })
     }
-    /// Bytes for `n` junctions: the bin table, and a member per junction (what runs reach:
-    /// 16.5 to 17.6 bytes per junction at `N = 1e6` and `1e7` on the bench's scene, where a
-    /// third of the junctions are attached; the buffers grow by doubling, shrink by half
-    /// when a quarter full, and the spares hold at most a member per junction, so no run
-    /// holds more than five members per junction).
+    /// Bytes for `n` junctions: the bin table, and a member and a quarter per junction (20
+    /// bytes; runs of the bench's scene, where a third of the junctions are attached, hold
+    /// 17 to 18 bytes per junction at `N = 1e6` and `1e7`: the buffers grow by doubling and
+    /// shrink by half when a quarter full, and the spares hold at most a member per junction).
     pub fn bytes_for(n: usize) -> u64 {
-        ((2 * HALF + 1) * (size_of::<Bin>() + size_of::<[f64; 2]>())) as u64 + (n * size_of::<Member>()) as u64
+        ((2 * HALF + 1) * (size_of::<Bin>() + size_of::<[f64; 2]>())) as u64 + (n * size_of::<Member>() * 5 / 4) as u64
     }
     /// Bytes of the model in a checkpoint (MessagePack, structs as maps) for `n` junctions at
     /// most: a member with its field names (22 bytes) per junction, and at most 96 bytes
@@ -297,9 +296,14 @@ impl Spares {
     }
     /// A kept buffer of at least `need` members, if there is one.
     fn take(&mut self, need: usize) -> Option<Vec<Member>> {
-        let i = self.buffers.iter().position(|v| v.capacity() >= need)?;
-        Some(self.buffers.swap_remove(i))
+        take_best(&mut self.buffers, need)
     }
+}
+
+/// The smallest buffer of `pool` that holds `need` members, taken out of it.
+fn take_best(pool: &mut Vec<Vec<Member>>, need: usize) -> Option<Vec<Member>> {
+    let i = (0..pool.len()).filter(|&i| pool[i].capacity() >= need).min_by_key(|&i| pool[i].capacity())?;
+    Some(pool.swap_remove(i))
 }
 
 /// Makes room in the full `members`: a spare buffer at least twice as large if there is one,
@@ -319,7 +323,7 @@ fn grow(members: &mut Vec<Member>, spare: &mut Spares) {
 }
 
 /// Halves the buffer of `members` once they fill less than a quarter of it (amortised O(1)
-/// per removal; a bin keeps at most four times its members' memory).
+/// per removal; a bin of more than 16 members keeps at most four times their memory).
 #[inline]
 fn shrink(members: &mut Vec<Member>) {
     if members.capacity() >= 64 && 4 * members.len() < members.capacity() {
@@ -358,8 +362,9 @@ impl RuptureModel for BinnedRupture {
         if let Some(m) = bin.members.get(p) {
             attached[m.slot as usize].bin = p as u32;
         }
-        shrink(&mut bin.members);
-        if bin.members.is_empty() {
+        if !bin.members.is_empty() {
+            shrink(&mut bin.members);
+        } else {
             // An emptied bin's buffer becomes a spare (the anchors drift through the bins).
             self.spare.keep(std::mem::take(&mut bin.members));
             while self.lo < self.hi && self.bins[self.lo].members.is_empty() {
@@ -393,28 +398,57 @@ impl RuptureModel for BinnedRupture {
         let ub = rng.uniform() * (e_hi * u[0] + e_lo * u[1]);
         accept(ub, [1.0 / m.e, m.e], e_hi, e_lo, || (self.a * traj.position(s)).exp()).then_some(m.slot as usize)
     }
+    /// Re-bins every junction. The old bins' buffers are reused for the new ones (the
+    /// smallest that holds a new bin's count), so a re-base holds no second copy of the
+    /// bins; what is left becomes spares. Only the bins occupied before are visited (a
+    /// re-base every `N / 4` events must not visit the whole table).
     fn rebuild(&mut self, attached: &mut [Attached]) -> Vec<usize> {
-        let before = self.lo..self.hi;
-        for i in before.clone() {
-            self.bins[i].members.clear();
+        let mut pool: Vec<Vec<Member>> = std::mem::take(&mut self.spare.buffers);
+        for i in self.lo..self.hi {
+            let mut v = std::mem::take(&mut self.bins[i].members);
+            v.clear();
+            if v.capacity() > 0 {
+                pool.push(v);
+            }
         }
         (self.lo, self.hi) = (HALF, HALF);
+        // The new bins' counts, then a buffer for each that holds its count.
+        let a = self.a;
+        let binned = move |c: f64| a * c.abs() <= EXPONENT_CAP;
+        let mut counts: Vec<(usize, usize)> = Vec::new();
+        {
+            let mut index: Vec<usize> = attached.iter().filter(|j| binned(j.c)).map(|j| self.bin_of(j.c)).collect();
+            index.sort_unstable();
+            for j in index {
+                match counts.last_mut() {
+                    Some((b, n)) if *b == j => *n += 1,
+                    _ => counts.push((j, 1)),
+                }
+            }
+        }
+        for &(j, n) in &counts {
+            let need = n.next_power_of_two().max(8);
+            self.bins[j].members = match take_best(&mut pool, n) {
+                Some(v) => v,
+                None => {
+                    let v = Vec::with_capacity(need);
+                    super::bags::advise_huge_pages(&v);
+                    v
+                }
+            };
+        }
         let mut over = Vec::new();
         for slot in 0..attached.len() {
             let c = attached[slot].c;
-            if self.a * c.abs() > EXPONENT_CAP {
+            if binned(c) {
+                self.insert(attached, slot, c);
+            } else {
                 attached[slot].bin = UNBINNED;
                 over.push(slot);
-            } else {
-                self.insert(attached, slot, c);
             }
         }
-        // Bins emptied by the shift give their buffers to the spares (only bins occupied
-        // before can hold one: a re-base every `N / 4` events must not visit the whole table).
-        for i in before {
-            if self.bins[i].members.is_empty() {
-                self.spare.keep(std::mem::take(&mut self.bins[i].members));
-            }
+        for v in pool {
+            self.spare.keep(v);
         }
         over
     }

@@ -147,7 +147,8 @@ impl Horizon {
             return Plan { rate: 0.0, horizon: f64::INFINITY };
         }
         if a == 0.0 {
-            // Constant rate k0: the bound is exact up to the factor 2 of the two terms.
+            // Constant rate k0: the bound is exact up to the factor of its two terms (2 with
+            // the tree's weights, about 2.2 with the bins' bounds).
             self.set_bounds(a, 0.0, 0.0);
             let (m, p) = self.terms(w);
             return Plan { rate: k0 * (m + p), horizon: f64::INFINITY };
