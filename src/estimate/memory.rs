@@ -6,7 +6,7 @@ use std::mem::size_of;
 use crate::engine::exact::bags::{Attached, Detached};
 use crate::engine::exact::sumtree::SumTree2;
 use crate::engine::exact::{self};
-use crate::engine::exact::{BINNED_FROM, BinnedRupture};
+use crate::engine::exact::{BinnedRupture, uses_bins};
 use crate::physics::ExactMethod;
 use crate::scene::laws::{LawVisitor, with_force_law};
 use crate::scene::{BondKind, EngineKind, Scene};
@@ -89,28 +89,52 @@ pub fn engine_parts(scene: &Scene) -> Vec<Part> {
         return vec![part("junction states and extensions", FIXED_PER_JUNCTION)];
     }
     let mut parts = vec![part("attached and detached bags", BAGS_PER_JUNCTION)];
-    let (what, bytes) = rupture_bytes(scene);
-    if bytes > 0 {
-        parts.push(Part { what, bytes, per_junction: bytes as f64 / n.max(1) as f64 });
+    if let Some(store) = RuptureStore::of(scene) {
+        let bytes = store.bytes(n);
+        parts.push(Part { what: store.name(), bytes, per_junction: bytes as f64 / n.max(1) as f64 });
     }
     parts
 }
 
-/// The weak-bond rupture model's buffers in the exact engine, and their bytes: the closed
-/// form thins against bins of anchors from [`BINNED_FROM`] junctions on
-/// ([`BinnedRupture::bytes_for`]), against a sum tree below, as the series method does; the direct method
-/// needs none.
-fn rupture_bytes(scene: &Scene) -> (&'static str, u64) {
-    if scene.junctions.bond != BondKind::Weak {
-        return ("", 0);
-    }
-    match Method::of(scene) {
-        Method::ClosedForm if scene.junctions.n >= BINNED_FROM => {
-            ("rupture bins", BinnedRupture::bytes_for(scene.junctions.n))
+/// The weak-bond rupture model's store in the exact engine: the closed form thins against
+/// bins of anchors from [`BINNED_FROM`](crate::engine::exact::BINNED_FROM) junctions on, against a sum tree below, as the
+/// series method does; the direct method, and strong bonds, need none.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum RuptureStore {
+    Tree,
+    Bins,
+}
+
+impl RuptureStore {
+    fn of(scene: &Scene) -> Option<RuptureStore> {
+        if scene.junctions.bond != BondKind::Weak {
+            return None;
         }
-        Method::ClosedForm => ("rupture sum tree", SumTree2::bytes_for(scene.junctions.n)),
-        Method::Series => ("rupture sum tree", SumTree2::bytes_for(scene.junctions.n)),
-        Method::Fixed | Method::Direct => ("", 0),
+        match Method::of(scene) {
+            Method::ClosedForm if uses_bins(scene.junctions.n) => Some(RuptureStore::Bins),
+            Method::ClosedForm | Method::Series => Some(RuptureStore::Tree),
+            Method::Fixed | Method::Direct => None,
+        }
+    }
+    fn name(self) -> &'static str {
+        match self {
+            RuptureStore::Tree => "rupture sum tree",
+            RuptureStore::Bins => "rupture bins",
+        }
+    }
+    /// Bytes in memory for `n` junctions.
+    fn bytes(self, n: usize) -> u64 {
+        match self {
+            RuptureStore::Tree => SumTree2::bytes_for(n),
+            RuptureStore::Bins => BinnedRupture::bytes_for(n),
+        }
+    }
+    /// Bytes in a checkpoint for `n` junctions: a sum tree node is 77 bytes per 64-byte node.
+    fn encoded_bytes(self, n: usize) -> u64 {
+        match self {
+            RuptureStore::Tree => SumTree2::bytes_for(n) / 64 * 77,
+            RuptureStore::Bins => BinnedRupture::encoded_bytes_for(n),
+        }
     }
 }
 
@@ -131,9 +155,6 @@ pub fn checkpoint_bytes(scene: &Scene) -> u64 {
         Method::Fixed => 10 * n,
         _ => 31 * n,
     };
-    let rupture = match rupture_bytes(scene) {
-        ("rupture bins", _) => BinnedRupture::encoded_bytes_for(scene.junctions.n),
-        (_, b) => b / 64 * 77,
-    };
+    let rupture = RuptureStore::of(scene).map_or(0, |s| s.encoded_bytes(scene.junctions.n));
     junctions + rupture + 4096
 }

@@ -35,7 +35,7 @@ use super::bags::{Attached, count};
 use super::horizon::Horizon;
 use super::motion::PlatePath;
 use super::pick::{index, prefetch_ptr};
-use super::rupture::{EXPONENT_CAP, Plan, RuptureModel, accept};
+use super::rupture::{EXPONENT_CAP, Plan, RuptureModel, accept, anchor_overflows, overflows};
 use crate::engine::alloc::{self, AllocError};
 use crate::rng::{Pcg64, UniformSource};
 
@@ -48,6 +48,13 @@ use crate::rng::{Pcg64, UniformSource};
 /// `N = 1e3`, 1.15x at `1e4`, 1.3x at `1e5`, and 1.5x and 2x at `1e6` and `1e7`, where the
 /// tree waits on memory (docs/performance.md).
 pub const BINNED_FROM: usize = 100_000;
+
+/// Whether a run of `n` junctions draws weak bonds' rupture candidates from bins
+/// ([`BINNED_FROM`]): the engine's dispatch and the memory estimate ask this one question.
+#[inline]
+pub fn uses_bins(n: usize) -> bool {
+    n >= BINNED_FROM
+}
 /// Bin width in the exponent `a c`: the bound is at most `2^(1/4)` (19%) above a member's own.
 const H: f64 = std::f64::consts::LN_2 / 4.0;
 /// Relative margin of the bins' bounds over their members' weights (the bin of `c` is
@@ -306,18 +313,21 @@ fn take_best(pool: &mut Vec<Vec<Member>>, need: usize) -> Option<Vec<Member>> {
     Some(pool.swap_remove(i))
 }
 
+/// An empty buffer for `capacity` members, advised onto huge pages before it is written (a
+/// large bin is read at random, as a bag is).
+fn new_buffer(capacity: usize) -> Vec<Member> {
+    let v = Vec::with_capacity(capacity);
+    super::bags::advise_huge_pages(&v);
+    v
+}
+
 /// Makes room in the full `members`: a spare buffer at least twice as large if there is one,
-/// else a new one advised onto huge pages before it is written (a large bin is read at
-/// random, as a bag is). The old buffer is freed.
+/// else a new one. The old buffer is freed.
 #[cold]
 #[inline(never)]
 fn grow(members: &mut Vec<Member>, spare: &mut Spares) {
     let need = (2 * members.capacity()).max(8);
-    let mut grown = spare.take(need).unwrap_or_else(|| {
-        let v = Vec::with_capacity(need);
-        super::bags::advise_huge_pages(&v);
-        v
-    });
+    let mut grown = spare.take(need).unwrap_or_else(|| new_buffer(need));
     grown.extend_from_slice(members);
     *members = grown;
 }
@@ -335,7 +345,7 @@ impl RuptureModel for BinnedRupture {
     const IS_WEAK: bool = true;
     #[inline]
     fn attached(&mut self, attached: &mut [Attached], slot: usize, c: f64, y: f64) -> bool {
-        if self.a * (y - c).abs() > EXPONENT_CAP || self.a * c.abs() > EXPONENT_CAP {
+        if overflows(self.a, c, y) {
             attached[slot].bin = UNBINNED;
             return false;
         }
@@ -400,8 +410,8 @@ impl RuptureModel for BinnedRupture {
     }
     /// Re-bins every junction. The old bins' buffers are reused for the new ones (the
     /// smallest that holds a new bin's count), so a re-base holds no second copy of the
-    /// bins; what is left becomes spares. Only the bins occupied before are visited (a
-    /// re-base every `N / 4` events must not visit the whole table).
+    /// bins; what is left becomes spares. Only the bins occupied before and after are
+    /// visited (a re-base every `N / 4` events must not visit the whole table).
     fn rebuild(&mut self, attached: &mut [Attached]) -> Vec<usize> {
         let mut pool: Vec<Vec<Member>> = std::mem::take(&mut self.spare.buffers);
         for i in self.lo..self.hi {
@@ -412,35 +422,24 @@ impl RuptureModel for BinnedRupture {
             }
         }
         (self.lo, self.hi) = (HALF, HALF);
-        // The new bins' counts, then a buffer for each that holds its count.
+        // The new bins' counts over the range they span (not the whole table), then a buffer
+        // for each that holds its count.
         let a = self.a;
-        let binned = move |c: f64| a * c.abs() <= EXPONENT_CAP;
-        let mut counts: Vec<(usize, usize)> = Vec::new();
-        {
-            let mut index: Vec<usize> = attached.iter().filter(|j| binned(j.c)).map(|j| self.bin_of(j.c)).collect();
-            index.sort_unstable();
-            for j in index {
-                match counts.last_mut() {
-                    Some((b, n)) if *b == j => *n += 1,
-                    _ => counts.push((j, 1)),
-                }
-            }
+        let bins: Vec<usize> =
+            attached.iter().filter(|j| !anchor_overflows(a, j.c)).map(|j| self.bin_of(j.c)).collect();
+        let first = bins.iter().copied().min().unwrap_or(HALF);
+        let mut counts = vec![0usize; bins.iter().copied().max().map_or(0, |last| last + 1 - first)];
+        for j in bins {
+            counts[j - first] += 1;
         }
-        for &(j, n) in &counts {
-            let need = n.next_power_of_two().max(8);
-            self.bins[j].members = match take_best(&mut pool, n) {
-                Some(v) => v,
-                None => {
-                    let v = Vec::with_capacity(need);
-                    super::bags::advise_huge_pages(&v);
-                    v
-                }
-            };
+        for (i, &n) in counts.iter().enumerate().filter(|(_, n)| **n > 0) {
+            self.bins[first + i].members =
+                take_best(&mut pool, n).unwrap_or_else(|| new_buffer(n.next_power_of_two().max(8)));
         }
         let mut over = Vec::new();
         for slot in 0..attached.len() {
             let c = attached[slot].c;
-            if binned(c) {
+            if !anchor_overflows(a, c) {
                 self.insert(attached, slot, c);
             } else {
                 attached[slot].bin = UNBINNED;

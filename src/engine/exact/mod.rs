@@ -37,7 +37,7 @@ use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};
 use crate::scene::{Scene, TiltedMethod};
 
 pub use self::core::{Core, Exact, Kernel};
-pub use binned::{BINNED_FROM, BinnedRupture};
+pub use binned::{BINNED_FROM, BinnedRupture, uses_bins};
 pub use clocks::{ArrayQueue, ChannelQueue, PqQueue};
 pub use direct::{DirectKernel, ExactDirect};
 pub use linear::{ExactLinear, LinearKernel};
@@ -172,7 +172,7 @@ impl<L: LinearLaw, V: EngineVisitor> BondVisitor for ClosedForm<'_, L, V> {
         let binned = |rng: &mut _| BinnedRupture::try_new(k0, a, n, rng);
         let tree = |_: &mut _| WeakRupture::try_new(k0, a, n);
         let strong = |rng: &mut _| Ok(StrongRupture::new(k0, rng));
-        let bins = n >= BINNED_FROM;
+        let bins = uses_bins(n);
         Ok(match (B::IS_WEAK, scene.plate.kinematic) {
             (true, true) if bins => {
                 visitor.visit(ExactLinear::<_, DefaultQueue, Kinematic>::try_new(scene, &law, binned)?)

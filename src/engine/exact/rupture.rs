@@ -36,6 +36,26 @@ use crate::rng::{Pcg64, UniformSource};
 pub const EXPONENT_CAP: f64 = 600.0;
 /// Re-base the coordinates before `a |y|` exceeds this, so weights stay finite.
 pub const FRAME_EXPONENT_LIMIT: f64 = 64.0;
+/// Whether the rate of a junction with anchor `c` overflows with the plate at `y`: its
+/// exponent `a |y - c|` or its weight's `a |c|` beyond [`EXPONENT_CAP`] (it ruptures at once).
+#[inline]
+pub fn overflows(a: f64, c: f64, y: f64) -> bool {
+    a * (y - c).abs() > EXPONENT_CAP || anchor_overflows(a, c)
+}
+
+/// Whether the weights of anchor `c` overflow: `a |c|` beyond [`EXPONENT_CAP`].
+#[inline]
+pub fn anchor_overflows(a: f64, c: f64) -> bool {
+    a * c.abs() > EXPONENT_CAP
+}
+
+/// A junction's weights `[exp(-a c), exp(a c)]`, the two terms of its rate bound.
+#[inline]
+fn weights(a: f64, c: f64) -> [f64; 2] {
+    let e = (a * c).exp();
+    [1.0 / e, e]
+}
+
 /// Rupture rate of the candidate channel until the next restart, and how long it holds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plan {
@@ -138,21 +158,15 @@ impl WeakRupture {
     pub fn try_new(k0: f64, a: f64, n: usize) -> Result<WeakRupture, AllocError> {
         Ok(WeakRupture { k0, a, tree: SumTree2::try_new(n)?, h: Horizon::default() })
     }
-    #[inline]
-    fn weights(&self, c: f64) -> [f64; 2] {
-        let e = (self.a * c).exp();
-        [1.0 / e, e]
-    }
     /// Weighs the junction in `slot` with anchor `c`, the plate at `y`; `false` (and no
     /// weight) when its rate is beyond [`EXPONENT_CAP`].
     #[inline]
     pub fn weigh(&mut self, slot: usize, c: f64, y: f64) -> bool {
-        if self.a * (y - c).abs() > EXPONENT_CAP || self.a * c.abs() > EXPONENT_CAP {
+        if overflows(self.a, c, y) {
             self.tree.set(slot, [0.0; 2]);
             return false;
         }
-        let w = self.weights(c);
-        self.tree.set(slot, w);
+        self.tree.set(slot, weights(self.a, c));
         true
     }
     /// The junction in `slot` left by `swap_remove` (the last slot `last` moved into it).
@@ -163,16 +177,9 @@ impl WeakRupture {
     /// Every weight recomputed from `attached`; the slots whose rate is beyond
     /// [`EXPONENT_CAP`] (weighed zero).
     pub fn reweigh(&mut self, attached: &[Attached]) -> Vec<usize> {
-        let over: Vec<usize> = (0..attached.len()).filter(|&s| self.a * attached[s].c.abs() > EXPONENT_CAP).collect();
-        let (a, cap) = (self.a, EXPONENT_CAP);
-        self.tree.rebuild(attached.iter().map(|j| {
-            if a * j.c.abs() > cap {
-                [0.0; 2]
-            } else {
-                let e = (a * j.c).exp();
-                [1.0 / e, e]
-            }
-        }));
+        let a = self.a;
+        let over: Vec<usize> = (0..attached.len()).filter(|&s| anchor_overflows(a, attached[s].c)).collect();
+        self.tree.rebuild(attached.iter().map(|j| if anchor_overflows(a, j.c) { [0.0; 2] } else { weights(a, j.c) }));
         over
     }
     /// The anchor of `slot` from its weight `exp(a c)` (tests).
