@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use super::run::{load_scene, prepare_out_dir, remove_if_empty};
+use super::run::{load_scene, prepare_out_dir};
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail, study};
 use crate::studies::compare::{JobRecord, Plan, StudyError, default_dts, report};
 use crate::studies::journal::{Header, StudyKind};
@@ -113,8 +113,8 @@ pub(crate) fn compare_as(args: &CompareArgs, command: &str) -> ExitCode {
             Err(e) => return fail(EXIT_BAD_INPUT, e),
         };
     let out = args.out.clone().unwrap_or_else(|| Path::new("out").join(format!("{}-compare", scene.name)));
-    let created = match prepare_out_dir(&out) {
-        Ok(c) => c,
+    let held = match prepare_out_dir(&out) {
+        Ok(h) => h,
         Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
     let header = Header::new(StudyKind::Compare, plan.arguments(), &scene, plan.seeds().len(), study::invocation());
@@ -127,7 +127,7 @@ pub(crate) fn compare_as(args: &CompareArgs, command: &str) -> ExitCode {
         Err(StudyError::Interrupted(e)) => return study::interrupted(&e, &out),
         Err(e) => {
             journal.discard_if_new();
-            remove_if_empty(&created);
+            held.abandon();
             return fail(EXIT_RUN_FAILED, e);
         }
     };

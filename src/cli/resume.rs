@@ -37,12 +37,12 @@ pub(crate) fn resume(args: &ResumeArgs) -> ExitCode {
         return code;
     }
     let opts = RunOptions { checkpoint_every: args.checkpoint_every, progress: true, stop: None };
-    // A directory that cannot be written is reported before anything else is done.
-    if args.dir.is_dir() {
-        if let Err(m) = prepare_out_dir(&args.dir) {
-            return fail(EXIT_BAD_INPUT, m);
-        }
-    }
+    // A directory that cannot be written, or that another run holds, is reported before
+    // anything else is done; it is held until the run is done.
+    let _held = match args.dir.is_dir().then(|| prepare_out_dir(&args.dir)).transpose() {
+        Ok(h) => h,
+        Err(m) => return fail(EXIT_BAD_INPUT, m),
+    };
     match runner::resume(&args.dir, &opts) {
         Ok(Resumed::Finished) => match plot_left_undrawn(&args.dir) {
             // Killed after its results were in place but before its plot was drawn.

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use super::stdout::emit;
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, EngineArg, SceneArgs, fail};
 use crate::output::Summary;
+use crate::output::lock::{self, DirLock};
 use crate::runner::{RunOptions, run_scene_with};
 use crate::scene::Scene;
 
@@ -16,9 +17,25 @@ pub(crate) fn load_scene(args: &SceneArgs, extra: &[String]) -> Result<Scene, Ex
     Scene::from_file(&args.scene, &overrides).map_err(|e| fail(EXIT_BAD_INPUT, e))
 }
 
-/// Creates `dir` and checks it can be written, before any work is done. Returns the
-/// directories it created (deepest first), so that a run that fails can remove them again.
-pub(crate) fn prepare_out_dir(dir: &Path) -> Result<Vec<PathBuf>, String> {
+/// An output directory prepared for a run or study: held by this process
+/// ([`crate::output::lock`]) until dropped, with the directories that were created for it.
+pub(crate) struct OutDir {
+    created: Vec<PathBuf>,
+    lock: DirLock,
+}
+
+impl OutDir {
+    /// Releases the directory and removes the directories created for it, as long as they
+    /// are empty: a run or study that failed leaves nothing behind.
+    pub(crate) fn abandon(self) {
+        drop(self.lock);
+        remove_if_empty(&self.created);
+    }
+}
+
+/// Creates `dir`, checks it can be written and holds it, before any work is done and before
+/// anything in it is written or removed.
+pub(crate) fn prepare_out_dir(dir: &Path) -> Result<OutDir, String> {
     let mut created = Vec::new();
     let mut d = Some(dir);
     while let Some(p) = d.filter(|p| !p.as_os_str().is_empty() && !p.exists()) {
@@ -33,7 +50,13 @@ pub(crate) fn prepare_out_dir(dir: &Path) -> Result<Vec<PathBuf>, String> {
     let probe = dir.join(".stickslip-write-probe");
     std::fs::write(&probe, b"").map_err(|e| fail("write in it", e, &created))?;
     let _ = std::fs::remove_file(probe);
-    Ok(created)
+    match lock::hold(dir) {
+        Ok(lock) => Ok(OutDir { created, lock }),
+        Err(e) => {
+            remove_if_empty(&created);
+            Err(e.to_string())
+        }
+    }
 }
 
 /// Removes the directories `prepare_out_dir` created, deepest first, as long as they are
@@ -69,8 +92,8 @@ pub(crate) fn run(
     if let Err(e) = crate::estimate::check_run(&scene, &out, checkpoint_every.is_some()) {
         return fail(EXIT_BAD_INPUT, e);
     }
-    let created = match prepare_out_dir(&out) {
-        Ok(c) => c,
+    let held = match prepare_out_dir(&out) {
+        Ok(h) => h,
         Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
     // After every bad-input check: bad input prints its one error line and nothing else.
@@ -82,7 +105,7 @@ pub(crate) fn run(
         Ok(s) => emit(&summary_lines(&s, &out)),
         Err(e) => {
             // A failed run leaves no empty output directory behind.
-            remove_if_empty(&created);
+            held.abandon();
             fail(EXIT_RUN_FAILED, e)
         }
     }

@@ -13,7 +13,7 @@ use std::process::ExitCode;
 use clap::{Arg, ArgAction, ArgMatches};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::run::{load_scene, prepare_out_dir, remove_if_empty};
+use super::run::{load_scene, prepare_out_dir};
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail, study};
 use crate::output::Summary;
 use crate::scene::error::printable;
@@ -187,8 +187,8 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("out").join(format!("{}-sweep-{}", sweep.base.name, sweep.name())));
-    let created = match prepare_out_dir(&out) {
-        Ok(c) => c,
+    let held = match prepare_out_dir(&out) {
+        Ok(h) => h,
         Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
     let header = Header::new(StudyKind::Sweep, sweep.arguments(), &sweep.base, sweep.len(), study::invocation());
@@ -214,7 +214,7 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
         Err(SweepError::Interrupted(e)) => return study::interrupted(&e, &out),
         Err(e) => {
             journal.discard_if_new();
-            remove_if_empty(&created);
+            held.abandon();
             return fail(EXIT_RUN_FAILED, e);
         }
     };

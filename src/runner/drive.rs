@@ -53,6 +53,10 @@ impl StopFlag {
     pub fn is_requested(&self) -> bool {
         self.0.load(Relaxed)
     }
+    /// The flag itself, for a signal handler that sets it.
+    pub(crate) fn shared(&self) -> Arc<AtomicBool> {
+        Arc::clone(&self.0)
+    }
 }
 
 /// Checks that a sampled state holds only finite numbers.

@@ -27,6 +27,7 @@ mod ode_convergence;
 mod ode_errors;
 mod ode_events;
 mod ode_state;
+mod out_lock;
 mod propagator_props;
 mod regime;
 mod renewal;

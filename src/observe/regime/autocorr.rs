@@ -8,8 +8,8 @@
 //! rho(j) = [ (1/(B-j)) sum_{i<B-j} x_i x_{i+j} ] / [ (1/B) sum_i x_i^2 ],
 //! ```
 //!
-//! computed with a radix-2 FFT (Wiener–Khinchin, zero-padded to at least `2B`: no
-//! wrap-around). A signal `p(t) + e(t)`, with `p` periodic of period `P` and `e` noise
+//! computed with a real FFT (realfft; Wiener–Khinchin, zero-padded to a power of two of at
+//! least `2B`: no wrap-around). A signal `p(t) + e(t)`, with `p` periodic of period `P` and `e` noise
 //! uncorrelated with it and with itself over a lag `P`, has `rho(P) = var p / (var p +
 //! var e)`: the **coherence** `rho(P)` is the fraction of the variance that repeats after one
 //! period. A stationary Gaussian process has, instead, `rho(P) = e^{-gamma P}` for its
@@ -20,59 +20,8 @@
 //! whose autocorrelation does not return above zero within a quarter of its length has no
 //! period.
 
-/// Complex numbers as `(re, im)`.
-type C = (f64, f64);
-
-/// In-place iterative radix-2 FFT of `a` (length a power of two); `inverse` uses `e^{+i..}`
-/// and does not scale. The twiddles `e^{-+2 pi i m/n}`, `m < n/2`, are computed once per
-/// call (`n/2` `sin_cos`, not `n/2` per stage): stage `len` uses `m = k n/len`, whose angle
-/// `(2 pi/n) (k n/len)` is the same `f64` as `(2 pi/len) k` (the two differ by powers of two
-/// only), so the transform is the one that computes every twiddle in its stage, bit for bit
-/// (unit test `fft_is_the_per_stage_fft`).
-fn fft(a: &mut [C], inverse: bool) {
-    let n = a.len();
-    debug_assert!(n.is_power_of_two());
-    bit_reverse(a);
-    let sign = if inverse { 1.0 } else { -1.0 };
-    let ang = sign * 2.0 * std::f64::consts::PI / n as f64;
-    let twiddles: Vec<C> = (0..n / 2)
-        .map(|m| {
-            let (s, c) = (ang * m as f64).sin_cos();
-            (c, s)
-        })
-        .collect();
-    let mut len = 2;
-    while len <= n {
-        let stride = n / len;
-        for start in (0..n).step_by(len) {
-            for k in 0..len / 2 {
-                let (c, s) = twiddles[k * stride];
-                let (u, v) = (a[start + k], a[start + k + len / 2]);
-                let t = (v.0 * c - v.1 * s, v.0 * s + v.1 * c);
-                a[start + k] = (u.0 + t.0, u.1 + t.1);
-                a[start + k + len / 2] = (u.0 - t.0, u.1 - t.1);
-            }
-        }
-        len <<= 1;
-    }
-}
-
-/// The FFT's bit-reversal permutation.
-fn bit_reverse(a: &mut [C]) {
-    let n = a.len();
-    let mut j = 0;
-    for i in 1..n {
-        let mut bit = n >> 1;
-        while j & bit != 0 {
-            j ^= bit;
-            bit >>= 1;
-        }
-        j |= bit;
-        if i < j {
-            a.swap(i, j);
-        }
-    }
-}
+use realfft::RealFftPlanner;
+use realfft::num_complex::Complex;
 
 /// `rho(0..=max_lag)` of `x` (its mean removed here). Empty if `x` has fewer than two
 /// values or no variance.
@@ -83,17 +32,21 @@ pub fn autocorrelation(x: &[f64], max_lag: usize) -> Vec<f64> {
     }
     let mean = x.iter().sum::<f64>() / b as f64;
     let size = (2 * b).next_power_of_two();
-    let mut a: Vec<C> = x.iter().map(|&v| (v - mean, 0.0)).collect();
-    a.resize(size, (0.0, 0.0));
-    fft(&mut a, false);
-    a.iter_mut().for_each(|z| *z = (z.0 * z.0 + z.1 * z.1, 0.0));
-    fft(&mut a, true);
-    // a[j].0 / size = sum_i x_i x_{i+j}.
-    let c0 = a[0].0 / size as f64 / b as f64;
+    let mut planner = RealFftPlanner::<f64>::new();
+    let (forward, inverse) = (planner.plan_fft_forward(size), planner.plan_fft_inverse(size));
+    let mut a = forward.make_input_vec();
+    a.iter_mut().zip(x).for_each(|(a, &v)| *a = v - mean);
+    let mut spectrum = forward.make_output_vec();
+    forward.process(&mut a, &mut spectrum).expect("buffers of the planned lengths");
+    // |X_k|^2 is real: the inverse's first and last bins have no imaginary part.
+    spectrum.iter_mut().for_each(|z| *z = Complex::new(z.norm_sqr(), 0.0));
+    inverse.process(&mut spectrum, &mut a).expect("buffers of the planned lengths");
+    // a[j] / size = sum_i x_i x_{i+j} (the inverse does not scale).
+    let c0 = a[0] / size as f64 / b as f64;
     if c0.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Vec::new();
     }
-    (0..=max_lag.min(b - 1)).map(|j| a[j].0 / size as f64 / (b - j) as f64 / c0).collect()
+    (0..=max_lag.min(b - 1)).map(|j| a[j] / size as f64 / (b - j) as f64 / c0).collect()
 }
 
 /// The period (in lags, fractional) and the coherence `rho(P)` of `rho` (from
@@ -159,45 +112,6 @@ mod tests {
             .collect()
     }
 
-    /// The transform with each twiddle computed in its stage, `(2 pi/len) k`.
-    fn per_stage_fft(a: &mut [C], inverse: bool) {
-        let n = a.len();
-        bit_reverse(a);
-        let sign = if inverse { 1.0 } else { -1.0 };
-        let mut len = 2;
-        while len <= n {
-            let ang = sign * 2.0 * std::f64::consts::PI / len as f64;
-            for start in (0..n).step_by(len) {
-                for k in 0..len / 2 {
-                    let (s, c) = (ang * k as f64).sin_cos();
-                    let (u, v) = (a[start + k], a[start + k + len / 2]);
-                    let t = (v.0 * c - v.1 * s, v.0 * s + v.1 * c);
-                    a[start + k] = (u.0 + t.0, u.1 + t.1);
-                    a[start + k + len / 2] = (u.0 - t.0, u.1 - t.1);
-                }
-            }
-            len <<= 1;
-        }
-    }
-
-    /// The shared twiddle table gives the per-stage transform bit for bit, both ways, at
-    /// every size from 1 to 2^14.
-    #[test]
-    fn fft_is_the_per_stage_fft() {
-        for bits in 0..=14 {
-            let n = 1usize << bits;
-            let x: Vec<C> =
-                (0..n).map(|i| (((i * 7919) % 1013) as f64 * 0.37 - 100.0, (i % 13) as f64 - 6.0)).collect();
-            for inverse in [false, true] {
-                let (mut a, mut b) = (x.clone(), x.clone());
-                fft(&mut a, inverse);
-                per_stage_fft(&mut b, inverse);
-                let bits_of = |v: &[C]| v.iter().flat_map(|z| [z.0.to_bits(), z.1.to_bits()]).collect::<Vec<_>>();
-                assert!(bits_of(&a) == bits_of(&b), "n = {n}, inverse = {inverse}");
-            }
-        }
-    }
-
     #[test]
     fn fft_autocorrelation_equals_the_direct_sum() {
         let x: Vec<f64> = (0..777).map(|i| ((i as f64) * 0.37).sin() + 0.3 * ((i * i % 17) as f64 - 8.0)).collect();
@@ -209,6 +123,40 @@ mod tests {
         }
         assert!(autocorrelation(&[1.0; 10], 5).is_empty());
         assert!(autocorrelation(&[1.0], 5).is_empty());
+    }
+
+    /// At every length from 2 to 70 and at lengths around powers of two up to 2^13 (the
+    /// padded size is `2B` exactly or nearly `4B`), noisy periodic records: the transform's
+    /// autocorrelation is the direct sum's to rounding, and so are the period and coherence.
+    #[test]
+    fn the_real_fft_gives_the_direct_sums_period_at_every_length() {
+        let mut s = 7u64;
+        let mut noise = || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let lengths = (2..=70).chain((4..=13).flat_map(|k| [(1 << k) - 1, 1 << k, (1 << k) + 1]));
+        let mut periods = 0;
+        for b in lengths {
+            let p = 3.0 + (b % 11) as f64;
+            let x: Vec<f64> =
+                (0..b).map(|i| 1e3 + (std::f64::consts::TAU * i as f64 / p).sin() + 0.8 * noise()).collect();
+            let lag = b / 4;
+            let (fft, exact) = (autocorrelation(&x, lag), direct(&x, lag));
+            assert_eq!(fft.len(), exact.len());
+            for (u, v) in fft.iter().zip(&exact) {
+                assert!((u - v).abs() < 1e-12, "B = {b}: {u} vs {v}");
+            }
+            match (period(&fft), period(&exact)) {
+                (Some((p1, c1)), Some((p2, c2))) => {
+                    assert!((p1 - p2).abs() < 1e-9 && (c1 - c2).abs() < 1e-12, "B = {b}: {p1} {c1} vs {p2} {c2}");
+                    periods += 1;
+                }
+                (None, None) => {}
+                (a, e) => panic!("B = {b}: {a:?} vs {e:?}"),
+            }
+        }
+        assert!(periods > 60, "{periods} records had a period");
     }
 
     #[test]
