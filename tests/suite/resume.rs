@@ -177,9 +177,14 @@ fn summary_without_wall_time(dir: &Path) -> serde_json::Value {
     v
 }
 
+/// The files in `dir`, but for the lock file a killed run leaves (not an output; a resume
+/// that is refused takes it, and removes it when it gives the directory up).
 fn files(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|f| f != stickslip::output::lock::FILE)
+        .collect();
     v.sort();
     v
 }
@@ -440,10 +445,11 @@ fn progress_on_a_terminal_and_quiet_otherwise() {
 
 // ---- bad input ---------------------------------------------------------------------------
 
-/// Every file under `dir` with its contents.
+/// Every file under `dir` with its contents, but for the lock file a killed run leaves.
 fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
     let mut v: Vec<(PathBuf, Vec<u8>)> = std::fs::read_dir(dir)
         .unwrap()
+        .filter(|e| e.as_ref().unwrap().file_name() != stickslip::output::lock::FILE)
         .map(|e| {
             let p = e.unwrap().path();
             let b = if p.is_file() { std::fs::read(&p).unwrap() } else { Vec::new() };

@@ -221,11 +221,13 @@ fn a_killed_compare_resumes_to_the_uninterrupted_table_and_quotes_its_own_comman
 }
 
 /// Every file under `dir` with its bytes.
+/// The files in `dir` with their bytes, but for the lock file a killed study leaves (not an
+/// output; a study that is refused takes it, and removes it when it gives the directory up).
 fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
     let mut v: Vec<(PathBuf, Vec<u8>)> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().path())
-        .filter(|p| p.is_file())
+        .filter(|p| p.is_file() && !p.ends_with(stickslip::output::lock::FILE))
         .map(|p| (p.clone(), std::fs::read(&p).unwrap()))
         .collect();
     v.sort();
