@@ -5,6 +5,7 @@
 //! line, scene file, `--set`, output directory). A closed pipe on standard output ends the
 //! process by `SIGPIPE`, quietly ([`stdout`]).
 
+mod bench;
 mod compare;
 mod cpu;
 mod resume;
@@ -89,6 +90,8 @@ pub enum Command {
     },
     /// Work-precision study: error against run time of the fixed-step and exact engines.
     Compare(compare::CompareArgs),
+    /// Scaling study: a scene at growing N in both engines; writes bench.csv and bench.svg (time per event and per junction-step, set-up time, memory per junction).
+    Bench(bench::BenchArgs),
 }
 
 /// Prints a one-line error and returns the exit code.
@@ -103,7 +106,7 @@ pub(crate) fn fail(code: u8, message: impl std::fmt::Display) -> ExitCode {
 fn clap_one_line(e: &clap::Error) -> String {
     use clap::error::ErrorKind;
     if matches!(e.kind(), ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand) {
-        return "a command is required: `run`, `resume`, `validate`, `stability`, `sweep` or `compare` (try --help)"
+        return "a command is required: `run`, `resume`, `validate`, `stability`, `sweep`, `compare` or `bench` (try --help)"
             .to_string();
     }
     let text = e.to_string();
@@ -138,6 +141,7 @@ pub fn main() -> ExitCode {
         Command::Validate { scene } => validate::validate(&scene),
         Command::Stability { scene } => stability::stability(&scene),
         Command::Compare(args) => compare::compare(&args),
+        Command::Bench(args) => bench::bench(&args),
         Command::Sweep(args) => sweep::sweep(&args),
     };
     report_peak_memory();

@@ -1,6 +1,6 @@
 //! Every figure the program draws, as SVG text (plotters' SVG backend): [`sweep`]
 //! (`sweep.svg`: a curve for one swept field, a regime map for two), [`compare`]
-//! (`compare.svg`) and [`trace`] (`trace.svg`), sharing the helpers of this file (panels of
+//! (`compare.svg`), [`trace`] (`trace.svg`) and [`scaling`] (`bench.svg`), sharing the helpers of this file (panels of
 //! line series with error bars, log or linear axes, shaded and labelled bands along the x
 //! axis, cell edges around grid points) and [`heatmap`] (a coloured grid with a colour bar
 //! and class boundaries).
@@ -16,6 +16,7 @@
 
 pub mod compare;
 pub mod heatmap;
+pub mod scaling;
 pub mod sweep;
 pub mod trace;
 

@@ -3,6 +3,7 @@
 //! - [`sweep`]: scene fields swept over values, with replicas (`stickslip sweep`).
 //! - [`compare`]: error against run time of the fixed-step and exact engines
 //!   (`stickslip compare`).
+//! - [`scaling`]: one scene at growing `N` in both engines, timed (`stickslip bench`).
 //! - [`seeds`]: how each run's seed is derived from the scene's seed (one mixer for all).
 //! - [`stats`]: statistics across replicas (means, spreads, Student-t intervals).
 //! - [`format`](mod@format): numbers as text for reports.
@@ -17,6 +18,7 @@ pub mod compare;
 pub mod execute;
 pub mod format;
 pub mod journal;
+pub mod scaling;
 pub mod seeds;
 pub mod stats;
 pub mod sweep;
