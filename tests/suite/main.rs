@@ -35,6 +35,7 @@ mod resume;
 mod rosenbrock;
 mod run_fuzz;
 mod scenarios;
+mod scaling;
 mod scene_fuzz;
 mod series_engine;
 mod series_props;
