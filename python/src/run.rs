@@ -78,6 +78,8 @@ pub fn run_to_dir<'py>(
     if !out.is_dir() {
         return Err(bad_input(format!("output directory {}: not a directory", out.display())));
     }
+    // Held until the run's files are written and read back, as `stickslip run` holds it.
+    let _held = stickslip::output::lock::hold(&out).map_err(bad_input)?;
     let done = py.detach(|| -> Result<_, String> {
         let summary = run_scene(s, Some(&out)).map_err(|e| e.to_string())?;
         if s.output.plot {

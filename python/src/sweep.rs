@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use pyo3::prelude::*;
 use stickslip::output::Summary;
+use stickslip::output::lock::{self, DirLock};
 use stickslip::studies::journal::{Header, Journal, StudyKind};
 use stickslip::studies::sweep::{self as lib, SweepAxis, SweepSpec, Timing, ValueSpec};
 
@@ -82,10 +83,12 @@ impl Sweep {
     fn journal(&self, py: Python<'_>, out: PathBuf) -> PyResult<SweepJournal> {
         let header = Header::new(StudyKind::Sweep, self.0.arguments(), &self.0.base, self.0.len(), None);
         let seeds = self.0.seeds();
+        // The directory is held while the journal is open, as `stickslip sweep` holds it.
+        let held = lock::hold(&out).map_err(bad_input)?;
         let opened = py.detach(|| Journal::open::<Summary>(&out, &header, &seeds)).map_err(bad_input)?;
         let done =
             opened.done.iter().map(|d| d.as_ref().map(|s| serde_json::to_string(s).expect("a summary serializes")));
-        Ok(SweepJournal { done: done.collect(), journal: opened.journal, seeds })
+        Ok(SweepJournal { done: done.collect(), journal: opened.journal, seeds, _held: held })
     }
 
     /// The outcome from every run's `summary.json` text, in the order of `runs`; with
@@ -137,6 +140,7 @@ impl SweepOutcome {
     /// Writes `sweep.csv`, `runs.csv`, `sweep.svg` and `sweep.json` into the existing
     /// directory `out`, as `stickslip sweep` does.
     fn write(&self, py: Python<'_>, out: PathBuf) -> PyResult<()> {
+        let _held = lock::hold(&out).map_err(bad_input)?;
         py.detach(|| self.outcome.write(&self.sweep, &out)).map_err(failed)
     }
 }
@@ -147,6 +151,8 @@ pub struct SweepJournal {
     journal: Journal,
     seeds: Vec<u64>,
     done: Vec<Option<String>>,
+    /// The output directory, held while the journal is open.
+    _held: DirLock,
 }
 
 #[pymethods]

@@ -152,3 +152,29 @@ def test_a_run_releases_the_gil(repo):
     # Held, the GIL would leave one gap as long as the run; released, the counter ticks
     # every millisecond or so (generous bound for a loaded machine).
     assert len(inside) > 50 and gaps.max() < 0.25 * run_time, (len(inside), gaps.max(), run_time)
+
+
+def test_a_run_into_a_directory_a_cli_run_holds_is_refused_and_the_cli_run_finishes(cli, repo, tmp_path):
+    import os
+    import subprocess
+
+    binary = os.environ.get("STICKSLIP_BIN", str(repo / "target" / "release" / "stickslip"))
+    out = tmp_path / "held"
+    long = subprocess.Popen(
+        [binary, "run", "scenarios/fig1-exact.toml", "--set", "run.t_end=40000", "--out", str(out)],
+        cwd=repo,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    lock = out / ".stickslip.lock"
+    deadline = time.monotonic() + 60
+    while not (lock.exists() and lock.read_text() == f"{long.pid}\n"):
+        assert long.poll() is None, "the CLI run ended before it was seen holding its directory"
+        assert time.monotonic() < deadline
+        time.sleep(0.005)
+    with pytest.raises(ValueError, match=rf"^output directory {out} is in use by process {long.pid} "):
+        stickslip.run(repo / "scenarios/fig1.toml", out=str(out))
+    assert long.poll() is None, "the CLI run ended before the Python run was refused: lengthen it"
+    assert long.wait(timeout=300) == 0, long.stderr.read()
+    assert sorted(f.name for f in out.iterdir()) == ["summary.json", "trace.csv", "trace.svg"]
