@@ -1,7 +1,7 @@
 //! Every figure the program draws, as SVG text (plotters' SVG backend): [`sweep`]
 //! (`sweep.svg`: a curve for one swept field, a regime map for two), [`compare`]
-//! (`compare.svg`), [`trace`] (`trace.svg`) and [`scaling`] (`bench.svg`), sharing the helpers of this file (panels of
-//! line series with error bars, log or linear axes, shaded and labelled bands along the x
+//! (`compare.svg`), [`trace`] (`trace.svg`) and [`scaling`] (`bench.svg`), sharing the
+//! helpers of this file (panels of line series with error bars, log or linear axes, shaded and labelled bands along the x
 //! axis, cell edges around grid points) and [`heatmap`] (a coloured grid with a colour bar
 //! and class boundaries).
 //!

@@ -44,7 +44,8 @@ pub fn scaling_svg(scene: &str, rows: &[Row]) -> Result<String, PlotError> {
         series: series(&|e| e.to_string(), &|r| Some(r.setup_seconds), 0),
         bands: Vec::new(),
     };
-    let mut memory = series(&|e| format!("{e}, estimated (engine state)"), &|r| Some(r.estimated_bytes_per_junction), 0);
+    let mut memory =
+        series(&|e| format!("{e}, estimated (engine state)"), &|r| Some(r.estimated_bytes_per_junction), 0);
     memory.extend(series(&|e| format!("{e}, measured (peak RSS rise)"), &|r| r.measured_bytes_per_junction, 2));
     let memory = Panel {
         title: "memory per junction".into(),

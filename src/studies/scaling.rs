@@ -173,7 +173,8 @@ pub fn measure(scene: &Scene, est: &Estimate) -> Result<Row, ScalingError> {
     let engine = scene.run.engine;
     let before = reset_peak_resident();
     let started = Instant::now();
-    let summary = run_scene(scene, None).map_err(|source| ScalingError::Run { n, engine: engine_name(engine), source })?;
+    let summary =
+        run_scene(scene, None).map_err(|source| ScalingError::Run { n, engine: engine_name(engine), source })?;
     let total = started.elapsed().as_secs_f64();
     let peak = estimate::system::peak_resident();
     let work = match engine {
@@ -188,9 +189,7 @@ pub fn measure(scene: &Scene, est: &Estimate) -> Result<Row, ScalingError> {
         run_seconds: summary.wall_seconds,
         setup_seconds: (total - summary.wall_seconds).max(0.0),
         estimated_bytes_per_junction: est.engine_bytes() as f64 / n as f64,
-        measured_bytes_per_junction: before
-            .zip(peak)
-            .map(|(b, p)| p.saturating_sub(b) as f64 / n as f64),
+        measured_bytes_per_junction: before.zip(peak).map(|(b, p)| p.saturating_sub(b) as f64 / n as f64),
     })
 }
 

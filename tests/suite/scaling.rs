@@ -28,7 +28,10 @@ fn bench(args: &[&str], env: &[(&str, String)]) -> Output {
 fn a_tiny_bench_writes_a_well_formed_csv_and_svg() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("b");
-    let o = bench(&["--n-min", "100", "--n-max", "300", "--per-decade", "1", "--work", "20000", "--out", out.to_str().unwrap()], &[]);
+    let o = bench(
+        &["--n-min", "100", "--n-max", "300", "--per-decade", "1", "--work", "20000", "--out", out.to_str().unwrap()],
+        &[],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let mut names: Vec<String> =
         std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
@@ -69,7 +72,13 @@ fn a_tiny_bench_writes_a_well_formed_csv_and_svg() {
 
     let svg = std::fs::read_to_string(out.join("bench.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"), "{}", &svg[..100.min(svg.len())]);
-    for text in ["ns per unit of work", "set-up time", "memory per junction", "exact, ns per event", "fixed, ns per junction-step"] {
+    for text in [
+        "ns per unit of work",
+        "set-up time",
+        "memory per junction",
+        "exact, ns per event",
+        "fixed, ns per junction-step",
+    ] {
         assert!(svg.contains(text), "bench.svg lacks {text:?}");
     }
     let stdout = String::from_utf8_lossy(&o.stdout);
