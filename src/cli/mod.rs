@@ -1,4 +1,5 @@
-//! The command line: `stickslip run`, `stickslip resume`, `stickslip validate`, `stickslip compare`.
+//! The command line: `stickslip run`, `stickslip resume`, `stickslip validate`, `stickslip compare`,
+//! `stickslip sweep`, `stickslip stability`, `stickslip bench`.
 //!
 //! Exit codes: 0 success; 1 the run failed (numerical trouble, a write that failed
 //! mid-run, a report that could not be written to standard output); 2 bad input (command

@@ -88,7 +88,7 @@ pub fn t_end_for(scene: &Scene, work: f64) -> f64 {
             let mut t = scene.run.t_end;
             for _ in 0..2 {
                 let events = events_at(t);
-                if !(events > 0.0) {
+                if events.is_nan() || events <= 0.0 {
                     return floor.max(scene.run.t_end);
                 }
                 t *= work / events;

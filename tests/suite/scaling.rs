@@ -90,7 +90,9 @@ fn bad_bench_options_are_refused_in_one_line() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("never");
     let out_s = out.to_str().unwrap().to_string();
-    let cases: [(&[&str], &str, Vec<(&str, String)>); 9] = [
+    // (arguments, what the error line mentions, environment)
+    type Case<'a> = (&'a [&'a str], &'a str, Vec<(&'a str, String)>);
+    let cases: [Case; 9] = [
         (&["--n-min", "0"], "--n-min = 0", vec![]),
         (&["--n-min", "1000", "--n-max", "999"], "--n-max = 999", vec![]),
         (&["--work", "nan"], "--work = NaN", vec![]),
