@@ -77,9 +77,11 @@ impl Coefficients {
                 ));
             }
         }
-        for (field, s) in
-            [("junctions.kappa_slope", self.kappa_slope), ("plate.k_slope", self.k_slope), ("plate.eta_slope", self.eta_slope)]
-        {
+        for (field, s) in [
+            ("junctions.kappa_slope", self.kappa_slope),
+            ("plate.k_slope", self.k_slope),
+            ("plate.eta_slope", self.eta_slope),
+        ] {
             if !s.is_finite() {
                 return Err(SceneError::invalid(field, s, "must be a finite number"));
             }

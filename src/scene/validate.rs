@@ -248,7 +248,13 @@ impl SceneFile {
 /// values in force at `j.temperature`); returns the reference values when the scene has a
 /// temperature dependence, `None` (and leaves `j` and `p` untouched) when it has none.
 fn thermal_map(j: &mut JunctionParams, p: &mut PlateParams) -> Result<Option<Reference>, SceneError> {
-    let c = Coefficients { e_off: j.e_off, e_on: j.e_on, kappa_slope: j.kappa_slope, k_slope: p.k_slope, eta_slope: p.eta_slope };
+    let c = Coefficients {
+        e_off: j.e_off,
+        e_on: j.e_on,
+        kappa_slope: j.kappa_slope,
+        k_slope: p.k_slope,
+        eta_slope: p.eta_slope,
+    };
     c.check()?;
     if c.is_zero() {
         return Ok(None);

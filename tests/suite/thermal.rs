@@ -156,8 +156,14 @@ fn a_temperature_sweep_moves_every_parameter_together() {
         let sum = run_scene(run.scene, None).unwrap();
         let json = serde_json::to_value(&sum).unwrap();
         let p = &json["parameters"];
-        let got = [&p["junctions"]["k0"], &p["junctions"]["kon0"], &p["junctions"]["kappa"], &p["plate"]["k"], &p["plate"]["eta"]]
-            .map(|x| x.as_f64().unwrap());
+        let got = [
+            &p["junctions"]["k0"],
+            &p["junctions"]["kon0"],
+            &p["junctions"]["kappa"],
+            &p["plate"]["k"],
+            &p["plate"]["eta"],
+        ]
+        .map(|x| x.as_f64().unwrap());
         for (name, (g, e)) in ["k0", "kon0", "kappa", "K", "eta"].iter().zip(got.iter().zip(expected(temperature))) {
             assert!((g - e).abs() <= 2.0 * f64::EPSILON * e, "T = {temperature}: {name} = {g}, expected {e}");
         }
@@ -165,7 +171,10 @@ fn a_temperature_sweep_moves_every_parameter_together() {
             assert_eq!(got, [1.0, 1.0, 0.1, 15.0, 25.0], "T = 1: the reference values exactly");
         }
         let r = &p["reference"];
-        assert_eq!([&r["k0"], &r["kon0"], &r["kappa"], &r["k"], &r["eta"]].map(|x| x.as_f64().unwrap()), [1.0, 1.0, 0.1, 15.0, 25.0]);
+        assert_eq!(
+            [&r["k0"], &r["kon0"], &r["kappa"], &r["k"], &r["eta"]].map(|x| x.as_f64().unwrap()),
+            [1.0, 1.0, 0.1, 15.0, 25.0]
+        );
         assert_eq!(p["junctions"]["e_off"].as_f64(), Some(2.5));
         summaries.push(sum);
     }
@@ -198,7 +207,13 @@ fn a_thermal_scene_round_trips() {
     // A scene recorded without the thermal fields (as before they existed) reads as zeros.
     let plain = stickslip_testkit::fig1();
     let mut value = serde_json::to_value(&plain).unwrap();
-    for (section, key) in [("junctions", "e_off"), ("junctions", "e_on"), ("junctions", "kappa_slope"), ("plate", "k_slope"), ("plate", "eta_slope")] {
+    for (section, key) in [
+        ("junctions", "e_off"),
+        ("junctions", "e_on"),
+        ("junctions", "kappa_slope"),
+        ("plate", "k_slope"),
+        ("plate", "eta_slope"),
+    ] {
         value[section].as_object_mut().unwrap().remove(key).unwrap();
     }
     assert_eq!(serde_json::from_value::<stickslip::Scene>(value).unwrap(), plain);
@@ -265,7 +280,11 @@ fn check(what: &str, x: &[f64], reference: Bounded) {
     let (m, hw) = mean_ci(x, ALPHA);
     let tol = hw + reference.error;
     eprintln!("{what}: replicas {m:.6} +- {hw:.2e}, reference {:.6} +- {:.2e}", reference.value, reference.error);
-    assert!((m - reference.value).abs() <= tol, "{what}: replicas {m:.6} +- {hw:.2e}, reference {:.6}", reference.value);
+    assert!(
+        (m - reference.value).abs() <= tol,
+        "{what}: replicas {m:.6} +- {hw:.2e}, reference {:.6}",
+        reference.value
+    );
     assert!(tol < 0.02 * reference.value.abs(), "{what}: tolerance {tol:.2e} too wide to test anything");
 }
 
