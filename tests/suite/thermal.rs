@@ -16,9 +16,9 @@ use std::path::Path;
 
 use crate::cli_bad_input::expect_bad_scene;
 use crate::common;
+use crate::renewal::{K0, KAPPA, KON0, REPLICAS, V, V0, check};
 
-use common::renewal::{Bounded, Renewal};
-use common::*;
+use common::renewal::Renewal;
 use stickslip::run_scene;
 use stickslip::studies::sweep::{Sweep, SweepAxis, SweepSpec, ValueSpec, parse_values};
 use stickslip_testkit::scene;
@@ -224,68 +224,30 @@ fn a_thermal_scene_round_trips() {
 const E_OFF: f64 = 2.0;
 const E_ON: f64 = 1.0;
 const KAPPA_SLOPE: f64 = 0.25;
-const KAPPA: f64 = 0.1;
-const K0: f64 = 0.1;
-const KON0: f64 = 0.1;
-/// Above `V0 = 0.5`: formation at `kon0 g(V)`.
-const V: f64 = 0.8;
-const V0: f64 = 0.5;
-const REPLICAS: u64 = 10;
-
-/// The renewal scene of `tests/suite/renewal.rs` with the thermal coefficients.
-const RENEWAL: &str = r#"
-[junctions]
-n = 1000
-bond = "weak"
-force_law = "linear"
-kappa = 0.1
-k0 = 0.1
-kon0 = 0.1
-dx = 1.0
-initial = "detached"
-reattach = "unstretched"
-tau0 = 2.0
-alpha = 1.0
-e_off = 2.0
-e_on = 1.0
-kappa_slope = 0.25
-[plate]
-kinematic = true
-v = 0.8
-[run]
-engine = "exact"
-t_warmup = 400.0
-t_end = 2400.0
-[output]
-trace = false
-"#;
-
-/// `(attached fraction, bond force per junction)` of `REPLICAS` replicas at `T`.
+/// `(attached fraction, bond force per junction)` of `REPLICAS` replicas at `T` of the
+/// renewal scene of `tests/suite/renewal.rs` (weak bonds, linear law, kinematic plate at
+/// `V = 0.8`, unstretched re-attachment, `N = 1000`, window `[400, 2400]`) with the thermal
+/// coefficients.
 fn replicas(t: f64) -> (Vec<f64>, Vec<f64>) {
     let (mut n, mut f) = (Vec::new(), Vec::new());
     let temperature = format!("junctions.temperature={t}");
+    let (e_off, e_on, slope) = (
+        format!("junctions.e_off={E_OFF}"),
+        format!("junctions.e_on={E_ON}"),
+        format!("junctions.kappa_slope={KAPPA_SLOPE}"),
+    );
     for r in 0..REPLICAS {
-        let mut s = scene(RENEWAL, &[&temperature]);
+        let mut s = scene(crate::renewal::SCENE, &[&temperature, &e_off, &e_on, &slope]);
+        assert_eq!(
+            (s.plate.v, s.junctions.kappa, s.junctions.temperature),
+            (V, KAPPA * (1.0 + KAPPA_SLOPE * (t - 1.0)), t)
+        );
         s.run.seed = 2000 + r;
         let sum = run_scene(&s, None).unwrap();
         n.push(sum.attached_fraction_mean);
         f.push(sum.bond_force_mean / s.junctions.n as f64);
     }
     (n, f)
-}
-
-/// `|mean - reference| <= t half-width (level 1 - ALPHA) + reference error`, and the
-/// tolerance small enough to test something.
-fn check(what: &str, x: &[f64], reference: Bounded) {
-    let (m, hw) = mean_ci(x, ALPHA);
-    let tol = hw + reference.error;
-    eprintln!("{what}: replicas {m:.6} +- {hw:.2e}, reference {:.6} +- {:.2e}", reference.value, reference.error);
-    assert!(
-        (m - reference.value).abs() <= tol,
-        "{what}: replicas {m:.6} +- {hw:.2e}, reference {:.6}",
-        reference.value
-    );
-    assert!(tol < 0.02 * reference.value.abs(), "{what}: tolerance {tol:.2e} too wide to test anything");
 }
 
 /// The exact engine (linear law) against the renewal theory with `k0(T)`, `kon0(T)`,
