@@ -20,6 +20,7 @@ pub(crate) fn validate(args: &SceneArgs) -> ExitCode {
     let j = &scene.junctions;
     let p = &scene.plate;
     let _ = writeln!(text, "# derived: V0 = alpha/tau0 = {}, beta dx = {}", j.v0(), j.beta_dx());
+    let _ = writeln!(text, "{}", in_force_line(&scene));
     if p.mass > 0.0 {
         let k_tot = p.k;
         let omega = (k_tot / p.mass).sqrt();
@@ -34,4 +35,15 @@ pub(crate) fn validate(args: &SceneArgs) -> ExitCode {
         let _ = writeln!(text, "{line}");
     }
     emit(&text)
+}
+
+/// The temperature-dependent parameters in force at the scene's temperature (the file above
+/// gives them at `T = 1`; docs/model.md, "Temperature").
+fn in_force_line(scene: &crate::scene::Scene) -> String {
+    let f = scene.in_force();
+    let how = if scene.reference.is_some() { "" } else { " (no temperature dependence: the values above)" };
+    format!(
+        "# in force at junctions.temperature = {}{how}: k0 = {}, kon0 = {}, kappa = {}, K = {}, eta = {}",
+        scene.junctions.temperature, f.k0, f.kon0, f.kappa, f.k, f.eta
+    )
 }

@@ -28,6 +28,9 @@ pub struct JunctionsSection {
     pub dx: Option<f64>,
     pub temperature: Option<f64>,
     pub initial: Option<Initial>,
+    pub e_off: Option<f64>,
+    pub e_on: Option<f64>,
+    pub kappa_slope: Option<f64>,
 }
 
 /// `[plate]`.
@@ -39,6 +42,8 @@ pub struct PlateSection {
     pub k: Option<f64>,
     pub v: Option<f64>,
     pub kinematic: Option<bool>,
+    pub k_slope: Option<f64>,
+    pub eta_slope: Option<f64>,
 }
 
 /// `[run]`.

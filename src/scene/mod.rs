@@ -6,6 +6,7 @@ pub mod file;
 pub mod laws;
 pub mod overrides;
 pub mod params;
+pub mod thermal;
 pub mod validate;
 
 pub use error::SceneError;
@@ -52,29 +53,36 @@ impl Scene {
     /// The scene written back as a complete scene file (every field explicit).
     pub fn to_file(&self) -> SceneFile {
         let (j, p, r, f, e, o) = (&self.junctions, &self.plate, &self.run, &self.fixed, &self.exact, &self.output);
+        // The file holds the reference values; validation maps them to `T` again.
+        let reference = self.reference_values();
         SceneFile {
             junctions: file::JunctionsSection {
                 n: Some(j.n),
                 bond: Some(j.bond),
                 force_law: Some(j.force_law),
-                kappa: Some(j.kappa),
+                kappa: Some(reference.kappa),
                 l0: Some(j.l0),
                 lambda: Some(j.lambda),
                 reattach: Some(j.reattach),
-                k0: Some(j.k0),
-                kon0: Some(j.kon0),
+                k0: Some(reference.k0),
+                kon0: Some(reference.kon0),
                 tau0: Some(j.tau0),
                 alpha: Some(j.alpha),
                 dx: Some(j.dx),
                 temperature: Some(j.temperature),
                 initial: Some(j.initial),
+                e_off: Some(j.e_off),
+                e_on: Some(j.e_on),
+                kappa_slope: Some(j.kappa_slope),
             },
             plate: file::PlateSection {
                 mass: Some(p.mass),
-                eta: Some(p.eta),
-                k: Some(p.k),
+                eta: Some(reference.eta),
+                k: Some(reference.k),
                 v: Some(p.v),
                 kinematic: Some(p.kinematic),
+                k_slope: Some(p.k_slope),
+                eta_slope: Some(p.eta_slope),
             },
             run: file::RunSection {
                 engine: Some(r.engine),

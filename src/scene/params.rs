@@ -99,9 +99,19 @@ pub struct JunctionParams {
     pub alpha: f64,
     /// Barrier distance `dx` (>= 0) of the weak-bond rate.
     pub dx: f64,
-    /// Temperature in units of the reference `kB T` (> 0); `beta = 1/temperature`.
+    /// Temperature in units of the reference `kB T` (> 0); `beta = 1/temperature`, and
+    /// `k0`, `kon0` and `kappa` above are the values in force at it (`scene::thermal`).
     pub temperature: f64,
     pub initial: Initial,
+    /// Activation energy of rupture (units of `kB T_ref`, >= 0): `k0(T) = k0 exp(-e_off (1/T - 1))`.
+    #[serde(default)]
+    pub e_off: f64,
+    /// Activation energy of formation (units of `kB T_ref`, >= 0): `kon0(T) = kon0 exp(-e_on (1/T - 1))`.
+    #[serde(default)]
+    pub e_on: f64,
+    /// Relative slope of `kappa` per unit of `T`: `kappa(T) = kappa (1 + kappa_slope (T - 1))`.
+    #[serde(default)]
+    pub kappa_slope: f64,
 }
 
 impl JunctionParams {
@@ -130,6 +140,12 @@ pub struct PlateParams {
     /// and `k` are not used) and the friction is the junctions' force `F_b`.
     #[serde(default)]
     pub kinematic: bool,
+    /// Relative slope of `K` per unit of `T`: `K(T) = K (1 + k_slope (T - 1))`.
+    #[serde(default)]
+    pub k_slope: f64,
+    /// Relative slope of `eta` per unit of `T`: `eta(T) = eta (1 + eta_slope (T - 1))`.
+    #[serde(default)]
+    pub eta_slope: f64,
 }
 
 /// Run control.
@@ -212,4 +228,36 @@ pub struct Scene {
     pub fixed: FixedParams,
     pub exact: ExactParams,
     pub output: OutputParams,
+    /// The reference values (at `T = 1`, as the scene file gives them) of the
+    /// temperature-dependent parameters, when the scene has a temperature dependence (any of
+    /// `e_off`, `e_on`, `kappa_slope`, `k_slope`, `eta_slope` not 0); `None` otherwise, and
+    /// then the values in force are the reference ones ([`Scene::reference_values`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<super::thermal::Reference>,
+}
+
+impl Scene {
+    /// The temperature-dependent parameters at `T = 1`, as the scene file gives them.
+    pub fn reference_values(&self) -> super::thermal::Reference {
+        self.reference.unwrap_or_else(|| self.in_force())
+    }
+
+    /// The temperature-dependent parameters in force at `junctions.temperature` (the values
+    /// the engines read from `junctions` and `plate`).
+    pub fn in_force(&self) -> super::thermal::Reference {
+        let (j, p) = (&self.junctions, &self.plate);
+        super::thermal::Reference { k0: j.k0, kon0: j.kon0, kappa: j.kappa, k: p.k, eta: p.eta }
+    }
+
+    /// The five coefficients of the temperature map.
+    pub fn thermal_coefficients(&self) -> super::thermal::Coefficients {
+        let (j, p) = (&self.junctions, &self.plate);
+        super::thermal::Coefficients {
+            e_off: j.e_off,
+            e_on: j.e_on,
+            kappa_slope: j.kappa_slope,
+            k_slope: p.k_slope,
+            eta_slope: p.eta_slope,
+        }
+    }
 }

@@ -4,6 +4,7 @@
 use super::error::SceneError;
 use super::file::SceneFile;
 use super::params::*;
+use super::thermal::{Coefficients, Reference, in_force};
 use crate::physics::ExactMethod;
 
 /// Largest Park–Miller seed: the state must lie in `[1, 2^31 - 2]`.
@@ -63,7 +64,7 @@ impl SceneFile {
         if n == 0 || n > N_MAX {
             return Err(SceneError::invalid("junctions.n", n, format!("must be a whole number from 1 to {N_MAX}")));
         }
-        let junctions = JunctionParams {
+        let mut junctions = JunctionParams {
             n,
             bond: j.bond.unwrap_or(BondKind::Strong),
             force_law: j.force_law.unwrap_or(ForceLawKind::Tilted),
@@ -78,7 +79,24 @@ impl SceneFile {
             dx: finite_ge("junctions.dx", j.dx.unwrap_or(1.0), 0.0)?,
             temperature: finite_gt("junctions.temperature", j.temperature.unwrap_or(1.0), 0.0)?,
             initial: j.initial.unwrap_or(Initial::Detached),
+            e_off: j.e_off.unwrap_or(0.0),
+            e_on: j.e_on.unwrap_or(0.0),
+            kappa_slope: j.kappa_slope.unwrap_or(0.0),
         };
+        let p = &self.plate;
+        let mut plate = PlateParams {
+            mass: finite_ge("plate.mass", p.mass.unwrap_or(75.0), 0.0)?,
+            eta: finite_ge("plate.eta", p.eta.unwrap_or(75.0), 0.0)?,
+            k: finite_ge("plate.k", p.k.unwrap_or(150.0), 0.0)?,
+            v: finite_ge("plate.v", p.v.unwrap_or(0.5), 0.0)?,
+            kinematic: p.kinematic.unwrap_or(false),
+            k_slope: p.k_slope.unwrap_or(0.0),
+            eta_slope: p.eta_slope.unwrap_or(0.0),
+        };
+        // The temperature map (scene::thermal), once: from here on `junctions` and `plate`
+        // hold the values in force at the scene's temperature, the ones every check below
+        // and every engine sees.
+        let reference = thermal_map(&mut junctions, &mut plate)?;
         // The law's and the bond kind's own checks (scene::laws), after the common ones above.
         let law =
             super::laws::check(&junctions).map_err(|(field, e)| SceneError::invalid(field, e.value, e.allowed))?;
@@ -90,14 +108,6 @@ impl SceneFile {
             ));
         }
 
-        let p = &self.plate;
-        let plate = PlateParams {
-            mass: finite_ge("plate.mass", p.mass.unwrap_or(75.0), 0.0)?,
-            eta: finite_ge("plate.eta", p.eta.unwrap_or(75.0), 0.0)?,
-            k: finite_ge("plate.k", p.k.unwrap_or(150.0), 0.0)?,
-            v: finite_ge("plate.v", p.v.unwrap_or(0.5), 0.0)?,
-            kinematic: p.kinematic.unwrap_or(false),
-        };
         if !plate.kinematic && plate.mass == 0.0 && plate.eta == 0.0 {
             return Err(SceneError::invalid(
                 "plate.eta",
@@ -230,8 +240,29 @@ impl SceneFile {
                 "needs output.trace = true (trace.svg is drawn from trace.csv after the run)",
             ));
         }
-        Ok(Scene { name: name.to_string(), junctions, plate, run, fixed, exact, output })
+        Ok(Scene { name: name.to_string(), junctions, plate, run, fixed, exact, output, reference })
     }
+}
+
+/// Applies the temperature map to the reference values in `j` and `p` (replaced by the
+/// values in force at `j.temperature`); returns the reference values when the scene has a
+/// temperature dependence, `None` (and leaves `j` and `p` untouched) when it has none.
+fn thermal_map(j: &mut JunctionParams, p: &mut PlateParams) -> Result<Option<Reference>, SceneError> {
+    let c = Coefficients {
+        e_off: j.e_off,
+        e_on: j.e_on,
+        kappa_slope: j.kappa_slope,
+        k_slope: p.k_slope,
+        eta_slope: p.eta_slope,
+    };
+    c.check()?;
+    if c.is_zero() {
+        return Ok(None);
+    }
+    let reference = Reference { k0: j.k0, kon0: j.kon0, kappa: j.kappa, k: p.k, eta: p.eta };
+    let now = in_force(&reference, &c, j.temperature)?;
+    (j.k0, j.kon0, j.kappa, p.k, p.eta) = (now.k0, now.kon0, now.kappa, now.k, now.eta);
+    Ok(Some(reference))
 }
 
 /// Default output interval: `t_end / 1000`, rounded up to whole steps for the fixed engine.

@@ -68,7 +68,7 @@ fn expect_bad_input_in(dir: &Path, args: &[&str], mentions: &[&str]) -> String {
 
 /// Writes `text` as `scene.toml` in a fresh directory and checks both `run` (whose default
 /// output directory `out/scene/` would be created in that directory) and `validate`.
-fn expect_bad_scene(text: &str, mentions: &[&str]) -> String {
+pub(crate) fn expect_bad_scene(text: &str, mentions: &[&str]) -> String {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("scene.toml"), text).unwrap();
     let line = expect_bad_input_in(dir.path(), &["run", "scene.toml"], mentions);

@@ -42,6 +42,7 @@ mod series_props;
 mod study_resume;
 mod sumtree_props;
 mod sweep;
+mod thermal;
 mod tilted_series;
 mod unstable;
 mod validate_scenarios;

@@ -20,18 +20,18 @@ use common::*;
 use stickslip::run_scene;
 use stickslip_testkit::scene;
 
-const KAPPA: f64 = 0.1;
-const K0: f64 = 0.1;
-const KON0: f64 = 0.1;
+pub(crate) const KAPPA: f64 = 0.1;
+pub(crate) const K0: f64 = 0.1;
+pub(crate) const KON0: f64 = 0.1;
 /// Above `V0 = alpha / tau0 = 0.5`, so formation runs at `kon0 g(V)`, `g < 1`.
-const V: f64 = 0.8;
-const V0: f64 = 0.5;
+pub(crate) const V: f64 = 0.8;
+pub(crate) const V0: f64 = 0.5;
 const L0: f64 = 1.0;
 const T_WARMUP: f64 = 400.0;
 const T_END: f64 = 2400.0;
-const REPLICAS: u64 = 10;
+pub(crate) const REPLICAS: u64 = 10;
 
-const SCENE: &str = r#"
+pub(crate) const SCENE: &str = r#"
 [junctions]
 n = 1000
 bond = "weak"
@@ -104,7 +104,7 @@ fn replicas(overrides: &[&str]) -> (Vec<f64>, Vec<f64>) {
 }
 
 /// `|mean - reference| <= t half-width + reference error`.
-fn check(what: &str, x: &[f64], reference: Bounded) {
+pub(crate) fn check(what: &str, x: &[f64], reference: Bounded) {
     let (m, hw) = mean_ci(x, ALPHA);
     let tol = hw + reference.error;
     eprintln!("{what}: replicas {m:.6} +- {hw:.2e}, reference {:.6} +- {:.2e}", reference.value, reference.error);

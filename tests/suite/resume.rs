@@ -2,7 +2,7 @@
 //! continued with `stickslip resume` gives the same `trace.csv` and `events.csv`, byte for
 //! byte, and the same `summary.json` apart from `wall_seconds`, as an uninterrupted run
 //! with the same seed; for the fixed engine and the exact engine (linear law with strong
-//! and weak bonds, tilted law), and for kinematic plates. Also: the progress display changes nothing, a finished run
+//! and weak bonds, tilted law), and for kinematic plates and a thermally activated scene. Also: the progress display changes nothing, a finished run
 //! is not resumed, and bad `resume` inputs and bad `--checkpoint-every` values are refused
 //! with one line and exit code 2, with nothing changed on disk, as is a `resume` when less
 //! memory is available than the run needs.
@@ -85,6 +85,24 @@ const KINEMATIC_EXACT: Case = Case {
 const KINEMATIC_FIXED: Case = Case {
     name: "fixed (tilted law, weak bonds), kinematic plate",
     sets: &["junctions.bond=weak", "plate.kinematic=true", "fixed.dt=0.2", "output.events=false"],
+    t_end: 20000.0,
+};
+/// Temperature as an input (docs/model.md, "Temperature"): the checkpoint's scene holds
+/// the values in force and the reference values, and the resumed run goes on with them.
+const THERMAL: Case = Case {
+    name: "exact, linear law, weak bonds, thermally activated at T = 1.4",
+    sets: &[
+        "run.engine=exact",
+        "junctions.force_law=linear",
+        "junctions.bond=weak",
+        "junctions.temperature=1.4",
+        "junctions.e_off=2",
+        "junctions.e_on=1",
+        "junctions.kappa_slope=-0.1",
+        "plate.k_slope=0.2",
+        "plate.eta_slope=-0.1",
+        "run.t_warmup=100",
+    ],
     t_end: 20000.0,
 };
 
@@ -338,6 +356,11 @@ fn killed_and_resumed_exact_linear_weak_in_bins() {
 fn killed_and_resumed_kinematic_plates() {
     kill_and_resume(&KINEMATIC_EXACT, 1);
     kill_and_resume(&KINEMATIC_FIXED, 1);
+}
+
+#[test]
+fn killed_and_resumed_thermal() {
+    kill_and_resume(&THERMAL, 1);
 }
 
 #[test]
