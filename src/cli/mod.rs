@@ -1,4 +1,5 @@
-//! The command line: `stickslip run`, `stickslip resume`, `stickslip validate`, `stickslip compare`.
+//! The command line: `stickslip run`, `stickslip resume`, `stickslip validate`, `stickslip compare`,
+//! `stickslip sweep`, `stickslip friction-law`.
 //!
 //! Exit codes: 0 success; 1 the run failed (numerical trouble, a write that failed
 //! mid-run, a report that could not be written to standard output); 2 bad input (command
@@ -7,6 +8,7 @@
 
 mod compare;
 mod cpu;
+mod friction_law;
 mod resume;
 mod run;
 mod signals;
@@ -89,6 +91,8 @@ pub enum Command {
     },
     /// Work-precision study: error against run time of the fixed-step and exact engines.
     Compare(compare::CompareArgs),
+    /// A friction law for continuum codes from a map over plate.v and junctions.temperature (run here, or --from a finished sweep): law.csv, abaqus.inp, ansys.mac, law.json.
+    FrictionLaw(friction_law::FrictionLawArgs),
 }
 
 /// Prints a one-line error and returns the exit code.
@@ -103,7 +107,7 @@ pub(crate) fn fail(code: u8, message: impl std::fmt::Display) -> ExitCode {
 fn clap_one_line(e: &clap::Error) -> String {
     use clap::error::ErrorKind;
     if matches!(e.kind(), ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand) {
-        return "a command is required: `run`, `resume`, `validate`, `stability`, `sweep` or `compare` (try --help)"
+        return "a command is required: `run`, `resume`, `validate`, `stability`, `sweep`, `compare` or `friction-law` (try --help)"
             .to_string();
     }
     let text = e.to_string();
@@ -139,6 +143,7 @@ pub fn main() -> ExitCode {
         Command::Stability { scene } => stability::stability(&scene),
         Command::Compare(args) => compare::compare(&args),
         Command::Sweep(args) => sweep::sweep(&args),
+        Command::FrictionLaw(args) => friction_law::friction_law(&args),
     };
     report_peak_memory();
     code
