@@ -315,8 +315,10 @@ fn bad_input_is_one_line_and_nothing_is_written() {
     assert!(stickslip(&args).status.success());
     let v1 = dir.path().join("v1");
     let v1_s = v1.display().to_string();
-    let o = stickslip(&["sweep", fig2_static(), "--set", "run.t_end=50", "--param", "plate.v", "--values", "0.1,10", "--out", &v1_s]);
-    assert!(o.status.success());
+    let mut args = vec!["sweep", fig2_static()];
+    args.extend(SET);
+    args.extend(["--param", "plate.v", "--values", "0.1,10", "--out", &v1_s]);
+    assert!(stickslip(&args).status.success());
 
     // A missing scale, for each one, when running a map: no output directory.
     for (k, option) in ["--l0", "--t0", "--t-ref", "--normal-load"].iter().enumerate() {
