@@ -12,8 +12,8 @@ use std::process::ExitCode;
 use super::sweep::{AxisArgs, Finished, SweepArgs, run_study};
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
 use crate::studies::law::{
-    self, DEFAULT_DEGREE, FrictionLaw, LawInput, PointRuns, ScaleArgs, T_FIELD, V_FIELD, from_outcome,
-    read_sweep_dir, vt_axes,
+    self, DEFAULT_DEGREE, FrictionLaw, LawInput, PointRuns, ScaleArgs, T_FIELD, V_FIELD, from_outcome, read_sweep_dir,
+    vt_axes,
 };
 
 #[derive(clap::Args, Debug)]
@@ -74,11 +74,8 @@ impl FrictionLawArgs {
 fn check_grid(sweep: &crate::studies::sweep::Sweep) -> Result<(), String> {
     let params: Vec<&str> = sweep.axes.iter().map(|a| a.param.as_str()).collect();
     let (iv, it) = vt_axes(&params, "--param").map_err(|e| e.to_string())?;
-    let points = sweep
-        .points
-        .iter()
-        .map(|p| PointRuns { v: p.values[iv].x, t: p.values[it].x, runs: Vec::new() })
-        .collect();
+    let points =
+        sweep.points.iter().map(|p| PointRuns { v: p.values[iv].x, t: p.values[it].x, runs: Vec::new() }).collect();
     let input = LawInput { scene: sweep.base.name.clone(), replicas: sweep.replicas, points };
     law::source::checked_points(&input).map(|_| ()).map_err(|e| e.to_string())
 }
@@ -119,7 +116,8 @@ pub(crate) fn friction_law(args: &FrictionLawArgs) -> ExitCode {
                 out: args.out.clone(),
                 threads: args.threads,
             };
-            let default_out = |s: &crate::studies::sweep::Sweep| Path::new("out").join(format!("{}-friction-law", s.base.name));
+            let default_out =
+                |s: &crate::studies::sweep::Sweep| Path::new("out").join(format!("{}-friction-law", s.base.name));
             let Finished { sweep, outcome, out } = match run_study(&sweep_args, default_out, check_grid) {
                 Ok(f) => f,
                 Err(code) => return code,

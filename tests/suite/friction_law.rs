@@ -26,7 +26,6 @@ use stickslip::studies::law::{BOLTZMANN, FrictionLaw, LawInput, PointRuns, RunRe
 
 const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
 
-
 fn stickslip(args: &[&str]) -> Output {
     Command::new(BIN).args(args).output().expect("the binary runs")
 }
@@ -173,7 +172,8 @@ fn exports_read_back_match_the_table_and_leave_out_stick_slip() {
     for text in [&abaqus, &ansys] {
         assert_eq!(text.matches("left out: V = ").count(), left_out);
     }
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("law.json")).unwrap()).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("law.json")).unwrap()).unwrap();
     assert_eq!(json["left_out"].as_array().unwrap().len(), left_out);
     assert_eq!(json["fit"]["residuals"].as_array().unwrap().len(), expected.len());
     assert_eq!(json["units"]["force_unit_n"].as_f64().unwrap(), force_unit);
@@ -202,15 +202,10 @@ fn from_a_finished_sweep_gives_the_files_of_a_map_run_here() {
 
 /// A map of exact `mu(V, T)` as two replicas `mu +- d`, in the model's force units.
 fn synthetic(mu: impl Fn(f64, f64) -> f64, d: f64) -> (LawInput, stickslip::studies::law::Scales) {
-    let scales = ScaleArgs {
-        l0: Some(1e-9),
-        t0: Some(1e-6),
-        t_ref: Some(300.0),
-        normal_load: Some(2.0),
-        force_unit: Some(0.5),
-    }
-    .resolve()
-    .unwrap();
+    let scales =
+        ScaleArgs { l0: Some(1e-9), t0: Some(1e-6), t_ref: Some(300.0), normal_load: Some(2.0), force_unit: Some(0.5) }
+            .resolve()
+            .unwrap();
     let mut points = Vec::new();
     for v in [0.05, 0.2, 0.7, 2.0, 6.0, 20.0] {
         for t in [0.4, 0.8, 1.5, 3.0] {

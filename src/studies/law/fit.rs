@@ -225,9 +225,7 @@ fn solve(points: &[FitPoint], terms: &[Term], sigma: Option<&[f64]>) -> Option<S
         }
     }
     let covariance = (0..p)
-        .map(|i| {
-            (0..p).map(|j| (0..p).map(|k| rinv[i][k] * rinv[j][k]).sum::<f64>() / (scale[i] * scale[j])).collect()
-        })
+        .map(|i| (0..p).map(|j| (0..p).map(|k| rinv[i][k] * rinv[j][k]).sum::<f64>() / (scale[i] * scale[j])).collect())
         .collect();
     let coefficients = c.iter().zip(&scale).map(|(c, s)| c / s).collect();
     Some(Solved { coefficients, covariance })

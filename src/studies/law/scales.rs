@@ -63,7 +63,13 @@ impl ScaleArgs {
             None => Err(ScaleError::Missing { option, why, example }),
             Some(value) => positive(value, option, unit),
         };
-        let l0 = need(self.l0, "--l0", "slip rates in m/s are V * l0 / t0", "the length unit in metres, e.g. --l0 1e-9", "metres")?;
+        let l0 = need(
+            self.l0,
+            "--l0",
+            "slip rates in m/s are V * l0 / t0",
+            "the length unit in metres, e.g. --l0 1e-9",
+            "metres",
+        )?;
         let t0 = need(
             self.t0,
             "--t0",

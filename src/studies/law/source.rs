@@ -35,7 +35,9 @@ pub enum SourceError {
     NotVT { context: String, found: String },
     #[error("--from {dir}: not a directory")]
     NoDir { dir: String },
-    #[error("--from {dir}: holds no sweep (no sweep.json, no journal.jsonl); give the output directory of `stickslip sweep`")]
+    #[error(
+        "--from {dir}: holds no sweep (no sweep.json, no journal.jsonl); give the output directory of `stickslip sweep`"
+    )]
     NoSweep { dir: String },
     #[error(
         "--from {dir}: the sweep has not finished ({done} of {total} runs in journal.jsonl{files}); continue it with `stickslip resume {dir}`, then make the law"
@@ -135,7 +137,10 @@ pub fn read_sweep_dir(dir: &Path) -> Result<LawInput, SourceError> {
     params.extend(rec.param2.as_deref());
     let (iv, it) = vt_axes(&params, &format!("--from {shown}"))?;
     let number = |s: &String| {
-        s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| damaged(&record_path, format!("value '{s}' is not a number")))
+        s.parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| damaged(&record_path, format!("value '{s}' is not a number")))
     };
     let axes = [
         rec.values.iter().map(number).collect::<Result<Vec<f64>, _>>()?,
@@ -175,7 +180,10 @@ pub fn read_sweep_dir(dir: &Path) -> Result<LawInput, SourceError> {
                 s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| bad(format!("'{s}' is not a number")))
             };
             if num(cv)? != v || num(ct)? != t {
-                return Err(bad(format!("not the grid point {} = {v}, {} = {t} of sweep.json", params[iv], params[it])));
+                return Err(bad(format!(
+                    "not the grid point {} = {v}, {} = {t} of sweep.json",
+                    params[iv], params[it]
+                )));
             }
             if cell(cseed)?.parse::<u64>().ok() != Some(rec.seeds[g][r]) {
                 return Err(bad(format!("not the seed {} of sweep.json", rec.seeds[g][r])));

@@ -121,7 +121,9 @@ impl FrictionLaw {
                 .terms
                 .iter()
                 .enumerate()
-                .map(|(k, t)| if t.i + t.j == 0 && !t.linear_v { format!("c{k}") } else { format!("c{k}*{}", t.name()) })
+                .map(
+                    |(k, t)| if t.i + t.j == 0 && !t.linear_v { format!("c{k}") } else { format!("c{k}*{}", t.name()) },
+                )
                 .collect::<Vec<_>>()
                 .join(" + ");
             FitRecord {
