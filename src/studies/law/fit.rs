@@ -216,16 +216,19 @@ fn solve(points: &[FitPoint], terms: &[Term], sigma: Option<&[f64]>) -> Option<S
         c[i] = (b[i] - s) / r(i, i);
     }
     // R^-1 (upper triangular), then (A^T W A)^-1 = D^-1 R^-1 R^-T D^-1.
-    let mut rinv = vec![vec![0.0; p]; p];
+    // Column k of R^-1 solves R u = e_k.
+    let mut rinv_cols: Vec<Vec<f64>> = Vec::with_capacity(p);
     for k in 0..p {
+        let mut u = vec![0.0; p];
         for i in (0..=k).rev() {
             let e = if i == k { 1.0 } else { 0.0 };
-            let s: f64 = (i + 1..=k).map(|j| r(i, j) * rinv[j][k]).sum();
-            rinv[i][k] = (e - s) / r(i, i);
+            let s: f64 = (i + 1..=k).map(|j| r(i, j) * u[j]).sum();
+            u[i] = (e - s) / r(i, i);
         }
+        rinv_cols.push(u);
     }
     let covariance = (0..p)
-        .map(|i| (0..p).map(|j| (0..p).map(|k| rinv[i][k] * rinv[j][k]).sum::<f64>() / (scale[i] * scale[j])).collect())
+        .map(|i| (0..p).map(|j| rinv_cols.iter().map(|u| u[i] * u[j]).sum::<f64>() / (scale[i] * scale[j])).collect())
         .collect();
     let coefficients = c.iter().zip(&scale).map(|(c, s)| c / s).collect();
     Some(Solved { coefficients, covariance })

@@ -200,10 +200,10 @@ pub fn read_sweep_dir(dir: &Path) -> Result<LawInput, SourceError> {
 /// points sorted by `T`, then `V` (the order of the tables).
 pub fn checked_points(input: &LawInput) -> Result<Vec<&PointRuns>, SourceError> {
     for p in &input.points {
-        if !(p.v > 0.0) {
+        if p.v.is_nan() || p.v <= 0.0 {
             return Err(SourceError::NotPositive { field: V_FIELD, value: p.v });
         }
-        if !(p.t > 0.0) {
+        if p.t.is_nan() || p.t <= 0.0 {
             return Err(SourceError::NotPositive { field: T_FIELD, value: p.t });
         }
     }
