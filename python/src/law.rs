@@ -14,50 +14,35 @@ use crate::{bad_input, failed};
 #[pyclass(frozen, module = "stickslip._stickslip")]
 pub struct FrictionLaw(lib::FrictionLaw);
 
-fn build(input: &lib::LawInput, scales: ScaleArgs, fit_degree: u32) -> PyResult<FrictionLaw> {
+/// The law of `source`, a finished sweep's directory (`sweep.json`, `runs.csv`) or a
+/// sweep's outcome (a 2-D sweep over `plate.v` and `junctions.temperature`), in the units
+/// of the scales (`None`: missing, a `ValueError` naming the option as the CLI does).
+/// The scales are checked before the directory is read.
+#[pyfunction]
+#[pyo3(signature = (source, l0, t0, t_ref, normal_load, force_unit = None, fit_degree = lib::DEFAULT_DEGREE))]
+#[allow(clippy::too_many_arguments)]
+pub fn friction_law(
+    py: Python<'_>,
+    source: &Bound<'_, PyAny>,
+    l0: Option<f64>,
+    t0: Option<f64>,
+    t_ref: Option<f64>,
+    normal_load: Option<f64>,
+    force_unit: Option<f64>,
+    fit_degree: u32,
+) -> PyResult<FrictionLaw> {
     if !(1..=2).contains(&fit_degree) {
         return Err(bad_input(format!("--fit-degree {fit_degree}: must be 1 or 2")));
     }
-    let scales = scales.resolve().map_err(bad_input)?;
-    Ok(FrictionLaw(lib::FrictionLaw::new(input, scales, fit_degree).map_err(bad_input)?))
-}
-
-/// The law of the finished sweep in `sweep_dir` (`sweep.json`, `runs.csv`), in the units
-/// of the scales (`None`: missing, a `ValueError` naming the option as the CLI does).
-#[pyfunction]
-#[pyo3(signature = (sweep_dir, l0, t0, t_ref, normal_load, force_unit = None, fit_degree = lib::DEFAULT_DEGREE))]
-pub fn law_from_dir(
-    py: Python<'_>,
-    sweep_dir: PathBuf,
-    l0: Option<f64>,
-    t0: Option<f64>,
-    t_ref: Option<f64>,
-    normal_load: Option<f64>,
-    force_unit: Option<f64>,
-    fit_degree: u32,
-) -> PyResult<FrictionLaw> {
-    let scales = ScaleArgs { l0, t0, t_ref, normal_load, force_unit };
-    scales.resolve().map_err(bad_input)?;
-    let input = py.detach(|| lib::read_sweep_dir(&sweep_dir)).map_err(bad_input)?;
-    build(&input, scales, fit_degree)
-}
-
-/// The law of a sweep's outcome (a 2-D sweep over `plate.v` and `junctions.temperature`).
-#[pyfunction]
-#[pyo3(signature = (outcome, l0, t0, t_ref, normal_load, force_unit = None, fit_degree = lib::DEFAULT_DEGREE))]
-pub fn law_from_outcome(
-    outcome: &SweepOutcome,
-    l0: Option<f64>,
-    t0: Option<f64>,
-    t_ref: Option<f64>,
-    normal_load: Option<f64>,
-    force_unit: Option<f64>,
-    fit_degree: u32,
-) -> PyResult<FrictionLaw> {
-    let scales = ScaleArgs { l0, t0, t_ref, normal_load, force_unit };
-    scales.resolve().map_err(bad_input)?;
-    let input = lib::from_outcome(outcome.sweep(), outcome.outcome()).map_err(bad_input)?;
-    build(&input, scales, fit_degree)
+    let scales = ScaleArgs { l0, t0, t_ref, normal_load, force_unit }.resolve().map_err(bad_input)?;
+    let input = match source.extract::<PyRef<'_, SweepOutcome>>() {
+        Ok(o) => lib::from_outcome(o.sweep(), o.outcome()).map_err(bad_input)?,
+        Err(_) => {
+            let dir: PathBuf = source.extract()?;
+            py.detach(|| lib::read_sweep_dir(&dir)).map_err(bad_input)?
+        }
+    };
+    Ok(FrictionLaw(lib::FrictionLaw::new(&input, scales, fit_degree).map_err(bad_input)?))
 }
 
 #[pymethods]

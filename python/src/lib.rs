@@ -37,7 +37,6 @@ fn _stickslip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run::run_summary_json, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::parse_values, m)?)?;
     m.add_class::<law::FrictionLaw>()?;
-    m.add_function(wrap_pyfunction!(law::law_from_dir, m)?)?;
-    m.add_function(wrap_pyfunction!(law::law_from_outcome, m)?)?;
+    m.add_function(wrap_pyfunction!(law::friction_law, m)?)?;
     Ok(())
 }

@@ -9,7 +9,8 @@ import os
 from dataclasses import dataclass
 from typing import Any, Optional, Union
 
-from ._stickslip import FrictionLaw, law_from_dir, law_from_outcome
+from ._stickslip import FrictionLaw
+from ._stickslip import friction_law as _friction_law
 from ._sweep import SweepResult, read_csv
 
 
@@ -53,11 +54,10 @@ def friction_law(
     Bad input (a scale missing or not > 0, a sweep not over V and T, an unfinished sweep)
     raises ``ValueError`` with the command's one-line message, before anything is written.
     """
-    scales = dict(l0=l0, t0=t0, t_ref=t_ref, normal_load=normal_load, force_unit=force_unit, fit_degree=fit_degree)
     if isinstance(source, SweepResult):
-        law = law_from_outcome(source.outcome, **scales)
+        law = _friction_law(source.outcome, l0, t0, t_ref, normal_load, force_unit, fit_degree)
     else:
-        law = law_from_dir(os.fspath(source), **scales)
+        law = _friction_law(os.fspath(source), l0, t0, t_ref, normal_load, force_unit, fit_degree)
         out = source if out is None else out
     if out is not None:
         os.makedirs(out, exist_ok=True)

@@ -90,24 +90,9 @@ class FrictionLaw:
     def write(self, out: str) -> None:
         """Writes law.csv, abaqus.inp, ansys.mac and law.json into the existing directory ``out``."""
 
-def law_from_dir(
-    sweep_dir: str,
-    l0: Optional[float],
-    t0: Optional[float],
-    t_ref: Optional[float],
-    normal_load: Optional[float],
-    force_unit: Optional[float] = None,
-    fit_degree: int = 2,
+def friction_law(
+    source: object, l0: Optional[float], t0: Optional[float], t_ref: Optional[float],
+    normal_load: Optional[float], force_unit: Optional[float] = None, fit_degree: int = 2,
 ) -> FrictionLaw:
-    """The law of a finished sweep's directory. Raises ValueError with the CLI's message."""
-
-def law_from_outcome(
-    outcome: SweepOutcome,
-    l0: Optional[float],
-    t0: Optional[float],
-    t_ref: Optional[float],
-    normal_load: Optional[float],
-    force_unit: Optional[float] = None,
-    fit_degree: int = 2,
-) -> FrictionLaw:
-    """The law of a sweep's outcome over plate.v and junctions.temperature."""
+    """The law of a finished sweep's directory (a path) or of a ``SweepOutcome``: the
+    arguments of :func:`stickslip.friction_law`. Raises ValueError with the CLI's message."""

@@ -91,19 +91,23 @@ impl FrictionLaw {
         lines.iter().flat_map(|l| wrap(l, 96)).map(|l| format!("{mark} {l}\n")).collect()
     }
 
+    /// The steady points as `(mu, slip rate in m/s, temperature in K)`, in table order.
+    fn table_rows(&self) -> Vec<(f64, f64, f64)> {
+        self.steady().map(|p| (p.mu.expect("a steady point has a coefficient").mean, p.slip_rate, p.kelvin)).collect()
+    }
+
     /// `abaqus.inp`: the `*FRICTION` block.
     pub fn abaqus_inp(&self) -> String {
         let mut s = self.preamble(
             "**",
             "Abaqus *FRICTION table (friction coefficient, slip rate, contact pressure, temperature); place it under a *SURFACE INTERACTION",
         );
-        if self.steady().next().is_none() {
-            return s;
+        let rows = self.table_rows();
+        if !rows.is_empty() {
+            s.push_str("*FRICTION\n");
         }
-        s.push_str("*FRICTION\n");
-        for p in self.steady() {
-            let mu = p.mu.expect("a steady point has a coefficient").mean;
-            let _ = writeln!(s, "{}, {}, 0.0, {}", num(mu), num(p.slip_rate), num(p.kelvin));
+        for (mu, v, t) in rows {
+            let _ = writeln!(s, "{}, {}, 0.0, {}", num(mu), num(v), num(t));
         }
         s
     }
@@ -114,19 +118,17 @@ impl FrictionLaw {
             "!",
             "Ansys TB,FRIC table over TBFIELD TEMP (K) and SLRV (m/s); material 1 is the contact pair's",
         );
-        if self.steady().next().is_none() {
-            return s;
+        let rows = self.table_rows();
+        if !rows.is_empty() {
+            s.push_str("TB,FRIC,1,,,ISO\n");
         }
-        s.push_str("TB,FRIC,1,,,ISO\n");
         let mut temperature = None;
-        for p in self.steady() {
-            if temperature != Some(p.kelvin) {
-                let _ = writeln!(s, "TBFIELD,TEMP,{}", num(p.kelvin));
-                temperature = Some(p.kelvin);
+        for (mu, v, t) in rows {
+            if temperature != Some(t) {
+                let _ = writeln!(s, "TBFIELD,TEMP,{}", num(t));
+                temperature = Some(t);
             }
-            let mu = p.mu.expect("a steady point has a coefficient").mean;
-            let _ = writeln!(s, "TBFIELD,SLRV,{}", num(p.slip_rate));
-            let _ = writeln!(s, "TBDATA,1,{}", num(mu));
+            let _ = writeln!(s, "TBFIELD,SLRV,{}\nTBDATA,1,{}", num(v), num(mu));
         }
         s
     }
