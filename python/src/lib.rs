@@ -1,12 +1,13 @@
 //! `stickslip._stickslip`: the native module of the Python package `stickslip`
-//! (python/stickslip/). Thin bindings of the library: scenes ([`scene`]), runs ([`run`])
-//! and sweeps ([`sweep`]). Every rule (validation, seeds, aggregation, the tables' text)
-//! stays in the library, so Python and the CLI cannot drift apart; the Python layer adds
+//! (python/stickslip/). Thin bindings of the library: scenes ([`scene`]), runs ([`run`]),
+//! sweeps ([`sweep`]) and friction laws ([`law`]). Every rule (validation, seeds,
+//! aggregation, the tables' text) stays in the library, so Python and the CLI cannot drift apart; the Python layer adds
 //! arrays, DataFrames and the Dask scheduling.
 //!
 //! Errors: bad input is a `ValueError` whose text is the CLI's one-line message (what
 //! `stickslip` prints after `error: `); a run that fails is a `RuntimeError`.
 
+mod law;
 mod run;
 mod scene;
 mod sweep;
@@ -35,5 +36,7 @@ fn _stickslip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run::run_to_dir, m)?)?;
     m.add_function(wrap_pyfunction!(run::run_summary_json, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::parse_values, m)?)?;
+    m.add_class::<law::FrictionLaw>()?;
+    m.add_function(wrap_pyfunction!(law::friction_law, m)?)?;
     Ok(())
 }

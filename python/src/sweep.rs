@@ -120,6 +120,17 @@ pub struct SweepOutcome {
     outcome: lib::SweepOutcome,
 }
 
+impl SweepOutcome {
+    /// The prepared sweep.
+    pub(crate) fn sweep(&self) -> &lib::Sweep {
+        &self.sweep
+    }
+    /// The library's outcome.
+    pub(crate) fn outcome(&self) -> &lib::SweepOutcome {
+        &self.outcome
+    }
+}
+
 #[pymethods]
 impl SweepOutcome {
     /// The text of `sweep.csv`.

@@ -8,7 +8,9 @@ the letter's fixed-step scheme); this package binds it with PyO3:
   summary as a dict, the trace and events as pandas DataFrames (numpy record arrays
   without pandas);
 - :func:`sweep` -- a parameter sweep on Dask distributed (a LocalCluster when no client is
-  given), the same seeds and the same ``sweep.csv`` table as ``stickslip sweep``.
+  given), the same seeds and the same ``sweep.csv`` table as ``stickslip sweep``;
+- :func:`friction_law` -- a map over ``plate.v`` and ``junctions.temperature`` as a friction
+  law for continuum codes, the files of ``stickslip friction-law``.
 
 Bad input raises ``ValueError`` with the command line's one-line message; a run that fails
 (numerical trouble) raises ``RuntimeError``. Overrides are ``section.key=value`` fields,
@@ -19,12 +21,15 @@ given as keyword arguments with ``__`` for the dot (``plate__v=0.5``) or as a di
 from ._stickslip import Scene, __version__
 from ._run import Result, StabilityWarning, load, run
 from ._sweep import SweepResult, log_range, linear_range, run_sweep, sweep
+from ._law import FrictionLawResult, friction_law
 
 __all__ = [
     "Scene",
     "Result",
     "StabilityWarning",
     "SweepResult",
+    "FrictionLawResult",
+    "friction_law",
     "load",
     "run",
     "sweep",

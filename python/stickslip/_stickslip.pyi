@@ -79,3 +79,20 @@ class SweepOutcome:
     def sweep_json(self) -> str: ...
     def write(self, out: str) -> None:
         """Writes sweep.csv, runs.csv, sweep.svg and sweep.json into ``out``."""
+
+class FrictionLaw:
+    """A friction law built by the library (``stickslip friction-law``)."""
+
+    def law_csv(self) -> str: ...
+    def abaqus_inp(self) -> str: ...
+    def ansys_mac(self) -> str: ...
+    def law_json(self) -> str: ...
+    def write(self, out: str) -> None:
+        """Writes law.csv, abaqus.inp, ansys.mac and law.json into the existing directory ``out``."""
+
+def friction_law(
+    source: object, l0: Optional[float], t0: Optional[float], t_ref: Optional[float],
+    normal_load: Optional[float], force_unit: Optional[float] = None, fit_degree: int = 2,
+) -> FrictionLaw:
+    """The law of a finished sweep's directory (a path) or of a ``SweepOutcome``: the
+    arguments of :func:`stickslip.friction_law`. Raises ValueError with the CLI's message."""

@@ -1,5 +1,5 @@
 //! The command line: `stickslip run`, `stickslip resume`, `stickslip validate`, `stickslip compare`,
-//! `stickslip sweep`, `stickslip stability`, `stickslip bench`.
+//! `stickslip sweep`, `stickslip stability`, `stickslip bench`, `stickslip friction-law`.
 //!
 //! Exit codes: 0 success; 1 the run failed (numerical trouble, a write that failed
 //! mid-run, a report that could not be written to standard output); 2 bad input (command
@@ -9,6 +9,7 @@
 mod bench;
 mod compare;
 mod cpu;
+mod friction_law;
 mod resume;
 mod run;
 mod signals;
@@ -93,6 +94,8 @@ pub enum Command {
     Compare(compare::CompareArgs),
     /// Scaling study: a scene at growing N in both engines; writes bench.csv and bench.svg (time per event and per junction-step, set-up time, memory per junction).
     Bench(bench::BenchArgs),
+    /// A friction law for continuum codes from a map over plate.v and junctions.temperature (run here, or --from a finished sweep): law.csv, abaqus.inp, ansys.mac, law.json.
+    FrictionLaw(friction_law::FrictionLawArgs),
 }
 
 /// Prints a one-line error and returns the exit code.
@@ -107,7 +110,7 @@ pub(crate) fn fail(code: u8, message: impl std::fmt::Display) -> ExitCode {
 fn clap_one_line(e: &clap::Error) -> String {
     use clap::error::ErrorKind;
     if matches!(e.kind(), ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand) {
-        return "a command is required: `run`, `resume`, `validate`, `stability`, `sweep`, `compare` or `bench` (try --help)"
+        return "a command is required: `run`, `resume`, `validate`, `stability`, `sweep`, `compare`, `bench` or `friction-law` (try --help)"
             .to_string();
     }
     let text = e.to_string();
@@ -144,6 +147,7 @@ pub fn main() -> ExitCode {
         Command::Compare(args) => compare::compare(&args),
         Command::Bench(args) => bench::bench(&args),
         Command::Sweep(args) => sweep::sweep(&args),
+        Command::FrictionLaw(args) => friction_law::friction_law(&args),
     };
     report_peak_memory();
     code

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
-use super::{Cli, Command, EXIT_BAD_INPUT, compare, fail, sweep};
+use super::{Cli, Command, EXIT_BAD_INPUT, compare, fail, friction_law, sweep};
 use crate::studies::journal::{self, Header};
 
 /// Resumes the study in `dir` if it holds a study journal; `None` if it holds none (a
@@ -58,6 +58,11 @@ fn rerun(dir: &Path, header: &Header) -> Result<ExitCode, String> {
             args.scene.scene = command.cwd.join(&args.scene.scene);
             args.out = Some(dir.to_path_buf());
             Ok(compare::compare_as(&args, &compare::quoted(&command.argv)))
+        }
+        Command::FrictionLaw(mut args) if args.from.is_none() => {
+            args.scene = args.scene.map(|s| command.cwd.join(s));
+            args.out = Some(dir.to_path_buf());
+            Ok(friction_law::friction_law(&args))
         }
         _ => Err(format!("its command line is not a sweep or a compare ({})", header.study.as_str())),
     }

@@ -13,12 +13,12 @@ use std::process::ExitCode;
 use clap::{Arg, ArgAction, ArgMatches};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::run::{load_scene, prepare_out_dir};
+use super::run::{OutDir, load_scene, prepare_out_dir};
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail, study};
 use crate::output::Summary;
 use crate::scene::error::printable;
 use crate::studies::journal::{Header, StudyKind};
-use crate::studies::sweep::{MAX_AXES, Sweep, SweepAxis, SweepError, SweepSpec, ValueSpec, parse_values};
+use crate::studies::sweep::{MAX_AXES, Sweep, SweepAxis, SweepError, SweepOutcome, SweepSpec, ValueSpec, parse_values};
 
 #[derive(clap::Args, Debug)]
 pub struct SweepArgs {
@@ -78,7 +78,6 @@ impl clap::Args for AxisArgs {
                 .long("param")
                 .value_name("SECTION.KEY")
                 .help(PARAM_HELP)
-                .required(true)
                 .action(ArgAction::Append)
                 .value_parser(clap::value_parser!(String)),
         )
@@ -129,6 +128,9 @@ impl ListFlag {
 /// The error is one line.
 pub(crate) fn axes(args: &AxisArgs, log_x: bool, log_y: bool) -> Result<Vec<SweepAxis>, String> {
     let (np, nl) = (args.params.len(), args.lists.len());
+    if np == 0 {
+        return Err(crate::studies::sweep::SpecError::NoAxes.to_string());
+    }
     if np > MAX_AXES {
         return Err(format!("--param: {np} fields given, at most {MAX_AXES} (a 2-D sweep)"));
     }
@@ -164,38 +166,36 @@ pub(crate) fn axes(args: &AxisArgs, log_x: bool, log_y: bool) -> Result<Vec<Swee
         .collect()
 }
 
-pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
-    let axes = match axes(&args.axes, args.log_x, args.log_y) {
-        Ok(a) => a,
-        Err(m) => return fail(EXIT_BAD_INPUT, m),
-    };
-    let scene = match load_scene(&args.scene, &[]) {
-        Ok(s) => s,
-        Err(code) => return code,
-    };
+/// A sweep run to its end, its files written.
+pub(crate) struct Finished {
+    pub sweep: Sweep,
+    pub outcome: SweepOutcome,
+    pub out: PathBuf,
+    /// The output directory, held until the caller has written its own files.
+    pub held: OutDir,
+}
+
+/// Runs the sweep `args` describe into `args.out` (else `default_out(&sweep)`), keeping its
+/// journal, and writes its files. `check` sees the prepared sweep before anything is
+/// created or run; its error is bad input. Every failure has been reported (one line) when
+/// this returns its exit code.
+pub(crate) fn run_study(
+    args: &SweepArgs,
+    default_out: impl FnOnce(&Sweep) -> PathBuf,
+    check: impl FnOnce(&Sweep) -> Result<(), String>,
+) -> Result<Finished, ExitCode> {
+    let axes = axes(&args.axes, args.log_x, args.log_y).map_err(|m| fail(EXIT_BAD_INPUT, m))?;
+    let scene = load_scene(&args.scene, &[])?;
     let spec = SweepSpec { axes, replicas: args.replicas as usize, set: args.scene.set.clone() };
-    let sweep = match Sweep::prepare(scene, spec) {
-        Ok(s) => s,
-        Err(e) => return fail(EXIT_BAD_INPUT, e),
-    };
+    let sweep = Sweep::prepare(scene, spec).map_err(|e| fail(EXIT_BAD_INPUT, e))?;
+    check(&sweep).map_err(|m| fail(EXIT_BAD_INPUT, m))?;
     let scenes = sweep.points.iter().flat_map(|p| &p.scenes);
-    let threads = match crate::estimate::check::study_threads(scenes, args.threads.map(|t| t as usize), "the sweep") {
-        Ok(t) => t,
-        Err(e) => return fail(EXIT_BAD_INPUT, e),
-    };
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("out").join(format!("{}-sweep-{}", sweep.base.name, sweep.name())));
-    let held = match prepare_out_dir(&out) {
-        Ok(h) => h,
-        Err(m) => return fail(EXIT_BAD_INPUT, m),
-    };
+    let threads = crate::estimate::check::study_threads(scenes, args.threads.map(|t| t as usize), "the sweep")
+        .map_err(|e| fail(EXIT_BAD_INPUT, e))?;
+    let out = args.out.clone().unwrap_or_else(|| default_out(&sweep));
+    let held = prepare_out_dir(&out).map_err(|m| fail(EXIT_BAD_INPUT, m))?;
     let header = Header::new(StudyKind::Sweep, sweep.arguments(), &sweep.base, sweep.len(), study::invocation());
-    let mut journal = match study::open::<Summary>(StudyKind::Sweep, &out, &header, &sweep.seeds()) {
-        Ok(j) => j,
-        Err(code) => return code,
-    };
+    let mut journal = study::open::<Summary>(StudyKind::Sweep, &out, &header, &sweep.seeds())?;
     let progress = std::io::stderr().is_terminal().then(|| {
         let p = ProgressBar::new(sweep.len() as u64);
         if let Ok(style) =
@@ -211,16 +211,25 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
     }
     let outcome = match result {
         Ok(o) => o,
-        Err(SweepError::Interrupted(e)) => return study::interrupted(&e, &out),
+        Err(SweepError::Interrupted(e)) => return Err(study::interrupted(&e, &out)),
         Err(e) => {
             journal.discard_if_new();
             held.abandon();
-            return fail(EXIT_RUN_FAILED, e);
+            return Err(fail(EXIT_RUN_FAILED, e));
         }
     };
     if let Err(e) = outcome.write(&sweep, &out) {
-        return study::write_failed(e, &out);
+        return Err(study::write_failed(e, &out));
     }
+    Ok(Finished { sweep, outcome, out, held })
+}
+
+pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
+    let default_out = |s: &Sweep| Path::new("out").join(format!("{}-sweep-{}", s.base.name, s.name()));
+    let Finished { sweep, outcome, out, .. } = match run_study(args, default_out, |_| Ok(())) {
+        Ok(f) => f,
+        Err(code) => return code,
+    };
     let timing = outcome.timing.expect("Sweep::run records its timing");
     let fields = sweep.axes.iter().map(|a| a.param.as_str()).collect::<Vec<_>>().join(" x ");
     let sizes = sweep.axes.iter().map(|a| a.values.len().to_string()).collect::<Vec<_>>().join(" x ");

@@ -1,6 +1,8 @@
 //! Studies: many runs of one scene, varied and replicated, with statistics across runs.
 //!
 //! - [`sweep`]: scene fields swept over values, with replicas (`stickslip sweep`).
+//! - [`law`]: a friction law for continuum codes from a velocity-temperature map
+//!   (`stickslip friction-law`).
 //! - [`compare`]: error against run time of the fixed-step and exact engines
 //!   (`stickslip compare`).
 //! - [`scaling`]: one scene at growing `N` in both engines, timed (`stickslip bench`).
@@ -18,6 +20,7 @@ pub mod compare;
 pub mod execute;
 pub mod format;
 pub mod journal;
+pub mod law;
 pub mod scaling;
 pub mod seeds;
 pub mod stats;

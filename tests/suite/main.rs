@@ -19,6 +19,7 @@ mod extreme;
 mod fixed_convergence;
 mod fixed_scheme;
 mod fixed_statistics;
+mod friction_law;
 mod kinds;
 mod kinematic;
 mod law_extension;

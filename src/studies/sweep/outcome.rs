@@ -27,6 +27,22 @@ pub enum Majority {
 }
 
 impl Majority {
+    /// The regime of replicas whose regimes are `regimes`.
+    pub fn of(regimes: impl Iterator<Item = Regime>) -> Majority {
+        let (mut runs, mut ss, mut unstable) = (0usize, 0usize, false);
+        for r in regimes {
+            runs += 1;
+            ss += usize::from(r == Regime::StickSlip);
+            unstable |= r == Regime::Unstable;
+        }
+        match (2 * ss).cmp(&runs) {
+            _ if unstable => Majority::Unstable,
+            std::cmp::Ordering::Less => Majority::Smooth,
+            std::cmp::Ordering::Greater => Majority::StickSlip,
+            std::cmp::Ordering::Equal => Majority::Mixed,
+        }
+    }
+
     pub fn as_str(self) -> &'static str {
         match self {
             Majority::Smooth => "smooth",
@@ -71,12 +87,7 @@ impl Row {
     pub fn from_runs(point: usize, values: &[SweepValue], runs: &[Summary]) -> Row {
         let col = |f: fn(&Summary) -> f64| mean_ci95(&runs.iter().map(f).collect::<Vec<_>>());
         let ss = runs.iter().filter(|s| s.regime == Regime::StickSlip).count();
-        let regime = match (2 * ss).cmp(&runs.len()) {
-            _ if runs.iter().any(|s| s.regime == Regime::Unstable) => Majority::Unstable,
-            std::cmp::Ordering::Less => Majority::Smooth,
-            std::cmp::Ordering::Greater => Majority::StickSlip,
-            std::cmp::Ordering::Equal => Majority::Mixed,
-        };
+        let regime = Majority::of(runs.iter().map(|s| s.regime));
         let periods: Vec<f64> = runs.iter().filter_map(|s| s.oscillation.oscillation_period).collect();
         Row {
             point,
