@@ -7,6 +7,7 @@
 
 mod compare;
 mod cpu;
+mod fit;
 mod resume;
 mod run;
 mod signals;
@@ -89,6 +90,8 @@ pub enum Command {
     },
     /// Work-precision study: error against run time of the fixed-step and exact engines.
     Compare(compare::CompareArgs),
+    /// Fit free scene fields to a measured friction curve (DATA.csv), with 95 % intervals; writes fit.json, fit.csv, fit.toml and fit.svg.
+    Fit(fit::FitArgs),
 }
 
 /// Prints a one-line error and returns the exit code.
@@ -103,7 +106,7 @@ pub(crate) fn fail(code: u8, message: impl std::fmt::Display) -> ExitCode {
 fn clap_one_line(e: &clap::Error) -> String {
     use clap::error::ErrorKind;
     if matches!(e.kind(), ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand) {
-        return "a command is required: `run`, `resume`, `validate`, `stability`, `sweep` or `compare` (try --help)"
+        return "a command is required: `run`, `resume`, `validate`, `stability`, `sweep`, `compare` or `fit` (try --help)"
             .to_string();
     }
     let text = e.to_string();
@@ -139,6 +142,7 @@ pub fn main() -> ExitCode {
         Command::Stability { scene } => stability::stability(&scene),
         Command::Compare(args) => compare::compare(&args),
         Command::Sweep(args) => sweep::sweep(&args),
+        Command::Fit(args) => fit::fit(&args),
     };
     report_peak_memory();
     code
