@@ -64,7 +64,7 @@ pub fn profile(
 ) -> Option<Interval> {
     let p = best.len();
     let others = |y: &[f64]| -> Vec<f64> { y.iter().enumerate().filter(|&(k, _)| k != j).map(|(_, &v)| v).collect() };
-    let settings = Settings { step: 0.05, tolerance: 0.02 * unit, max_iters: 25 * (p as u64 - 1).max(1), unit };
+    let settings = Settings { step: 0.03, tolerance: 0.02 * unit, max_iters: 10 * (p as u64 - 1).max(1) + 5, unit };
     let mut points = Vec::new();
     // The rise at y_j = y, re-optimising the others from `warm`; returns (rise, others).
     let mut at = |y: f64, warm: &[f64]| -> Option<(f64, Vec<f64>)> {
@@ -83,21 +83,26 @@ pub fn profile(
     let mut ends = Vec::new();
     for dir in [-1.0, 1.0] {
         let (mut y_in, mut d_in, mut z_in) = (best[j], 0.0, others(best));
+        // The previous inner point, for a linear prediction of the others along the profile.
+        let mut prev: Option<(f64, Vec<f64>)> = None;
         let mut end = None;
         for off in OFFSETS {
             let y = (best[j] + dir * off).clamp(0.0, 1.0);
             if y == y_in {
                 break;
             }
-            let (d, z) = at(y, &z_in)?;
+            let warm = predict(&prev, y_in, &z_in, y);
+            let (d, z) = at(y, &warm)?;
             if d >= threshold {
                 let (mut y_out, mut d_out) = (y, d);
                 for _ in 0..BISECTIONS {
                     let mid = 0.5 * (y_in + y_out);
-                    let (dm, zm) = at(mid, &z_in)?;
+                    let warm = predict(&prev, y_in, &z_in, mid);
+                    let (dm, zm) = at(mid, &warm)?;
                     if dm >= threshold {
                         (y_out, d_out) = (mid, dm);
                     } else {
+                        prev = Some((y_in, z_in));
                         (y_in, d_in, z_in) = (mid, dm, zm);
                     }
                 }
@@ -105,7 +110,8 @@ pub fn profile(
                 end = Some(End { y: y_in + frac * (y_out - y_in), at_bound: false });
                 break;
             }
-            (y_in, d_in, z_in) = (y, d, z);
+            prev = Some((y_in, std::mem::replace(&mut z_in, z)));
+            (y_in, d_in) = (y, d);
             if y == 0.0 || y == 1.0 {
                 break;
             }
@@ -113,11 +119,70 @@ pub fn profile(
         let bound = if dir < 0.0 { 0.0 } else { 1.0 };
         ends.push(end.unwrap_or(End { y: bound, at_bound: true }));
     }
-    let high = ends.pop().expect("two sides");
-    let low = ends.pop().expect("two sides");
+    let mut high = ends.pop().expect("two sides");
+    let mut low = ends.pop().expect("two sides");
+    if let Some((vertex, half)) = parabola(&points, best[j], threshold) {
+        let (lo, hi) = (vertex - half, vertex + half);
+        low = if lo <= 0.0 || low.at_bound && lo < low.y { End { y: 0.0, at_bound: true } } else { End { y: lo.min(best[j]), at_bound: false } };
+        high = if hi >= 1.0 || high.at_bound && hi > high.y { End { y: 1.0, at_bound: true } } else { End { y: hi.max(best[j]), at_bound: false } };
+    }
     let max_rise = points.iter().map(|p| p.1).fold(0.0, f64::max);
     let min_rise = points.iter().map(|p| p.1).fold(0.0, f64::min);
     Some(Interval { low, high, profile: points, max_rise, min_rise })
+}
+
+/// The profile smoothed: a parabola `a + b d + c d^2` in `d = y - y_best` fitted by least
+/// squares to the profile points with a rise below [`SMOOTH_CAP`] times the threshold and
+/// the optimum itself (rise 0). Returns its vertex and the half-width `sqrt(threshold / c)`
+/// at which it rises by the threshold; `None` without at least [`SMOOTH_MIN_POINTS`] such
+/// points on each side, or without upward curvature.
+fn parabola(points: &[(f64, f64)], y_best: f64, threshold: f64) -> Option<(f64, f64)> {
+    let used: Vec<(f64, f64)> = std::iter::once((0.0, 0.0))
+        .chain(points.iter().filter(|p| p.1 <= SMOOTH_CAP * threshold).map(|&(y, d)| (y - y_best, d)))
+        .collect();
+    let side = |below: bool| used.iter().filter(|p| if below { p.0 < 0.0 } else { p.0 > 0.0 }).count();
+    if side(true) < SMOOTH_MIN_POINTS || side(false) < SMOOTH_MIN_POINTS {
+        return None;
+    }
+    // Normal equations of the least-squares fit, solved by Cramer's rule.
+    let m = |k: i32| used.iter().map(|p| p.0.powi(k)).sum::<f64>();
+    let r = |k: i32| used.iter().map(|p| p.0.powi(k) * p.1).sum::<f64>();
+    let a = [[m(0), m(1), m(2)], [m(1), m(2), m(3)], [m(2), m(3), m(4)]];
+    let det3 = |a: [[f64; 3]; 3]| {
+        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+    };
+    let d = det3(a);
+    if d.abs() < f64::MIN_POSITIVE {
+        return None;
+    }
+    let rhs = [r(0), r(1), r(2)];
+    let column = |k: usize| {
+        let mut b = a;
+        for (row, v) in b.iter_mut().zip(rhs) {
+            row[k] = v;
+        }
+        det3(b) / d
+    };
+    let (b, c) = (column(1), column(2));
+    (c > 0.0 && c.is_finite()).then(|| (y_best - b / (2.0 * c), (threshold / c).sqrt()))
+}
+
+/// Profile points used by the smoothing parabola rise at most this many thresholds.
+pub const SMOOTH_CAP: f64 = 4.0;
+/// Points the smoothing parabola needs on each side of the optimum.
+pub const SMOOTH_MIN_POINTS: usize = 2;
+
+/// The others' optimum at `y` predicted linearly from the last two profile points
+/// `(y_prev, z_prev)` and `(y_in, z_in)` (just `z_in` without a previous one), in the box.
+fn predict(prev: &Option<(f64, Vec<f64>)>, y_in: f64, z_in: &[f64], y: f64) -> Vec<f64> {
+    match prev {
+        Some((yp, zp)) if *yp != y_in => {
+            let t = (y - y_in) / (y_in - yp);
+            z_in.iter().zip(zp).map(|(a, b)| (a + t * (a - b)).clamp(0.0, 1.0)).collect()
+        }
+        _ => z_in.to_vec(),
+    }
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@ use super::model::{Evaluation, FitError, Objective};
 use super::optimise::{Settings, minimise};
 
 /// Nelder–Mead iterations per free parameter, for each of the two searches of the optimum.
-pub const ITERS_PER_PARAMETER: u64 = 150;
+pub const ITERS_PER_PARAMETER: u64 = 80;
 
 /// What a fit found.
 #[derive(Clone, Debug)]
@@ -57,7 +57,7 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
     let mean_square = prob.data.points.iter().map(|q| q.friction * q.friction).sum::<f64>() / n as f64;
     let first_unit = if has_sigma { 1.0 } else { 1e-4 * mean_square.max(f64::MIN_POSITIVE) };
     let iters = ITERS_PER_PARAMETER * p as u64;
-    let s1 = Settings { step: 0.1, tolerance: 1e-3 * first_unit, max_iters: iters, unit: first_unit };
+    let s1 = Settings { step: 0.1, tolerance: 1e-2 * first_unit, max_iters: iters, unit: first_unit };
     let (y1, v1) = minimise(&score_y, &start, s1).ok_or_else(stopped)?;
     let dof = n - p;
     let unit = if has_sigma { 1.0 } else { (v1 / dof as f64).max(f64::MIN_POSITIVE) };
@@ -79,7 +79,7 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
     let mut intervals = Vec::with_capacity(p);
     for j in 0..p {
         intervals.push(profile(&score_y, &best_y, score, unit, threshold, j).ok_or_else(stopped)?);
-    }
+        }
     let values: Vec<f64> = prob.free.iter().zip(&best_y).map(|(f, &v)| f.value(v)).collect();
     let best = obj.evaluate(&values)?;
     let all = obj.all();
