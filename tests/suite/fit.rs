@@ -134,10 +134,7 @@ fn two_parameters_are_recovered_within_their_intervals() {
         assert!(covers(&p, &r, j, t), "{}: truth {t} outside [{lo}, {hi}] (fit {})", p.free[j].field, r.best.values[j]);
         assert!(iv.determined(), "{}: [{lo}, {hi}]", p.free[j].field);
     }
-    // k0 is well determined (the data's 20 % noise leaves kon0, which trades off against
-    // it, much less so): an interval far narrower than its bounds (a factor 100).
-    let k0 = &r.intervals[0];
-    assert!(p.free[0].value(k0.high.y) / p.free[0].value(k0.low.y) < 2.0, "{k0:?}");
+
     assert!(r.p_value.unwrap() > 1e-3, "chi2 {} with {} dof", r.chi2, r.dof);
     assert_eq!(r.dof, 4);
 }
