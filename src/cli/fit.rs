@@ -87,8 +87,7 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
         Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
     let max = args.max_evaluations as usize;
-    let header =
-        Header::new(StudyKind::Fit, problem.arguments(max), &problem.base, max, study::invocation());
+    let header = Header::new(StudyKind::Fit, problem.arguments(max), &problem.base, max, study::invocation());
     let seeds = vec![problem.base.run.seed; max];
     let mut journal = match study::open::<Evaluation>(StudyKind::Fit, &out, &header, &seeds) {
         Ok(j) => j,
@@ -113,7 +112,8 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
         p
     });
     if let Some(p) = progress.clone() {
-        objective.on_new = Some(Box::new(move |n, best| p.set_message(format!("{n} evaluations, best misfit {best:.6e}"))));
+        objective.on_new =
+            Some(Box::new(move |n, best| p.set_message(format!("{n} evaluations, best misfit {best:.6e}"))));
     }
     let started = std::time::Instant::now();
     let result = crate::fit::solve::fit(&objective);
@@ -135,7 +135,9 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
             let (name, code) = signals::received().unwrap_or(("a stop", EXIT_RUN_FAILED));
             return fail(code, format!("stopped by {name} after {done} evaluations; {}", kept()));
         }
-        Err(e @ (FitError::TooMany { .. } | FitError::Journal(_))) => return fail(EXIT_RUN_FAILED, format!("{e}; {}", kept())),
+        Err(e @ (FitError::TooMany { .. } | FitError::Journal(_))) => {
+            return fail(EXIT_RUN_FAILED, format!("{e}; {}", kept()));
+        }
         Err(e) => {
             journal.discard_if_new();
             remove_if_empty(&created);
@@ -169,7 +171,9 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
             if flags.is_empty() { String::new() } else { format!("  ({})", flags.join("; ")) }
         );
     }
-    let p = r.p_value.map_or_else(|| "no p-value (sigma estimated from the residuals)".to_string(), |p| format!("p-value {p:.4}"));
+    let p = r
+        .p_value
+        .map_or_else(|| "no p-value (sigma estimated from the residuals)".to_string(), |p| format!("p-value {p:.4}"));
     println!("  misfit chi2 = {:.4} with {} degrees of freedom; {p}", r.chi2, r.dof);
     println!("output in {} (fit.json, fit.csv, fit.toml, fit.svg)", out.display());
     ExitCode::SUCCESS

@@ -69,15 +69,21 @@ impl DataSet {
     pub fn parse(text: &str, origin: &str, base: &Scene, scale: f64) -> Result<DataSet, DataError> {
         let origin = printable(origin);
         let fail = |message: String| DataError { origin: origin.clone(), message };
-        let mut lines =
-            text.lines().enumerate().map(|(k, l)| (k + 1, l.trim())).filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .map(|(k, l)| (k + 1, l.trim()))
+            .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
         let Some((_, header)) = lines.next() else {
             return Err(fail(format!("no header line (expected columns such as plate.v,{FRICTION},{SIGMA})")));
         };
         let names: Vec<String> = header.split(',').map(|c| c.trim().to_string()).collect();
         let find = |name: &str| names.iter().position(|c| c == name);
         let friction = find(FRICTION).ok_or_else(|| {
-            fail(format!("no '{FRICTION}' column (columns: {}); it holds the measured mean friction per junction", printable(header)))
+            fail(format!(
+                "no '{FRICTION}' column (columns: {}); it holds the measured mean friction per junction",
+                printable(header)
+            ))
         })?;
         let sigma = find(SIGMA);
         let mut columns = Vec::new();
@@ -91,7 +97,10 @@ impl DataSet {
             }
             check_field(base, name).map_err(|why| fail(format!("column '{}' {why}", printable(name))))?;
             if name == "run.seed" {
-                return Err(fail("column 'run.seed': the seeds of a fit's runs are derived from run.seed, not measured conditions".into()));
+                return Err(fail(
+                    "column 'run.seed': the seeds of a fit's runs are derived from run.seed, not measured conditions"
+                        .into(),
+                ));
             }
             columns.push(name.clone());
             condition_at.push(c);
@@ -107,7 +116,11 @@ impl DataSet {
                     fail(format!("line {line}: {} = '{}' is not a number", printable(&names[c]), printable(cells[c])))
                 })?;
                 if !v.is_finite() {
-                    return Err(fail(format!("line {line}: {} = {}: must be a finite number", printable(&names[c]), cells[c])));
+                    return Err(fail(format!(
+                        "line {line}: {} = {}: must be a finite number",
+                        printable(&names[c]),
+                        cells[c]
+                    )));
                 }
                 Ok(v)
             };
@@ -116,14 +129,20 @@ impl DataSet {
                 Some(c) => {
                     let s = number(c)? * scale;
                     if !(s > 0.0 && s.is_finite()) {
-                        return Err(fail(format!("line {line}: {SIGMA} = {}: must be > 0 (a standard error)", cells[c])));
+                        return Err(fail(format!(
+                            "line {line}: {SIGMA} = {}: must be > 0 (a standard error)",
+                            cells[c]
+                        )));
                     }
                     Some(s)
                 }
                 None => None,
             };
             if !f.is_finite() {
-                return Err(fail(format!("line {line}: {FRICTION} = {} times --friction-scale {scale} is not finite", cells[friction])));
+                return Err(fail(format!(
+                    "line {line}: {FRICTION} = {} times --friction-scale {scale} is not finite",
+                    cells[friction]
+                )));
             }
             let mut text = Vec::new();
             let mut conditions = Vec::new();

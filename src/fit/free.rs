@@ -81,13 +81,17 @@ pub fn parse_free(args: &[String], base: &Scene, data: &DataSet) -> Result<Vec<F
         check_field(base, field).map_err(|why| fail(format!("{} {why}", printable(field))))?;
         let (section, key) = field.split_once('.').expect("checked");
         let Some(value) = table[section][key].as_float() else {
-            return Err(fail(format!("{field} is not a real-valued field (a fit varies numbers such as junctions.k0)")));
+            return Err(fail(format!(
+                "{field} is not a real-valued field (a fit varies numbers such as junctions.k0)"
+            )));
         };
         if field == "run.seed" || field == "run.t_end" || field == "run.t_warmup" {
             return Err(fail(format!("{field} decides how the model is run, not the model")));
         }
         if data.columns.iter().any(|c| c == field) {
-            return Err(fail(format!("{field} is a column of the data (a measured condition), it cannot also be free")));
+            return Err(fail(format!(
+                "{field} is a column of the data (a measured condition), it cannot also be free"
+            )));
         }
         if out.iter().any(|p| p.field == field) {
             return Err(fail(format!("{field} is given twice")));
@@ -106,7 +110,7 @@ pub fn parse_free(args: &[String], base: &Scene, data: &DataSet) -> Result<Vec<F
         };
         let (low, high) = match parts.as_slice() {
             [] => {
-                if !(value > 0.0) {
+                if value <= 0.0 {
                     return Err(fail(format!(
                         "{field} = {value} in the scene: give bounds as {field}=LOW:HIGH (the default bounds are the value / {DEFAULT_DECADE} and x {DEFAULT_DECADE})"
                     )));
@@ -116,21 +120,25 @@ pub fn parse_free(args: &[String], base: &Scene, data: &DataSet) -> Result<Vec<F
             [lo, hi] => (number(lo, "lower bound")?, number(hi, "upper bound")?),
             _ => return Err(fail("expected FIELD, FIELD=LOW:HIGH or FIELD=LOW:HIGH:lin (or :log)".into())),
         };
-        if !(low < high) {
+        if low >= high {
             return Err(fail(format!("the lower bound {low} must be less than the upper bound {high}")));
         }
         let log = scale.unwrap_or(low > 0.0);
-        if log && !(low > 0.0) {
+        if log && low <= 0.0 {
             return Err(fail(format!("a log scale needs bounds > 0 (lower bound {low}); add :lin for a linear scale")));
         }
         for bound in [low, high] {
             let a = assignment(field, bound);
-            base.with_overrides(std::slice::from_ref(&a)).map_err(|e| fail(format!("bound outside the allowed range: {e}")))?;
+            base.with_overrides(std::slice::from_ref(&a))
+                .map_err(|e| fail(format!("bound outside the allowed range: {e}")))?;
             for i in 0..data.len() {
                 let mut o = data.overrides(i);
                 o.push(a.clone());
                 base.with_overrides(&o).map_err(|e| {
-                    fail(format!("bound outside the allowed range at the conditions of data line {}: {e}", data.points[i].line))
+                    fail(format!(
+                        "bound outside the allowed range at the conditions of data line {}: {e}",
+                        data.points[i].line
+                    ))
                 })?;
             }
         }

@@ -123,8 +123,16 @@ pub fn profile(
     let mut low = ends.pop().expect("two sides");
     if let Some((vertex, half)) = parabola(&points, best[j], threshold) {
         let (lo, hi) = (vertex - half, vertex + half);
-        low = if lo <= 0.0 || low.at_bound && lo < low.y { End { y: 0.0, at_bound: true } } else { End { y: lo.min(best[j]), at_bound: false } };
-        high = if hi >= 1.0 || high.at_bound && hi > high.y { End { y: 1.0, at_bound: true } } else { End { y: hi.max(best[j]), at_bound: false } };
+        low = if lo <= 0.0 || low.at_bound && lo < low.y {
+            End { y: 0.0, at_bound: true }
+        } else {
+            End { y: lo.min(best[j]), at_bound: false }
+        };
+        high = if hi >= 1.0 || high.at_bound && hi > high.y {
+            End { y: 1.0, at_bound: true }
+        } else {
+            End { y: hi.max(best[j]), at_bound: false }
+        };
     }
     let max_rise = points.iter().map(|p| p.1).fold(0.0, f64::max);
     let min_rise = points.iter().map(|p| p.1).fold(0.0, f64::min);

@@ -77,7 +77,11 @@ impl Problem {
                 "the data hold {n} point{} for {p} free parameter{}: a fit needs at least {need}{}",
                 if n == 1 { "" } else { "s" },
                 if p == 1 { "" } else { "s" },
-                if data.has_sigma { "" } else { " (one more than the free parameters without a sigma column, to estimate sigma)" }
+                if data.has_sigma {
+                    ""
+                } else {
+                    " (one more than the free parameters without a sigma column, to estimate sigma)"
+                }
             ));
         }
         if replicas == 0 {
@@ -150,10 +154,7 @@ impl Problem {
         let free = self.free.iter().map(FreeParam::describe).collect::<Vec<_>>().join(",");
         let data = format!("{:?}", self.data);
         let sum = crate::output::checkpoint::Checksum::of(data.as_bytes());
-        format!(
-            "--free {free} --replicas {} --max-evaluations {max_evaluations} --data {sum:016x}",
-            self.replicas
-        )
+        format!("--free {free} --replicas {} --max-evaluations {max_evaluations} --data {sum:016x}", self.replicas)
     }
 }
 
@@ -231,7 +232,10 @@ impl<'a> Objective<'a> {
         if let Some(bad) = friction.iter().position(|f| !f.is_finite()) {
             return Err(FitError::Run {
                 at: p.assignments(values).join(", "),
-                message: format!("the run at data line {} gave a friction that is not finite", p.data.points[bad / p.replicas].line),
+                message: format!(
+                    "the run at data line {} gave a friction that is not finite",
+                    p.data.points[bad / p.replicas].line
+                ),
             });
         }
         let e = p.evaluation(values, &friction);

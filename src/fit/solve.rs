@@ -79,7 +79,7 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
     let mut intervals = Vec::with_capacity(p);
     for j in 0..p {
         intervals.push(profile(&score_y, &best_y, score, unit, threshold, j).ok_or_else(stopped)?);
-        }
+    }
     let values: Vec<f64> = prob.free.iter().zip(&best_y).map(|(f, &v)| f.value(v)).collect();
     let best = obj.evaluate(&values)?;
     let all = obj.all();

@@ -50,7 +50,17 @@ pub fn fit_svg(prob: &Problem, r: &FitResult) -> Result<String, PlotError> {
         title: "normalized residuals (data - fitted) / sqrt(sigma^2 + se^2)".to_string(),
         x: axis,
         y: Axis::linear("residual / s"),
-        series: vec![zero, Series { label: String::new(), points: residuals, error: None, color: PALETTE[0], line: false, markers: true }],
+        series: vec![
+            zero,
+            Series {
+                label: String::new(),
+                points: residuals,
+                error: None,
+                color: PALETTE[0],
+                line: false,
+                markers: true,
+            },
+        ],
         bands: vec![],
     };
     render_svg(&[top, bottom], 900, 360)

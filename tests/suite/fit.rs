@@ -215,18 +215,30 @@ fn a_killed_fit_resumes_to_the_same_fit_json() {
     let whole = d.path().join("whole");
     let cut = d.path().join("cut");
     let args = |out: &Path, threads: &str| -> Vec<String> {
-        ["fit", &scene, &data, "--free", "junctions.k0,junctions.kon0", "--replicas", "2", "--threads", threads, "--out"]
-            .iter()
-            .map(|s| s.to_string())
-            .chain([out.to_str().unwrap().to_string()])
-            .collect()
+        [
+            "fit",
+            &scene,
+            &data,
+            "--free",
+            "junctions.k0,junctions.kon0",
+            "--replicas",
+            "2",
+            "--threads",
+            threads,
+            "--out",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .chain([out.to_str().unwrap().to_string()])
+        .collect()
     };
     let o = Command::new(BIN).args(args(&whole, "2")).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let lines = |dir: &Path| std::fs::read_to_string(dir.join("journal.jsonl")).map_or(0, |t| t.lines().count());
     let total = lines(&whole);
     // Killed after about a third of its evaluations.
-    let mut child = Command::new(BIN).args(args(&cut, "1")).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
+    let mut child =
+        Command::new(BIN).args(args(&cut, "1")).stdout(Stdio::null()).stderr(Stdio::null()).spawn().unwrap();
     let started = Instant::now();
     while lines(&cut) < total / 3 && started.elapsed() < Duration::from_secs(120) {
         std::thread::sleep(Duration::from_millis(5));
