@@ -9,20 +9,14 @@ use serde_json::{Map, Value, json};
 
 use super::model::Problem;
 use super::solve::FitResult;
-use crate::output::atomic::{WriteFileError, write_files};
+use crate::output::atomic::write_files;
 use crate::plot::PlotError;
 
 /// The method of the intervals, as `fit.json` states it.
 pub const METHOD: &str = "profile likelihood: 95 % interval where the misfit, re-optimised over the other free parameters, rises by the threshold above its minimum";
 
-/// Why a fit's files could not be written.
-#[derive(Debug, thiserror::Error)]
-pub enum WriteError {
-    #[error(transparent)]
-    Plot(#[from] PlotError),
-    #[error(transparent)]
-    Write(#[from] WriteFileError),
-}
+/// Why a fit's files could not be written: the figure, or a file (the studies' error).
+pub use crate::studies::sweep::WriteError;
 
 /// A number for JSON: `null` when not finite.
 fn num(v: f64) -> Value {
