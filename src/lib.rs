@@ -21,6 +21,7 @@
 //! - [`estimate`]: memory, work and output-size estimates made before a run, and the checks
 //!   that refuse what will not fit;
 //! - [`studies`]: many scenes at once: sweeps, work-precision comparisons;
+//! - [`fit`]: calibration: scene fields fitted to a measured friction curve, with intervals;
 //! - [`plot`]: the figures of runs and studies (SVG);
 //! - [`cli`]: the `stickslip` command line, and the text of its reports (such as the
 //!   stability table).
@@ -28,6 +29,7 @@
 pub mod cli;
 pub mod engine;
 pub mod estimate;
+pub mod fit;
 pub mod observe;
 pub mod ode;
 pub mod output;

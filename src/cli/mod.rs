@@ -1,5 +1,5 @@
 //! The command line: `stickslip run`, `stickslip resume`, `stickslip validate`, `stickslip compare`,
-//! `stickslip sweep`, `stickslip stability`, `stickslip bench`, `stickslip friction-law`.
+//! `stickslip sweep`, `stickslip stability`, `stickslip bench`, `stickslip friction-law`, `stickslip fit`.
 //!
 //! Exit codes: 0 success; 1 the run failed (numerical trouble, a write that failed
 //! mid-run, a report that could not be written to standard output); 2 bad input (command
@@ -9,6 +9,7 @@
 mod bench;
 mod compare;
 mod cpu;
+mod fit;
 mod friction_law;
 mod resume;
 mod run;
@@ -96,6 +97,8 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// A friction law for continuum codes from a map over plate.v and junctions.temperature (run here, or --from a finished sweep): law.csv, abaqus.inp, ansys.mac, law.json.
     FrictionLaw(friction_law::FrictionLawArgs),
+    /// Fit free scene fields to a measured friction curve (DATA.csv), with 95 % intervals; writes fit.json, fit.csv, fit.toml and fit.svg.
+    Fit(fit::FitArgs),
 }
 
 /// Prints a one-line error and returns the exit code.
@@ -110,7 +113,7 @@ pub(crate) fn fail(code: u8, message: impl std::fmt::Display) -> ExitCode {
 fn clap_one_line(e: &clap::Error) -> String {
     use clap::error::ErrorKind;
     if matches!(e.kind(), ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand | ErrorKind::MissingSubcommand) {
-        return "a command is required: `run`, `resume`, `validate`, `stability`, `sweep`, `compare`, `bench` or `friction-law` (try --help)"
+        return "a command is required: `run`, `resume`, `validate`, `stability`, `sweep`, `compare`, `bench`, `friction-law` or `fit` (try --help)"
             .to_string();
     }
     let text = e.to_string();
@@ -148,6 +151,7 @@ pub fn main() -> ExitCode {
         Command::Bench(args) => bench::bench(&args),
         Command::Sweep(args) => sweep::sweep(&args),
         Command::FrictionLaw(args) => friction_law::friction_law(&args),
+        Command::Fit(args) => fit::fit(&args),
     };
     report_peak_memory();
     code

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
-use super::{Cli, Command, EXIT_BAD_INPUT, compare, fail, friction_law, sweep};
+use super::{Cli, Command, EXIT_BAD_INPUT, compare, fail, fit, friction_law, sweep};
 use crate::studies::journal::{self, Header};
 
 /// Resumes the study in `dir` if it holds a study journal; `None` if it holds none (a
@@ -64,6 +64,12 @@ fn rerun(dir: &Path, header: &Header) -> Result<ExitCode, String> {
             args.out = Some(dir.to_path_buf());
             Ok(friction_law::friction_law(&args))
         }
-        _ => Err(format!("its command line is not a sweep or a compare ({})", header.study.as_str())),
+        Command::Fit(mut args) => {
+            args.scene.scene = command.cwd.join(&args.scene.scene);
+            args.data = command.cwd.join(&args.data);
+            args.out = Some(dir.to_path_buf());
+            Ok(fit::fit(&args))
+        }
+        _ => Err(format!("its command line is not a sweep, a compare, a friction law or a fit ({})", header.study.as_str())),
     }
 }

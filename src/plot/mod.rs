@@ -15,6 +15,7 @@
 //! drawn from its `trace.csv` after the run, by [`trace::write_trace_svg`].
 
 pub mod compare;
+pub mod fit;
 pub mod heatmap;
 pub mod scaling;
 pub mod sweep;

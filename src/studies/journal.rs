@@ -39,6 +39,8 @@ pub const FORMAT: u32 = 1;
 pub enum StudyKind {
     Sweep,
     Compare,
+    /// A calibration (`stickslip fit`): a "run" is one evaluation of the misfit.
+    Fit,
 }
 
 impl StudyKind {
@@ -46,6 +48,7 @@ impl StudyKind {
         match self {
             StudyKind::Sweep => "sweep",
             StudyKind::Compare => "compare",
+            StudyKind::Fit => "fit",
         }
     }
 }

@@ -16,6 +16,7 @@ mod estimate;
 mod exact_invariants;
 mod exact_stats;
 mod extreme;
+mod fit;
 mod fixed_convergence;
 mod fixed_scheme;
 mod fixed_statistics;

@@ -1,0 +1,313 @@
+//! The misfit of a fit and its evaluations.
+//!
+//! An evaluation at parameter values `theta` runs every data point's conditions `c_i` with
+//! `theta` applied, `R` replicas each, and takes the mean friction per junction over the
+//! replicas, `F_sim(theta, c_i)`, with its standard error `se_i` (the replicas' sample
+//! standard deviation over `sqrt(R)`; 0 with one replica). Replica `r` of point `i` has the
+//! same seed at every `theta` (common random numbers: [`crate::studies::seeds::derive_all`]
+//! of the scene's `run.seed`, the point index and the replica), so that the misfit changes
+//! smoothly with `theta` instead of jumping with fresh noise at every evaluation.
+//!
+//! The misfit minimised (the "score"):
+//! - with `sigma` in the data: `chi2 = sum_i ((F_sim_i - F_i) / s_i)^2`,
+//!   `s_i^2 = sigma_i^2 + se_i^2`;
+//! - without: `SSR = sum_i (F_sim_i - F_i)^2`; the common `sigma^2` is then estimated from
+//!   the residuals at the optimum, `SSR_min / (n - p)`, and `chi2 = SSR / sigma^2`.
+
+use std::collections::HashMap;
+use std::sync::Mutex;
+
+use serde::{Deserialize, Serialize};
+
+use super::data::DataSet;
+use super::free::{FreeParam, assignment};
+use crate::runner::StopFlag;
+use crate::scene::{EngineKind, RngKind, Scene};
+use crate::studies::journal::Journal;
+use crate::studies::seeds::{self, SeedRange};
+
+/// One evaluation: the free parameters' values and, per data point, the simulated mean
+/// friction per junction and its standard error over the replicas.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Evaluation {
+    pub values: Vec<f64>,
+    pub mean: Vec<f64>,
+    pub se: Vec<f64>,
+}
+
+/// Runs scenes and returns each one's mean friction per junction, in order. The CLI runs
+/// them on a rayon pool; Python hands them to Dask.
+pub trait Simulator: Sync {
+    fn friction_per_junction(&self, scenes: &[Scene]) -> Result<Vec<f64>, String>;
+}
+
+/// A fit's problem: the scene, the data, the free parameters, the replicas and their seeds.
+#[derive(Clone, Debug)]
+pub struct Problem {
+    pub base: Scene,
+    pub data: DataSet,
+    pub free: Vec<FreeParam>,
+    pub replicas: usize,
+    /// `seeds[i][r]`: the seed of replica `r` at data point `i`, the same at every `theta`.
+    pub seeds: Vec<Vec<u64>>,
+}
+
+/// Why a fit stopped before its result.
+#[derive(Debug, thiserror::Error)]
+pub enum FitError {
+    #[error("at {at}: {message}")]
+    Run { at: String, message: String },
+    #[error("the fit was stopped after {done} evaluations")]
+    Stopped { done: usize },
+    #[error("the fit needs more than --max-evaluations {max} evaluations")]
+    TooMany { max: usize },
+    #[error("{0}")]
+    Journal(String),
+}
+
+impl Problem {
+    /// Checks that there are enough points for the free parameters (`n >= p` with sigma
+    /// given, `n > p` without, to estimate it) and derives the replicas' seeds.
+    pub fn new(base: Scene, data: DataSet, free: Vec<FreeParam>, replicas: usize) -> Result<Problem, String> {
+        let (n, p) = (data.len(), free.len());
+        let need = if data.has_sigma { p } else { p + 1 };
+        if n < need {
+            return Err(format!(
+                "the data hold {n} point{} for {p} free parameter{}: a fit needs at least {need}{}",
+                if n == 1 { "" } else { "s" },
+                if p == 1 { "" } else { "s" },
+                if data.has_sigma {
+                    ""
+                } else {
+                    " (one more than the free parameters without a sigma column, to estimate sigma)"
+                }
+            ));
+        }
+        if replicas == 0 {
+            return Err("--replicas 0: must be at least 1".into());
+        }
+        let range = if base.run.engine == EngineKind::Fixed && base.fixed.rng == RngKind::ParkMiller {
+            SeedRange::ParkMiller
+        } else {
+            SeedRange::Full
+        };
+        let seeds = seeds::derive_all(base.run.seed, n, replicas, |_| range);
+        Ok(Problem { base, data, free, replicas, seeds })
+    }
+
+    /// The free parameters' values as `--set` assignments.
+    pub fn assignments(&self, values: &[f64]) -> Vec<String> {
+        self.free.iter().zip(values).map(|(p, &v)| assignment(&p.field, v)).collect()
+    }
+
+    /// The scene of every run at `values`: point by point, replicas in order.
+    pub fn scenes(&self, values: &[f64]) -> Result<Vec<Scene>, FitError> {
+        let mut out = Vec::with_capacity(self.data.len() * self.replicas);
+        for i in 0..self.data.len() {
+            let mut o = self.data.overrides(i);
+            o.extend(self.assignments(values));
+            let scene = self.base.with_overrides(&o).map_err(|e| FitError::Run {
+                at: format!("data line {}", self.data.points[i].line),
+                message: e.to_string(),
+            })?;
+            for &seed in &self.seeds[i] {
+                let mut s = scene.clone();
+                s.run.seed = seed;
+                out.push(s);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Means and standard errors per point from the runs' frictions (point-major).
+    pub fn evaluation(&self, values: &[f64], friction: &[f64]) -> Evaluation {
+        let r = self.replicas;
+        let (mut mean, mut se) = (Vec::new(), Vec::new());
+        for chunk in friction.chunks(r) {
+            let s = crate::studies::stats::ReplicaStats::of(chunk.iter().copied().map(Some));
+            mean.push(s.mean);
+            se.push(if r > 1 { s.se } else { 0.0 });
+        }
+        Evaluation { values: values.to_vec(), mean, se }
+    }
+
+    /// The score of an evaluation: `chi2` with sigma given, `SSR` without.
+    pub fn score(&self, e: &Evaluation) -> f64 {
+        self.data
+            .points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let r = e.mean[i] - p.friction;
+                match p.sigma {
+                    Some(s) => r * r / (s * s + e.se[i] * e.se[i]),
+                    None => r * r,
+                }
+            })
+            .sum()
+    }
+
+    /// The arguments that decide the evaluations, as one line (for the journal's header):
+    /// the free parameters, the replicas, and a checksum of the data as read.
+    pub fn arguments(&self, max_evaluations: usize) -> String {
+        let free = self.free.iter().map(FreeParam::describe).collect::<Vec<_>>().join(",");
+        let data = format!("{:?}", self.data);
+        let sum = crate::output::checkpoint::Checksum::of(data.as_bytes());
+        format!("--free {free} --replicas {} --max-evaluations {max_evaluations} --data {sum:016x}", self.replicas)
+    }
+}
+
+/// The misfit as a function of the free parameters, with every evaluation cached (and
+/// journaled), counted, and stoppable.
+pub struct Objective<'a> {
+    pub problem: &'a Problem,
+    sim: &'a dyn Simulator,
+    state: Mutex<Cache>,
+    journal: Option<&'a Journal>,
+    stop: Option<&'a StopFlag>,
+    max: usize,
+    /// Called after each new evaluation with (evaluations so far, best score so far).
+    pub on_new: Option<Box<dyn Fn(usize, f64) + Sync + 'a>>,
+}
+
+#[derive(Default)]
+struct Cache {
+    /// Every evaluation, in the order made (or read from the journal).
+    list: Vec<Evaluation>,
+    index: HashMap<Vec<u64>, usize>,
+    /// How many of `list` were made by this process.
+    new: usize,
+    best: f64,
+    error: Option<FitError>,
+}
+
+fn key(values: &[f64]) -> Vec<u64> {
+    values.iter().map(|v| v.to_bits()).collect()
+}
+
+impl<'a> Objective<'a> {
+    /// `done`: evaluations already made (from a journal), in their order.
+    pub fn new(
+        problem: &'a Problem,
+        sim: &'a dyn Simulator,
+        done: Vec<Evaluation>,
+        journal: Option<&'a Journal>,
+        stop: Option<&'a StopFlag>,
+        max: usize,
+    ) -> Self {
+        let mut cache = Cache { best: f64::INFINITY, ..Cache::default() };
+        for e in done {
+            cache.best = cache.best.min(problem.score(&e));
+            cache.index.insert(key(&e.values), cache.list.len());
+            cache.list.push(e);
+        }
+        Objective { problem, sim, state: Mutex::new(cache), journal, stop, max, on_new: None }
+    }
+
+    /// The evaluation at `values` (field values), made or taken from the cache.
+    pub fn evaluate(&self, values: &[f64]) -> Result<Evaluation, FitError> {
+        let k = key(values);
+        {
+            let c = self.state.lock().unwrap_or_else(|p| p.into_inner());
+            if let Some(&i) = c.index.get(&k) {
+                return Ok(c.list[i].clone());
+            }
+            if c.list.len() >= self.max {
+                return Err(FitError::TooMany { max: self.max });
+            }
+        }
+        if self.stop.is_some_and(|s| s.is_requested()) {
+            return Err(FitError::Stopped { done: self.evaluations() });
+        }
+        let p = self.problem;
+        let scenes = p.scenes(values)?;
+        let friction = match self.sim.friction_per_junction(&scenes) {
+            Ok(f) => f,
+            Err(_) if self.stop.is_some_and(|s| s.is_requested()) => {
+                return Err(FitError::Stopped { done: self.evaluations() });
+            }
+            Err(message) => return Err(FitError::Run { at: p.assignments(values).join(", "), message }),
+        };
+        if let Some(bad) = friction.iter().position(|f| !f.is_finite()) {
+            return Err(FitError::Run {
+                at: p.assignments(values).join(", "),
+                message: format!(
+                    "the run at data line {} gave a friction that is not finite",
+                    p.data.points[bad / p.replicas].line
+                ),
+            });
+        }
+        let e = p.evaluation(values, &friction);
+        let mut c = self.state.lock().unwrap_or_else(|p| p.into_inner());
+        let n = c.list.len();
+        if let Some(j) = self.journal {
+            j.append(n, p.base.run.seed, &e).map_err(|err| FitError::Journal(err.to_string()))?;
+        }
+        c.best = c.best.min(p.score(&e));
+        c.index.insert(k, n);
+        c.list.push(e.clone());
+        c.new += 1;
+        let best = c.best;
+        drop(c);
+        if let Some(f) = &self.on_new {
+            f(n + 1, best);
+        }
+        Ok(e)
+    }
+
+    /// The score at `values`; an error is kept (see [`Objective::take_error`]) and `None`
+    /// returned.
+    pub fn score(&self, values: &[f64]) -> Option<f64> {
+        match self.evaluate(values) {
+            Ok(e) => Some(self.problem.score(&e)),
+            Err(err) => {
+                self.state.lock().unwrap_or_else(|p| p.into_inner()).error.get_or_insert(err);
+                None
+            }
+        }
+    }
+
+    /// The first error met, if any.
+    pub fn take_error(&self) -> Option<FitError> {
+        self.state.lock().unwrap_or_else(|p| p.into_inner()).error.take()
+    }
+
+    /// Evaluations made (in this process or read from a journal).
+    pub fn evaluations(&self) -> usize {
+        self.state.lock().unwrap_or_else(|p| p.into_inner()).list.len()
+    }
+
+    /// Evaluations made by this process.
+    pub fn new_evaluations(&self) -> usize {
+        self.state.lock().unwrap_or_else(|p| p.into_inner()).new
+    }
+
+    /// Every evaluation so far.
+    pub fn all(&self) -> Vec<Evaluation> {
+        self.state.lock().unwrap_or_else(|p| p.into_inner()).list.clone()
+    }
+}
+
+/// Runs scenes on a rayon pool; the results are in order whatever the number of threads.
+pub struct PoolSimulator<'a> {
+    pub pool: &'a rayon::ThreadPool,
+    pub stop: Option<StopFlag>,
+}
+
+impl Simulator for PoolSimulator<'_> {
+    fn friction_per_junction(&self, scenes: &[Scene]) -> Result<Vec<f64>, String> {
+        use rayon::prelude::*;
+        let opts = crate::runner::RunOptions { stop: self.stop.clone(), ..crate::runner::RunOptions::default() };
+        self.pool.install(|| {
+            scenes
+                .par_iter()
+                .map(|s| {
+                    crate::runner::run_scene_with(s, None, &opts)
+                        .map(|summary| summary.friction_per_junction)
+                        .map_err(|e| format!("seed {}: {e}", s.run.seed))
+                })
+                .collect()
+        })
+    }
+}

@@ -1,0 +1,138 @@
+//! A fit's files: `fit.json` (parameters with their intervals, misfit, degrees of freedom,
+//! p-value, evaluations), `fit.csv` (per data point: conditions, data, sigma, fitted value,
+//! band, residual), `fit.toml` (the scene with the fitted values, for `stickslip run`) and
+//! `fit.svg` ([`crate::plot::fit`]), each written atomically.
+
+use std::path::Path;
+
+use serde_json::{Map, Value, json};
+
+use super::model::Problem;
+use super::solve::FitResult;
+use crate::output::atomic::write_files;
+use crate::plot::PlotError;
+
+/// The method of the intervals, as `fit.json` states it.
+pub const METHOD: &str = "profile likelihood: 95 % interval where the misfit, re-optimised over the other free parameters, rises by the threshold above its minimum";
+
+/// Why a fit's files could not be written: the figure, or a file (the studies' error).
+pub use crate::studies::sweep::WriteError;
+
+/// A number for JSON: `null` when not finite.
+fn num(v: f64) -> Value {
+    if v.is_finite() { json!(v) } else { Value::Null }
+}
+
+/// The flags of parameter `j`'s interval.
+pub fn flags(r: &FitResult, j: usize) -> Vec<String> {
+    let iv = &r.intervals[j];
+    let mut f = Vec::new();
+    if iv.flat() {
+        f.push("flat profile: no visible effect on the data within the bounds".to_string());
+    } else if !iv.determined() {
+        f.push("undetermined: the interval reaches both bounds".to_string());
+    }
+    if iv.low.at_bound {
+        f.push("reaches lower bound".to_string());
+    }
+    if iv.high.at_bound {
+        f.push("reaches upper bound".to_string());
+    }
+    if iv.min_rise < -0.5 {
+        f.push(format!("the profile found a misfit {:.3} below the optimum: the optimum may be local", -iv.min_rise));
+    }
+    f
+}
+
+/// `fit.json`.
+pub fn fit_json(prob: &Problem, r: &FitResult, data_path: &str) -> String {
+    let mut params = Map::new();
+    for (j, f) in prob.free.iter().enumerate() {
+        let iv = &r.intervals[j];
+        params.insert(
+            f.field.clone(),
+            json!({
+                "value": num(r.best.values[j]),
+                "low": num(f.value(iv.low.y)),
+                "high": num(f.value(iv.high.y)),
+                "determined": iv.determined(),
+                "flags": flags(r, j),
+                "start": num(f.start),
+                "bounds": [num(f.low), num(f.high)],
+                "scale": if f.log { "log" } else { "lin" },
+                "profile": iv.profile.iter().map(|&(y, d)| json!([num(f.value(y)), num(d)])).collect::<Vec<_>>(),
+            }),
+        );
+    }
+    let value = json!({
+        "scene": prob.base.name,
+        "data": data_path,
+        "points": prob.data.len(),
+        "conditions": prob.data.columns,
+        "replicas": prob.replicas,
+        "seed": prob.base.run.seed,
+        "parameters": params,
+        "misfit": num(r.chi2),
+        "dof": r.dof,
+        "p_value": r.p_value.map_or(Value::Null, num),
+        "sigma": if prob.data.has_sigma { "given (data column sigma, plus the simulation's standard error)" } else { "estimated from the residuals: sqrt(SSR / dof); misfit = dof by construction, no p-value" },
+        "sigma_estimate": r.sigma_estimate.map_or(Value::Null, num),
+        "method": METHOD,
+        "threshold": num(r.threshold),
+        "band_threshold": num(r.band_threshold),
+        "evaluations": r.evaluations,
+    });
+    let mut s = serde_json::to_string_pretty(&value).expect("JSON values serialize");
+    s.push('\n');
+    s
+}
+
+/// `fit.csv`: one row per data point.
+pub fn fit_csv(prob: &Problem, r: &FitResult) -> String {
+    let mut out = prob.data.columns.join(",");
+    if !out.is_empty() {
+        out.push(',');
+    }
+    out.push_str("line,friction,sigma,fitted,fitted_se,band_low,band_high,residual,normalized_residual\n");
+    let sigma = r.sigma_estimate;
+    for (i, p) in prob.data.points.iter().enumerate() {
+        let s = p.sigma.or(sigma).unwrap_or(f64::NAN);
+        let scale = (s * s + r.best.se[i] * r.best.se[i]).sqrt();
+        let res = p.friction - r.best.mean[i];
+        let mut row: Vec<String> = p.text.clone();
+        row.push(p.line.to_string());
+        for v in [p.friction, s, r.best.mean[i], r.best.se[i], r.band[i].0, r.band[i].1, res, res / scale] {
+            row.push(if v.is_finite() { format!("{v}") } else { String::new() });
+        }
+        out.push_str(&row.join(","));
+        out.push('\n');
+    }
+    out
+}
+
+/// `fit.toml`: the scene with the fitted values.
+pub fn fit_toml(prob: &Problem, r: &FitResult) -> Result<String, String> {
+    let scene = prob.base.with_overrides(&prob.assignments(&r.best.values)).map_err(|e| e.to_string())?;
+    let mut head = format!(
+        "# The scene {} with the values fitted by `stickslip fit` ({} free: {}); run it with `stickslip run fit.toml`.\n",
+        prob.base.name,
+        prob.free.len(),
+        prob.free.iter().map(|f| f.field.as_str()).collect::<Vec<_>>().join(", ")
+    );
+    head.push_str(&toml::to_string(&scene.to_file()).map_err(|e| e.to_string())?);
+    Ok(head)
+}
+
+/// Writes the four files into `dir`; the figure is drawn before anything is written.
+pub fn write(prob: &Problem, r: &FitResult, dir: &Path, data_path: &str) -> Result<(), WriteError> {
+    let svg = crate::plot::fit::fit_svg(prob, r)?;
+    let toml = fit_toml(prob, r).map_err(PlotError)?;
+    let files = [
+        ("fit.csv", fit_csv(prob, r)),
+        ("fit.toml", toml),
+        ("fit.svg", svg),
+        ("fit.json", fit_json(prob, r, data_path)),
+    ];
+    write_files(dir, &files)?;
+    Ok(())
+}

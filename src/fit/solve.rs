@@ -1,0 +1,110 @@
+//! The whole fit: the optimum (Nelder–Mead from the scene's values, restarted once from its
+//! best point), the goodness of fit, the profile interval of every free parameter, and the
+//! band of the fitted curve.
+
+use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor};
+
+use super::intervals::{Interval, profile};
+use super::model::{Evaluation, FitError, Objective};
+use super::optimise::{Settings, minimise};
+
+/// Nelder–Mead iterations per free parameter, for each of the two searches of the optimum.
+pub const ITERS_PER_PARAMETER: u64 = 80;
+
+/// What a fit found.
+#[derive(Clone, Debug)]
+pub struct FitResult {
+    /// The optimum in unit coordinates, and its evaluation.
+    pub best_y: Vec<f64>,
+    pub best: Evaluation,
+    /// The minimised score (chi2, or SSR without sigma).
+    pub score: f64,
+    /// Sigma estimated from the residuals (no sigma column), `sqrt(SSR_min / (n - p))`.
+    pub sigma_estimate: Option<f64>,
+    /// `chi2` at the optimum (with sigma estimated: `n - p` by construction).
+    pub chi2: f64,
+    pub dof: usize,
+    /// `P(chi2_dof >= chi2)`; `None` with sigma estimated or no degrees of freedom.
+    pub p_value: Option<f64>,
+    /// The rise of chi2 that bounds a one-parameter 95 % interval.
+    pub threshold: f64,
+    /// The rise of chi2 that bounds the joint 95 % region (for the band).
+    pub band_threshold: f64,
+    pub intervals: Vec<Interval>,
+    /// Per data point, the least and greatest simulated friction over the evaluations in
+    /// the joint 95 % region.
+    pub band: Vec<(f64, f64)>,
+    pub evaluations: usize,
+}
+
+fn quantile95(d: impl ContinuousCDF<f64, f64>) -> f64 {
+    d.inverse_cdf(0.95)
+}
+
+/// Runs the fit on `obj`.
+pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
+    let prob = obj.problem;
+    let (n, p) = (prob.data.len(), prob.free.len());
+    let has_sigma = prob.data.has_sigma;
+    let stopped = || obj.take_error().unwrap_or(FitError::Stopped { done: obj.evaluations() });
+    let score_y = |y: &[f64]| -> Option<f64> {
+        let values: Vec<f64> = prob.free.iter().zip(y).map(|(f, &v)| f.value(v)).collect();
+        obj.score(&values)
+    };
+    let start: Vec<f64> = prob.free.iter().map(|f| f.unit(f.start)).collect();
+    // The misfit's unit before sigma is estimated: a sum of squares is compared with the
+    // data's mean square.
+    let mean_square = prob.data.points.iter().map(|q| q.friction * q.friction).sum::<f64>() / n as f64;
+    let first_unit = if has_sigma { 1.0 } else { 1e-4 * mean_square.max(f64::MIN_POSITIVE) };
+    let iters = ITERS_PER_PARAMETER * p as u64;
+    let s1 = Settings { step: 0.1, tolerance: 1e-2 * first_unit, max_iters: iters, unit: first_unit };
+    let (y1, v1) = minimise(&score_y, &start, s1).ok_or_else(stopped)?;
+    let dof = n - p;
+    let unit = if has_sigma { 1.0 } else { (v1 / dof as f64).max(f64::MIN_POSITIVE) };
+    let s2 = Settings { step: 0.05, tolerance: 1e-3 * unit, max_iters: iters, unit };
+    let (mut best_y, mut score) = minimise(&score_y, &y1, s2).ok_or_else(stopped)?;
+    if v1 < score {
+        (best_y, score) = (y1, v1);
+    }
+    let unit = if has_sigma { 1.0 } else { (score / dof as f64).max(f64::MIN_POSITIVE) };
+    let (threshold, band_threshold) = if has_sigma {
+        (quantile95(ChiSquared::new(1.0).expect("1 > 0")), quantile95(ChiSquared::new(p as f64).expect("p > 0")))
+    } else {
+        let d = dof as f64;
+        (
+            quantile95(FisherSnedecor::new(1.0, d).expect("dof > 0")),
+            p as f64 * quantile95(FisherSnedecor::new(p as f64, d).expect("dof > 0")),
+        )
+    };
+    let mut intervals = Vec::with_capacity(p);
+    for j in 0..p {
+        intervals.push(profile(&score_y, &best_y, score, unit, threshold, j).ok_or_else(stopped)?);
+    }
+    let values: Vec<f64> = prob.free.iter().zip(&best_y).map(|(f, &v)| f.value(v)).collect();
+    let best = obj.evaluate(&values)?;
+    let all = obj.all();
+    let band = (0..n)
+        .map(|i| {
+            all.iter()
+                .filter(|e| (prob.score(e) - score) / unit <= band_threshold)
+                .map(|e| e.mean[i])
+                .fold((best.mean[i], best.mean[i]), |(lo, hi), m| (lo.min(m), hi.max(m)))
+        })
+        .collect();
+    let chi2 = score / unit;
+    let p_value = (has_sigma && dof > 0).then(|| 1.0 - ChiSquared::new(dof as f64).expect("dof > 0").cdf(chi2));
+    Ok(FitResult {
+        best_y,
+        best,
+        score,
+        sigma_estimate: (!has_sigma).then(|| unit.sqrt()),
+        chi2,
+        dof,
+        p_value,
+        threshold,
+        band_threshold,
+        intervals,
+        band,
+        evaluations: obj.evaluations(),
+    })
+}
