@@ -9,7 +9,7 @@ use std::process::ExitCode;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::run::{load_scene, prepare_out_dir, remove_if_empty};
+use super::run::{load_scene, prepare_out_dir};
 use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail, signals, study};
 use crate::fit::data::DataSet;
 use crate::fit::free::parse_free;
@@ -82,7 +82,7 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
         Err(e) => return fail(EXIT_BAD_INPUT, e),
     };
     let out = args.out.clone().unwrap_or_else(|| Path::new("out").join(format!("{}-fit", problem.base.name)));
-    let created = match prepare_out_dir(&out) {
+    let held = match prepare_out_dir(&out) {
         Ok(c) => c,
         Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
@@ -92,7 +92,7 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
     let mut journal = match study::open::<Evaluation>(StudyKind::Fit, &out, &header, &seeds) {
         Ok(j) => j,
         Err(code) => {
-            remove_if_empty(&created);
+            held.abandon();
             return code;
         }
     };
@@ -140,7 +140,7 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
         }
         Err(e) => {
             journal.discard_if_new();
-            remove_if_empty(&created);
+            held.abandon();
             return fail(EXIT_RUN_FAILED, e);
         }
     };
