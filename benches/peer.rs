@@ -131,71 +131,71 @@ fn rebop_row(c: &mut Criterion, n: usize, k0: f64, kon: f64) {
     g.finish();
 }
 
-fn engine_row<E: Engine>(c: &mut Criterion, name: &str, n: usize, make: impl Fn() -> E) {
-    let mut pilot = make();
+/// The events of one span after the warm-up, counted on a pilot engine.
+fn engine_events_per_span<E: Engine>(mut pilot: E, n: usize) -> u64 {
     pilot.advance(WARM, &mut Nothing).unwrap();
     let before = pilot.counters().events.unwrap();
     pilot.advance(WARM + span(n), &mut Nothing).unwrap();
-    let per_span = pilot.counters().events.unwrap() - before;
+    pilot.counters().events.unwrap() - before
+}
 
+/// A row of `per_span` events per iteration: `advance(t)` continues one warmed-up engine to
+/// `t` and returns its event count so far (`events` after the warm-up).
+fn timed_row(
+    c: &mut Criterion,
+    name: &str,
+    n: usize,
+    per_span: u64,
+    mut events: u64,
+    mut advance: impl FnMut(f64) -> u64,
+) {
     let row = format!("{name}/{n}");
     let mut g = c.benchmark_group("peer");
     g.sample_size(10).measurement_time(Duration::from_secs(6)).warm_up_time(Duration::from_secs(1));
     g.throughput(Throughput::Elements(per_span));
-    let mut e = make();
-    e.advance(WARM, &mut Nothing).unwrap();
     let mut t = WARM;
     g.bench_function(BenchmarkId::new(name, n), |b| {
         b.iter_custom(|iters| {
-            let before = e.counters().events.unwrap();
+            let before = events;
             let start = Instant::now();
             for _ in 0..iters {
                 t += span(n);
-                e.advance(t, &mut Nothing).unwrap();
+                events = advance(t);
             }
             let elapsed = start.elapsed();
-            record(&row, (e.counters().events.unwrap() - before) as f64, elapsed);
+            record(&row, (events - before) as f64, elapsed);
             elapsed
         })
     });
     g.finish();
 }
 
+fn engine_row<E: Engine>(c: &mut Criterion, name: &str, n: usize, make: impl Fn() -> E) {
+    let per_span = engine_events_per_span(make(), n);
+    let mut e = make();
+    e.advance(WARM, &mut Nothing).unwrap();
+    let events = e.counters().events.unwrap();
+    timed_row(c, name, n, per_span, events, |t| {
+        e.advance(t, &mut Nothing).unwrap();
+        e.counters().events.unwrap()
+    });
+}
+
 /// The strong-bond engine as a run drives it: the runner's loop ([`drive`]) along the output
 /// grid up to each iteration's end, feeding the run's core observers (window from `WARM`).
 fn run_row(c: &mut Criterion, n: usize) {
     let scene = scaled_with(n, ForceLawKind::Linear, BondKind::Strong, &["run.t_warmup=20", "run.t_end=1e9"]);
-    let name = "strong-linear-run";
-    let mut pilot = strong_linear::<ArrayQueue>(&scene);
-    pilot.advance(WARM, &mut Nothing).unwrap();
-    let before = pilot.counters().events.unwrap();
-    pilot.advance(WARM + span(n), &mut Nothing).unwrap();
-    let per_span = pilot.counters().events.unwrap() - before;
-
-    let row = format!("{name}/{n}");
-    let mut g = c.benchmark_group("peer");
-    g.sample_size(10).measurement_time(Duration::from_secs(6)).warm_up_time(Duration::from_secs(1));
-    g.throughput(Throughput::Elements(per_span));
+    let per_span = engine_events_per_span(strong_linear::<ArrayQueue>(&scene), n);
     let grid = OutputGrid::new(&scene, None);
     let mut obs = core_observers(&scene);
     let mut e = strong_linear::<ArrayQueue>(&scene);
     drive(&mut e, &OutputGrid { t_end: WARM, ..grid }, &mut obs).unwrap();
-    let mut t = WARM;
-    g.bench_function(BenchmarkId::new(name, n), |b| {
-        b.iter_custom(|iters| {
-            let before = e.counters().events.unwrap();
-            let start = Instant::now();
-            for _ in 0..iters {
-                t += span(n);
-                drive(&mut e, &OutputGrid { t_end: t, ..grid }, &mut obs).unwrap();
-            }
-            let elapsed = start.elapsed();
-            std::hint::black_box(obs.0.friction_mean());
-            record(&row, (e.counters().events.unwrap() - before) as f64, elapsed);
-            elapsed
-        })
+    let events = e.counters().events.unwrap();
+    timed_row(c, "strong-linear-run", n, per_span, events, |t| {
+        drive(&mut e, &OutputGrid { t_end: t, ..grid }, &mut obs).unwrap();
+        std::hint::black_box(obs.0.friction_mean());
+        e.counters().events.unwrap()
     });
-    g.finish();
 }
 
 /// Rounds of the paired measurement ([`paired`]).
