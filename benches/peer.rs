@@ -12,7 +12,11 @@
 //! Rows per `N` (1e3, 1e6, 1e7), all in events per second (criterion's throughput):
 //! `peer/rebop-two-state/N`, `peer/strong-linear/N` and `peer/weak-linear/N`
 //! (`testkit::scaled_linear`, the scene of `benches/exact.rs`, one engine per row warmed up
-//! to `t = 20`, then `1e6 / N` time units per iteration, about 1e5 events). After each `N` the bench prints the
+//! to `t = 20`, then `1e6 / N` time units per iteration, about 1e5 events), and
+//! `peer/strong-linear-run/N`: the same engine as a run drives it, through the runner's loop
+//! (`runner::drive` along the scene's output grid, a sample every time unit) feeding the
+//! run's own observers (window statistics from `t = 20`, regime detector): what `stickslip
+//! run` does between its set-up and its files. After each `N` the bench prints the
 //! median events per second of each row over its samples, and the engine's ratio to the
 //! peer. It then measures each engine's ratio in *paired rounds*: a fresh engine and a fresh
 //! rebop system warmed up to `t = 20`, then [`ROUNDS`] rounds each timing one span of rebop
@@ -35,7 +39,9 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use stickslip::engine::Engine;
 use stickslip::engine::exact::{ArrayQueue, strong_linear, weak_linear};
 use stickslip::observe::Nothing;
-use stickslip_testkit::scaled_linear;
+use stickslip::runner::{OutputGrid, core_observers, drive};
+use stickslip::scene::{BondKind, ForceLawKind};
+use stickslip_testkit::{scaled_linear, scaled_with};
 
 rebop::define_system! {
     k_off k_on;
@@ -125,34 +131,71 @@ fn rebop_row(c: &mut Criterion, n: usize, k0: f64, kon: f64) {
     g.finish();
 }
 
-fn engine_row<E: Engine>(c: &mut Criterion, name: &str, n: usize, make: impl Fn() -> E) {
-    let mut pilot = make();
+/// The events of one span after the warm-up, counted on a pilot engine.
+fn engine_events_per_span<E: Engine>(mut pilot: E, n: usize) -> u64 {
     pilot.advance(WARM, &mut Nothing).unwrap();
     let before = pilot.counters().events.unwrap();
     pilot.advance(WARM + span(n), &mut Nothing).unwrap();
-    let per_span = pilot.counters().events.unwrap() - before;
+    pilot.counters().events.unwrap() - before
+}
 
+/// A row of `per_span` events per iteration: `advance(t)` continues one warmed-up engine to
+/// `t` and returns its event count so far (`events` after the warm-up).
+fn timed_row(
+    c: &mut Criterion,
+    name: &str,
+    n: usize,
+    per_span: u64,
+    mut events: u64,
+    mut advance: impl FnMut(f64) -> u64,
+) {
     let row = format!("{name}/{n}");
     let mut g = c.benchmark_group("peer");
     g.sample_size(10).measurement_time(Duration::from_secs(6)).warm_up_time(Duration::from_secs(1));
     g.throughput(Throughput::Elements(per_span));
-    let mut e = make();
-    e.advance(WARM, &mut Nothing).unwrap();
     let mut t = WARM;
     g.bench_function(BenchmarkId::new(name, n), |b| {
         b.iter_custom(|iters| {
-            let before = e.counters().events.unwrap();
+            let before = events;
             let start = Instant::now();
             for _ in 0..iters {
                 t += span(n);
-                e.advance(t, &mut Nothing).unwrap();
+                events = advance(t);
             }
             let elapsed = start.elapsed();
-            record(&row, (e.counters().events.unwrap() - before) as f64, elapsed);
+            record(&row, (events - before) as f64, elapsed);
             elapsed
         })
     });
     g.finish();
+}
+
+fn engine_row<E: Engine>(c: &mut Criterion, name: &str, n: usize, make: impl Fn() -> E) {
+    let per_span = engine_events_per_span(make(), n);
+    let mut e = make();
+    e.advance(WARM, &mut Nothing).unwrap();
+    let events = e.counters().events.unwrap();
+    timed_row(c, name, n, per_span, events, |t| {
+        e.advance(t, &mut Nothing).unwrap();
+        e.counters().events.unwrap()
+    });
+}
+
+/// The strong-bond engine as a run drives it: the runner's loop ([`drive`]) along the output
+/// grid up to each iteration's end, feeding the run's core observers (window from `WARM`).
+fn run_row(c: &mut Criterion, n: usize) {
+    let scene = scaled_with(n, ForceLawKind::Linear, BondKind::Strong, &["run.t_warmup=20", "run.t_end=1e9"]);
+    let per_span = engine_events_per_span(strong_linear::<ArrayQueue>(&scene), n);
+    let grid = OutputGrid::new(&scene, None);
+    let mut obs = core_observers(&scene);
+    let mut e = strong_linear::<ArrayQueue>(&scene);
+    drive(&mut e, &OutputGrid { t_end: WARM, ..grid }, &mut obs).unwrap();
+    let events = e.counters().events.unwrap();
+    timed_row(c, "strong-linear-run", n, per_span, events, |t| {
+        drive(&mut e, &OutputGrid { t_end: t, ..grid }, &mut obs).unwrap();
+        std::hint::black_box(obs.0.friction_mean());
+        e.counters().events.unwrap()
+    });
 }
 
 /// Rounds of the paired measurement ([`paired`]).
@@ -218,12 +261,13 @@ fn peer(c: &mut Criterion) {
         rebop_row(c, n, k0, kon);
         engine_row(c, "strong-linear", n, || strong_linear::<ArrayQueue>(&strong));
         engine_row(c, "weak-linear", n, || weak_linear::<ArrayQueue>(&weak));
+        run_row(c, n);
         let peer = median_rate(&format!("rebop-two-state/{n}"));
         if peer.is_nan() {
             continue; // filtered out by criterion's own filter
         }
         println!("\npeer N = {n}: rebop two-state {:.1} M events/s (median of its samples)", peer / 1e6);
-        for name in ["strong-linear", "weak-linear"] {
+        for name in ["strong-linear", "weak-linear", "strong-linear-run"] {
             let own = median_rate(&format!("{name}/{n}"));
             if !own.is_nan() {
                 println!("peer N = {n}: {name} {:.2} M events/s, {:.3}x rebop", own / 1e6, own / peer);

@@ -4,15 +4,24 @@
 //! - [`Segment`]s: time integrals of the observables over consecutive pieces of the
 //!   trajectory that tile `[0, t]` (between events for the exact engine, one step for the
 //!   fixed engine). Window statistics are built from these, so they are exact integrals
-//!   of the engine's trajectory, not averages of a sampled trace.
+//!   of the engine's trajectory, not averages of a sampled trace. An engine that has the
+//!   raw integrals of a piece reports a [`Piece`] instead ([`Observer::piece`]), which an
+//!   observer turns into a segment ([`Piece::segment`]) or sums as it is.
 //! - [`JunctionEvent`]s: ruptures and formations, only when an observer wants them
 //!   ([`Observer::EVENTS`] is a constant, so engines compile the event path away otherwise).
 //! - [`Sample`]s: the state on the runner's output grid.
 //!
+//! - Grid stops ([`Observer::stop`]): the runner's loop says when the engine stands at one,
+//!   so that an observer may fold what it has summed since the last.
+//!
 //! Observers are combined with tuples and dispatched statically.
 
+pub mod piece;
 pub mod regime;
+pub mod shifted;
 pub mod stats;
+
+pub use piece::Piece;
 
 use serde::{Deserialize, Serialize};
 
@@ -98,6 +107,9 @@ pub trait Observer {
     /// Whether this observer wants [`JunctionEvent`]s. Engines test this constant, so the
     /// event path costs nothing when it is `false`.
     const EVENTS: bool = false;
+    /// Whether this observer wants formations too, when it wants events (an observer of
+    /// ruptures alone sets it false, and engines then build no event for a formation).
+    const FORMATIONS: bool = Self::EVENTS;
     /// Whether this observer reads [`Segment`]s. Engines may skip computing a segment's
     /// time integrals when it is `false` (and still call [`Observer::segment`], with
     /// integrals that are not meaningful).
@@ -108,6 +120,24 @@ pub trait Observer {
     /// The engine advanced over `[s.t0, s.t1]`.
     #[inline]
     fn segment(&mut self, _s: &Segment) {}
+    /// The engine advanced over `[p.t0, p.t1]`, reported as raw integrals. Default: as the
+    /// segment [`Piece::segment`] (whose division is dropped by the compiler for an
+    /// observer that reads no segments).
+    #[inline]
+    fn piece(&mut self, p: &Piece) {
+        self.segment(&p.segment());
+    }
+    /// The time up to which this observer reads no piece's integrals: a piece that ends at
+    /// or before it may be reported with its integrals zero (an engine then skips computing
+    /// them). `-inf` (every piece's integrals) by default; the window's start for window
+    /// statistics; `+inf` for an observer that reads times or samples only.
+    #[inline]
+    fn integrals_after(&self) -> f64 {
+        f64::NEG_INFINITY
+    }
+    /// The engine stands at a grid stop of the runner's loop (between two advances).
+    #[inline]
+    fn stop(&mut self) {}
     /// A state on the output grid.
     fn sample(&mut self, _s: &Sample) {}
 }
@@ -117,10 +147,15 @@ pub trait Observer {
 pub struct Nothing;
 impl Observer for Nothing {
     const SEGMENTS: bool = false;
+    #[inline]
+    fn integrals_after(&self) -> f64 {
+        f64::INFINITY
+    }
 }
 
 impl<A: Observer, B: Observer> Observer for (A, B) {
     const EVENTS: bool = A::EVENTS || B::EVENTS;
+    const FORMATIONS: bool = (A::EVENTS && A::FORMATIONS) || (B::EVENTS && B::FORMATIONS);
     const SEGMENTS: bool = A::SEGMENTS || B::SEGMENTS;
     #[inline]
     fn event(&mut self, e: &JunctionEvent) {
@@ -136,6 +171,20 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
         self.0.segment(s);
         self.1.segment(s);
     }
+    #[inline]
+    fn piece(&mut self, p: &Piece) {
+        self.0.piece(p);
+        self.1.piece(p);
+    }
+    #[inline]
+    fn integrals_after(&self) -> f64 {
+        self.0.integrals_after().min(self.1.integrals_after())
+    }
+    #[inline]
+    fn stop(&mut self) {
+        self.0.stop();
+        self.1.stop();
+    }
     fn sample(&mut self, s: &Sample) {
         self.0.sample(s);
         self.1.sample(s);
@@ -144,6 +193,7 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
 
 impl<A: Observer> Observer for Option<A> {
     const EVENTS: bool = A::EVENTS;
+    const FORMATIONS: bool = A::FORMATIONS;
     const SEGMENTS: bool = A::SEGMENTS;
     #[inline]
     fn event(&mut self, e: &JunctionEvent) {
@@ -157,6 +207,25 @@ impl<A: Observer> Observer for Option<A> {
             a.segment(s)
         }
     }
+    #[inline]
+    fn piece(&mut self, p: &Piece) {
+        if let Some(a) = self {
+            a.piece(p)
+        }
+    }
+    #[inline]
+    fn integrals_after(&self) -> f64 {
+        match self {
+            Some(a) => a.integrals_after(),
+            None => f64::INFINITY,
+        }
+    }
+    #[inline]
+    fn stop(&mut self) {
+        if let Some(a) = self {
+            a.stop()
+        }
+    }
     fn sample(&mut self, s: &Sample) {
         if let Some(a) = self {
             a.sample(s)
@@ -166,6 +235,7 @@ impl<A: Observer> Observer for Option<A> {
 
 impl<A: Observer + ?Sized> Observer for &mut A {
     const EVENTS: bool = A::EVENTS;
+    const FORMATIONS: bool = A::FORMATIONS;
     const SEGMENTS: bool = A::SEGMENTS;
     #[inline]
     fn event(&mut self, e: &JunctionEvent) {
@@ -174,6 +244,18 @@ impl<A: Observer + ?Sized> Observer for &mut A {
     #[inline]
     fn segment(&mut self, s: &Segment) {
         (**self).segment(s)
+    }
+    #[inline]
+    fn piece(&mut self, p: &Piece) {
+        (**self).piece(p)
+    }
+    #[inline]
+    fn integrals_after(&self) -> f64 {
+        (**self).integrals_after()
+    }
+    #[inline]
+    fn stop(&mut self) {
+        (**self).stop()
     }
     fn sample(&mut self, s: &Sample) {
         (**self).sample(s)

@@ -1,9 +1,10 @@
 //! Time-weighted statistics over the averaging window `[t_warmup, t_end]`, built from
-//! [`Segment`]s, plus rupture-force statistics from events.
+//! [`Segment`]s and [`Piece`]s, plus rupture-force statistics from events.
 
 use serde::{Deserialize, Serialize};
 
-use super::{EventKind, JunctionEvent, Observer, Segment};
+use super::shifted::ShiftedSums;
+use super::{EventKind, JunctionEvent, Observer, Piece, Segment};
 
 /// Time-weighted mean and second central moment, merged segment by segment with the
 /// pairwise update of Chan, Golub & LeVeque (stable: no `E[F^2] - E[F]^2` cancellation).
@@ -38,16 +39,22 @@ impl Moments {
 
 /// Window statistics of a run. Segments are clipped to the window; a segment that
 /// straddles a window edge (only the fixed engine's, which are constant) is weighted by
-/// its overlap.
+/// its overlap. The friction's moments are summed about a reference between grid stops
+/// ([`ShiftedSums`]) and merged into `friction` at each stop ([`Observer::stop`]), so a
+/// checkpoint, written at a stop, holds them whole; the accessors include a stretch not
+/// yet merged.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct WindowStats {
     pub t_lo: f64,
     pub t_hi: f64,
     pub n: u64,
-    pub friction: Moments,
+    friction: Moments,
     bond_force_integral: f64,
     viscous_integral: f64,
     attached_integral: f64,
+    /// The stretch since the last stop (empty at a stop).
+    #[serde(skip)]
+    stretch: ShiftedSums,
 }
 
 impl WindowStats {
@@ -60,17 +67,24 @@ impl WindowStats {
             bond_force_integral: 0.0,
             viscous_integral: 0.0,
             attached_integral: 0.0,
+            stretch: ShiftedSums::default(),
         }
+    }
+    /// The friction's moments so far.
+    pub fn friction(&self) -> Moments {
+        let mut m = self.friction;
+        self.stretch.fold_into(&mut m);
+        m
     }
     /// Time covered so far.
     pub fn covered(&self) -> f64 {
-        self.friction.weight
+        self.friction().weight
     }
     pub fn friction_mean(&self) -> f64 {
-        self.friction.mean
+        self.friction().mean
     }
     pub fn friction_std(&self) -> f64 {
-        self.friction.std()
+        self.friction().std()
     }
     pub fn bond_force_mean(&self) -> f64 {
         self.bond_force_integral / self.covered()
@@ -94,10 +108,51 @@ impl Observer for WindowStats {
         }
         let h = s.t1 - s.t0;
         let m2 = if w < h { s.friction_m2 * (w / h) } else { s.friction_m2 };
-        self.friction.merge(w, s.friction, m2);
+        self.stretch.add_mean(w, s.friction, m2);
         self.bond_force_integral += w * s.bond_force;
         self.viscous_integral += w * s.viscous;
         self.attached_integral += w * s.attached as f64;
+    }
+
+    /// A piece inside the window is summed as it is (no division); one before it costs a
+    /// comparison; one that straddles an edge (an advance that did not stop there) is
+    /// clipped as its segment.
+    #[inline]
+    fn piece(&mut self, p: &Piece) {
+        if p.t1 <= self.t_lo || p.t0 >= self.t_hi {
+            return;
+        }
+        if p.t0 >= self.t_lo && p.t1 <= self.t_hi && p.h > 0.0 {
+            self.stretch.add_piece(p.h, p.friction0, p.dev, p.dev2);
+            self.bond_force_integral += p.bond;
+            self.viscous_integral += p.viscous;
+            self.attached_integral += p.h * p.attached as f64;
+        } else {
+            self.straddling(p);
+        }
+    }
+
+    /// Nothing before the window is read.
+    #[inline]
+    fn integrals_after(&self) -> f64 {
+        self.t_lo
+    }
+
+    #[inline]
+    fn stop(&mut self) {
+        self.stretch.fold_into(&mut self.friction);
+        self.stretch = ShiftedSums::default();
+    }
+}
+
+impl WindowStats {
+    /// A piece across a window edge, clipped as its segment. Rare: kept out of line.
+    #[cold]
+    #[inline(never)]
+    fn straddling(&mut self, p: &Piece) {
+        if p.h > 0.0 {
+            self.segment(&p.segment());
+        }
     }
 }
 
@@ -128,6 +183,12 @@ impl RuptureForces {
 
 impl Observer for RuptureForces {
     const EVENTS: bool = true;
+    /// Ruptures only: engines build no event for a formation.
+    const FORMATIONS: bool = false;
+    #[inline]
+    fn integrals_after(&self) -> f64 {
+        f64::INFINITY
+    }
     #[inline]
     fn event(&mut self, e: &JunctionEvent) {
         if e.kind == EventKind::Rupture && e.t >= self.t_lo && e.t <= self.t_hi {

@@ -132,6 +132,10 @@ impl TraceWriter {
 }
 
 impl Observer for TraceWriter {
+    #[inline]
+    fn integrals_after(&self) -> f64 {
+        f64::INFINITY
+    }
     fn sample(&mut self, s: &Sample) {
         let l = &mut self.0.line;
         for (i, v) in [s.t, s.x, s.v, s.friction, s.bond_force, s.attached_fraction()].into_iter().enumerate() {
@@ -157,6 +161,10 @@ impl EventWriter {
 
 impl Observer for EventWriter {
     const EVENTS: bool = true;
+    #[inline]
+    fn integrals_after(&self) -> f64 {
+        f64::INFINITY
+    }
     #[inline]
     fn event(&mut self, e: &JunctionEvent) {
         let l = &mut self.0.line;

@@ -103,6 +103,7 @@ where
     let mut termination = Termination::ReachedEnd;
     while let Some(next) = walk.take() {
         engine.advance(next.t, obs)?;
+        obs.stop();
         let s = engine.sample();
         check_finite(&s)?;
         let pos = walk.position_mut();

@@ -8,7 +8,7 @@ use super::error::{RunError, output_error};
 use super::progress::Probe;
 use crate::observe::regime::RegimeDetector;
 use crate::observe::stats::{RuptureForces, WindowStats};
-use crate::observe::{JunctionEvent, Nothing, Observer, Sample, Segment};
+use crate::observe::{JunctionEvent, Nothing, Observer, Piece, Sample, Segment};
 use crate::output::csv::{CsvFile, EventWriter, FilePos, TraceWriter};
 use crate::scene::Scene;
 
@@ -133,6 +133,7 @@ pub(super) struct RunObservers<X> {
 impl<X: EventObservers> Observer for RunObservers<X> {
     // The trace writer and the probe want no events.
     const EVENTS: bool = CoreObservers::EVENTS || X::EVENTS;
+    const FORMATIONS: bool = (CoreObservers::EVENTS && CoreObservers::FORMATIONS) || (X::EVENTS && X::FORMATIONS);
     #[inline]
     fn event(&mut self, e: &JunctionEvent) {
         if CoreObservers::EVENTS {
@@ -148,6 +149,25 @@ impl<X: EventObservers> Observer for RunObservers<X> {
         self.trace.segment(s);
         self.events.segment(s);
         self.probe.segment(s);
+    }
+    #[inline]
+    fn piece(&mut self, p: &Piece) {
+        self.core.piece(p);
+        self.trace.piece(p);
+        self.events.piece(p);
+        self.probe.piece(p);
+    }
+    #[inline]
+    fn integrals_after(&self) -> f64 {
+        let writers = self.trace.integrals_after().min(self.events.integrals_after());
+        self.core.integrals_after().min(writers).min(self.probe.integrals_after())
+    }
+    #[inline]
+    fn stop(&mut self) {
+        self.core.stop();
+        self.trace.stop();
+        self.events.stop();
+        self.probe.stop();
     }
     fn sample(&mut self, s: &Sample) {
         self.core.sample(s);

@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 
 use indicatif::{HumanDuration, ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::observe::{Observer, Segment};
+use crate::observe::{Observer, Piece, Segment};
 
 /// A run that lasts longer than this shows progress.
 pub const SHOW_AFTER: Duration = Duration::from_millis(1500);
@@ -49,6 +49,14 @@ impl Observer for Probe {
     #[inline]
     fn segment(&mut self, s: &Segment) {
         self.0.t.store(s.t1.to_bits(), Relaxed);
+    }
+    #[inline]
+    fn piece(&mut self, p: &Piece) {
+        self.0.t.store(p.t1.to_bits(), Relaxed);
+    }
+    #[inline]
+    fn integrals_after(&self) -> f64 {
+        f64::INFINITY
     }
 }
 

@@ -46,7 +46,7 @@ pub mod slips;
 use serde::{Deserialize, Serialize};
 
 use super::Segment;
-use super::{Observer, Sample};
+use super::{Observer, Piece, Sample};
 use crate::scene::Scene;
 use buffer::Decimator;
 use numerics::{Numerics, NumericsDetector};
@@ -302,6 +302,18 @@ impl Observer for RegimeDetector {
         if let Some(d) = &mut self.numerics {
             d.step(s.friction);
         }
+    }
+    /// Pieces come from exact engines, which have no plate step to judge.
+    #[inline]
+    fn piece(&mut self, p: &Piece) {
+        if let Some(d) = &mut self.numerics {
+            d.step(p.segment().friction);
+        }
+    }
+    /// Only the plate step's verdict reads integrals.
+    #[inline]
+    fn integrals_after(&self) -> f64 {
+        if self.numerics.is_some() { f64::NEG_INFINITY } else { f64::INFINITY }
     }
     fn sample(&mut self, s: &Sample) {
         if s.t >= self.t_lo {

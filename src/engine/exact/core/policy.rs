@@ -55,11 +55,12 @@ pub fn reattached_extension(reattach: Reattach, lambda: f64, d: &Detached, tau: 
     }
 }
 
-/// Reports a junction event at absolute time `t` to `obs`, if it takes events; `tension` is
-/// the law's `f(x)`, evaluated only then.
+/// Reports a junction event at absolute time `t` to `obs`, if it takes events of its kind
+/// (formations only if [`Observer::FORMATIONS`]); `tension` is the law's `f(x)`, evaluated
+/// only then.
 #[inline]
 pub fn emit<O: Observer>(obs: &mut O, t: f64, kind: EventKind, id: u32, x: f64, tension: impl FnOnce(f64) -> f64) {
-    if O::EVENTS {
+    if O::EVENTS && (O::FORMATIONS || kind == EventKind::Rupture) {
         obs.event(&JunctionEvent { t, junction: id, kind, extension: x, tension: tension(x) });
     }
 }

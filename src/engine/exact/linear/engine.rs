@@ -32,6 +32,7 @@ use crate::engine::exact::clocks::ChannelQueue;
 use crate::engine::exact::core::junctions::refresh_clocks;
 use crate::engine::exact::core::{Core, Exact, Kernel};
 use crate::engine::exact::linear::propagator::{Integrals, LinearPlate, Trajectory};
+use crate::engine::exact::linear::report;
 use crate::engine::exact::motion::{Drive, Dynamic, PlateMotion};
 use crate::engine::exact::pick::Pick;
 use crate::engine::exact::rupture::RuptureModel;
@@ -179,7 +180,9 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
 }
 
 impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> LinearKernel<R, Q, M> {
-    /// Reports `[piece.tau0, tau1]` given the state and integrals at `tau1`, and moves there.
+    /// Reports `[piece.tau0, tau1]` given the state and integrals at `tau1` as raw integrals
+    /// ([`report::piece`]: no division), and moves there.
+    #[inline(always)]
     fn report_piece<O: Observer>(
         &mut self,
         core: &mut Core<Q>,
@@ -192,24 +195,15 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> LinearKernel<R, Q, M> {
         let pc = &self.piece;
         let h = tau1 - pc.tau0;
         if h > 0.0 {
-            let p = &core.plate;
-            // Lag w.r.t. the driver: lag(s) = lag0 + (y(s) - y0 - V s).
-            let lag0 = core.frame.lag(pc.y0, pc.tau0);
-            let inv_h = 1.0 / h;
-            let w1 = ints.i1 - 0.5 * p.v * h * h;
-            let mean_lag = lag0 + w1 * inv_h;
-            let m2 = (ints.i2 - w1 * w1 * inv_h).max(0.0);
-            let n_att = core.bags.n_attached();
-            let bond = self.kappa * (n_att as f64 * (pc.y0 + ints.i1 * inv_h) - core.bags.anchor_sum());
-            obs.segment(&Segment {
+            let start = report::Start {
                 t0: core.frame.time(pc.tau0),
-                t1: core.frame.time(tau1),
-                friction: -p.k * mean_lag,
-                friction_m2: p.k * p.k * m2,
-                bond_force: bond,
-                viscous: p.eta * (y1 - pc.y0) * inv_h,
-                attached: n_att as u64,
-            });
+                y0: pc.y0,
+                // Lag w.r.t. the driver: lag(s) = lag0 + (y(s) - y0 - V s).
+                lag0: core.frame.lag(pc.y0, pc.tau0),
+                n_att: core.bags.n_attached(),
+                anchor_sum: core.bags.anchor_sum(),
+            };
+            obs.piece(&report::piece(&start, core.frame.time(tau1), h, y1, ints, &core.plate, self.kappa));
         }
         core.tau = tau1;
         self.y = y1;
@@ -242,6 +236,13 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> LinearKernel<R, Q, M> {
         core.tau = tau1;
         self.y = y1;
         self.yd = v;
+    }
+
+    /// Whether a piece ending at local time `tau1` is reported with its integrals
+    /// ([`Observer::integrals_after`]: none in the warm-up for a run's observers).
+    #[inline(always)]
+    fn integrals<O: Observer>(core: &Core<Q>, tau1: f64, obs: &O) -> bool {
+        O::SEGMENTS && core.frame.time(tau1) > obs.integrals_after()
     }
 
     /// The plate along the current piece, as a kinematic drive.
@@ -301,7 +302,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
             return Ok(true);
         }
         let h = t - self.piece.tau0;
-        let (y, v, ints) = self.piece.traj.current().at_maybe_integrals(h, core.plate.v, O::SEGMENTS);
+        let (y, v, ints) = self.piece.traj.current().at_maybe_integrals(h, core.plate.v, Self::integrals(core, t, obs));
         if core.accepts_formation(v) {
             self.report_piece(core, t, y, v, ints, obs);
             self.check(core)?;
@@ -318,7 +319,8 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
             self.close_kinematic(core, t, obs);
         } else {
             let h = (t - self.piece.tau0).max(0.0);
-            let (y1, v1, ints) = self.piece.traj.current().at_maybe_integrals(h, core.plate.v, O::SEGMENTS);
+            let (y1, v1, ints) =
+                self.piece.traj.current().at_maybe_integrals(h, core.plate.v, Self::integrals(core, t, obs));
             self.report_piece(core, t, y1, v1, ints, obs);
         }
         self.check(core)

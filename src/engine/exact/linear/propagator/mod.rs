@@ -698,7 +698,8 @@ impl Trajectory {
         (y, v, self.integrals(h, s))
     }
 
-    /// [`Trajectory::at_with_integrals`] when `integrals` (a constant at the call site), else
+    /// [`Trajectory::at_with_integrals`] when `integrals` (a constant at the call site, or a
+    /// flag that changes rarely: a predictable branch), else
     /// [`Trajectory::at`] with zero integrals: the same state bit for bit either way, and
     /// nothing of the integrals computed for a caller that does not read them.
     #[inline(always)]

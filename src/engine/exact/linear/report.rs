@@ -1,0 +1,142 @@
+//! What a closed-form piece of the linear engine reports: its raw time integrals
+//! ([`Piece`]) from the propagator's integrals, with no division.
+//!
+//! With `w(s) = y(s) - y0 - V s` the lag is `lag0 + w(s)` and the friction `F = -K lag`, so
+//! with `i1 = int (y - y0)` and `i2 = int w^2` over `[0, h]` ([`Integrals`]):
+//!
+//! ```text
+//!     int (F - F0) = -K int w = -K (i1 - V h^2 / 2),      int (F - F0)^2 = K^2 i2,
+//!     int F_b = kappa (N_att (h y0 + i1) - h C),          int eta y' = eta (y1 - y0).
+//! ```
+
+use crate::engine::exact::linear::propagator::Integrals;
+use crate::observe::Piece;
+use crate::physics::Plate;
+
+/// Where a piece starts: absolute time `t0`, local position `y0` and lag `lag0`; the
+/// attached count and the anchors' sum `C` (constant on the piece).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Start {
+    pub t0: f64,
+    pub y0: f64,
+    pub lag0: f64,
+    pub n_att: usize,
+    pub anchor_sum: f64,
+}
+
+/// The piece `[start.t0, t1]` of length `h` (local) ending at `y1`, with the propagator's
+/// integrals `ints` (drift `V` of the plate `p`), for the law's slope `kappa`.
+#[inline(always)]
+pub(super) fn piece(start: &Start, t1: f64, h: f64, y1: f64, ints: Integrals, p: &Plate, kappa: f64) -> Piece {
+    let w1 = ints.i1 - 0.5 * p.v * h * h;
+    let n = start.n_att as f64;
+    Piece {
+        t0: start.t0,
+        t1,
+        h,
+        friction0: -p.k * start.lag0,
+        dev: -p.k * w1,
+        dev2: p.k * p.k * ints.i2,
+        bond: kappa * (n * (h * start.y0 + ints.i1) - h * start.anchor_sum),
+        viscous: p.eta * (y1 - start.y0),
+        attached: start.n_att as u64,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::exact::linear::propagator::LinearPlate;
+    use crate::observe::Observer;
+    use crate::observe::stats::WindowStats;
+    use crate::rng::{UniformSource, pcg};
+
+    /// Gauss-Legendre nodes and weights on `[-1, 1]`, five points (exact to degree 9).
+    const GL5: [(f64, f64); 5] = [
+        (0.0, 0.568_888_888_888_888_9),
+        (-0.538_469_310_105_683_1, 0.478_628_670_499_366_5),
+        (0.538_469_310_105_683_1, 0.478_628_670_499_366_5),
+        (-0.906_179_845_938_664, 0.236_926_885_056_189_1),
+        (0.906_179_845_938_664, 0.236_926_885_056_189_1),
+    ];
+
+    /// `int_0^h g(s) ds`, composite five-point Gauss-Legendre on 16 panels.
+    fn quad(h: f64, g: impl Fn(f64) -> f64) -> f64 {
+        let panels = 16;
+        let w = h / panels as f64;
+        (0..panels)
+            .map(|k| {
+                let mid = (k as f64 + 0.5) * w;
+                GL5.iter().map(|&(x, wt)| wt * g(mid + 0.5 * w * x)).sum::<f64>() * 0.5 * w
+            })
+            .sum()
+    }
+
+    /// Random plates (under- and overdamped, `M = 0` too), random chains of pieces with
+    /// random attached counts and anchors, random grid stops, a window from one piece
+    /// boundary to another (the runner stops at both): the window statistics summed from
+    /// the pieces ([`piece`], shifted sums folded at stops) equal a direct quadrature of the
+    /// piecewise path (friction's mean and standard deviation, bond and viscous force,
+    /// attached fraction).
+    #[test]
+    fn summed_pieces_equal_a_quadrature_of_the_path() {
+        let mut rng = pcg(38);
+        let mut u = || rng.uniform();
+        for case in 0..200 {
+            let (mass, eta) = if case % 10 == 0 { (0.0, 0.5 + 2.0 * u()) } else { (0.1 + 5.0 * u(), 0.01 + 3.0 * u()) };
+            let p = Plate { mass, eta, k: 0.5 + 10.0 * u(), v: 0.5 * u() };
+            let kappa = 0.1 + u();
+            // Local frame: absolute time t = epoch + tau, lag = y - V tau + lag_ref.
+            let (epoch, lag_ref) = (u() - 0.5, 3.0 * (u() - 0.5));
+            let hs: Vec<f64> = (0..8 + (u() * 20.0) as usize).map(|_| 0.01 + 0.4 * u()).collect();
+            let mut ends = Vec::new();
+            hs.iter().fold(0.0, |tau, h| {
+                ends.push(epoch + (tau + h));
+                tau + h
+            });
+            let (t_lo, t_hi) = (ends[1], ends[hs.len() - 2]);
+            let mut stats = WindowStats::new(t_lo, t_hi, 40);
+            let (mut tau, mut y, mut v) = (0.0, 2.0 * (u() - 0.5), u() - 0.5);
+            let (mut want_f, mut want_f2, mut want_b, mut want_v, mut want_a, mut covered) =
+                (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+            for &h in &hs {
+                let n_att = (u() * 40.0) as usize;
+                let anchor_sum = n_att as f64 * (y - 1.5 * u());
+                let k_eff = p.k + kappa * n_att as f64;
+                // M y'' + eta y' + k_eff y = K (V (tau + s) - lag_ref) + kappa C.
+                let a = p.k * (p.v * tau - lag_ref) + kappa * anchor_sum;
+                let tr = LinearPlate::new(p.mass, p.eta, k_eff).trajectory(y, v, a, p.k * p.v);
+                let (y1, v1, ints) = tr.at_with_integrals(h, p.v);
+                let start = Start { t0: epoch + tau, y0: y, lag0: (y - p.v * tau) + lag_ref, n_att, anchor_sum };
+                stats.piece(&piece(&start, epoch + (tau + h), h, y1, ints, &p, kappa));
+                if u() < 0.3 {
+                    stats.stop();
+                }
+                // The reference: the path on the pieces inside the window.
+                if start.t0 >= t_lo && epoch + (tau + h) <= t_hi {
+                    let f = |s: f64| -p.k * ((tr.at(s).0 - p.v * (tau + s)) + lag_ref);
+                    want_f += quad(h, f);
+                    want_f2 += quad(h, |s| f(s) * f(s));
+                    want_b += quad(h, |s| kappa * (n_att as f64 * tr.at(s).0 - anchor_sum));
+                    want_v += quad(h, |s| p.eta * tr.at(s).1);
+                    want_a += h * n_att as f64;
+                    covered += h;
+                }
+                (tau, y, v) = (tau + h, y1, v1);
+            }
+            let mean = want_f / covered;
+            let std = (want_f2 / covered - mean * mean).sqrt();
+            let scale = mean.abs() + std;
+            let ctx = format!("case {case}: {p:?}, {} pieces", hs.len());
+            assert!((stats.covered() - covered).abs() < 1e-12, "{ctx}: covered {} of {covered}", stats.covered());
+            assert!((stats.friction_mean() - mean).abs() < 1e-10 * scale, "{ctx}: {} vs {mean}", stats.friction_mean());
+            // The reference's E[F^2] - E[F]^2 loses the digits of (mean/std)^2.
+            let tol = 1e-10 * scale * scale / std;
+            assert!((stats.friction_std() - std).abs() < tol, "{ctx}: std {} vs {std}", stats.friction_std());
+            let bscale = kappa * 40.0 * 4.0;
+            assert!((stats.bond_force_mean() - want_b / covered).abs() < 1e-10 * bscale, "{ctx}: bond");
+            assert!((stats.viscous_mean() - want_v / covered).abs() < 1e-10 * (1.0 + p.eta), "{ctx}: viscous");
+            assert!((stats.attached_fraction_mean() - want_a / covered / 40.0).abs() < 1e-12, "{ctx}: attached");
+        }
+    }
+}
