@@ -31,6 +31,9 @@ pub struct Settings {
 struct Boxed<'a, 'b> {
     score: &'b Score<'a>,
     unit: f64,
+    /// An evaluation stopped the search: every cost from then on is infinite (argmin's
+    /// Nelder–Mead does not take an error from its first simplex), without evaluating.
+    stopped: std::sync::atomic::AtomicBool,
 }
 
 impl CostFunction for Boxed<'_, '_> {
@@ -39,9 +42,16 @@ impl CostFunction for Boxed<'_, '_> {
     fn cost(&self, y: &Vec<f64>) -> Result<f64, Error> {
         let clamped: Vec<f64> = y.iter().map(|v| v.clamp(0.0, 1.0)).collect();
         let outside: f64 = y.iter().zip(&clamped).map(|(a, b)| (a - b) * (a - b)).sum();
+        use std::sync::atomic::Ordering::Relaxed;
+        if self.stopped.load(Relaxed) {
+            return Ok(f64::INFINITY);
+        }
         match (self.score)(&clamped) {
             Some(s) => Ok(s + PENALTY * self.unit * outside),
-            None => Err(Error::msg("the evaluation stopped")),
+            None => {
+                self.stopped.store(true, Relaxed);
+                Ok(f64::INFINITY)
+            }
         }
     }
 }
@@ -60,8 +70,11 @@ pub fn minimise(score: &Score<'_>, start: &[f64], s: Settings) -> Option<(Vec<f6
         simplex.push(v);
     }
     let solver = NelderMead::new(simplex).with_sd_tolerance(s.tolerance).ok()?;
-    let problem = Boxed { score, unit: s.unit };
+    let problem = Boxed { score, unit: s.unit, stopped: false.into() };
     let result = Executor::new(problem, solver).configure(|st| st.max_iters(s.max_iters)).timer(false).run().ok()?;
+    if result.problem.problem.as_ref().is_none_or(|p| p.stopped.load(std::sync::atomic::Ordering::Relaxed)) {
+        return None;
+    }
     let state = result.state();
     let best: Vec<f64> = state.get_best_param()?.iter().map(|v| v.clamp(0.0, 1.0)).collect();
     let value = score(&best)?;
