@@ -89,7 +89,6 @@ impl UniformSource for ParkMiller {
     }
 }
 
-
 impl UniformSource for Pcg64 {
     /// `(m + 0.5) / 2^53` from the top 53 bits `m` of one output: in `(0, 1)`.
     #[inline]

@@ -8,6 +8,7 @@
 //! another law's physics. [`MethodVisitor`] hands the law to the engine's code for its method
 //! with that capability in its type (physics names the methods; the engines implement them).
 
+pub mod hypot;
 mod method;
 
 pub use method::{
