@@ -47,7 +47,7 @@ impl ForceLaw for Tilted {
         let f = self.kappa * s;
         (f, f * (x / l))
     }
-    /// [`ForceLaw::force_x`] four at a time: `l` from [`hypot::common`] (the C library's
+    /// [`ForceLaw::force_x`] four at a time: `l` from [`hypot::common4`] (the C library's
     /// bits, vectorised), the rest the same operations as one at a time; a group of four
     /// with an argument outside `hypot`'s common range, or a C library whose `hypot` differs
     /// ([`hypot::matches_library`]), is done one at a time.
@@ -63,11 +63,9 @@ impl ForceLaw for Tilted {
         for group in &mut groups {
             let group: &mut [f64; 4] = group.try_into().unwrap();
             let x = *group;
-            let mut in_range = true;
+            let (l, in_range) = hypot::common4(x, self.l0);
             for i in 0..4 {
-                let (l, ok) = hypot::common(x[i], self.l0);
-                in_range &= ok;
-                group[i] = self.kappa * (x[i] * x[i] / (l + self.l0)) * (x[i] / l);
+                group[i] = self.kappa * (x[i] * x[i] / (l[i] + self.l0)) * (x[i] / l[i]);
             }
             if !in_range {
                 for i in 0..4 {
