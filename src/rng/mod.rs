@@ -24,7 +24,13 @@ pub trait UniformSource {
     /// Whether [`UniformSource::raws`] gives the draws on a scale of their own (then
     /// [`UniformSource::to_uniform`] and [`UniformSource::raw_partition`] say how it maps).
     /// `false`: the raw draws are the uniforms.
-    const RAW: bool = false;
+    #[inline]
+    fn has_raw_scale() -> bool
+    where
+        Self: Sized,
+    {
+        false
+    }
     /// Fills `out` with the next `out.len()` draws `r` on the generator's raw scale: the
     /// uniforms that as many calls of [`UniformSource::uniform`] return are
     /// `Self::to_uniform(r)`, bit for bit. By default the uniforms themselves.
@@ -34,14 +40,20 @@ pub trait UniformSource {
     }
     /// The uniform of a raw draw, non-decreasing in `r`. By default `r` itself.
     #[inline]
-    fn to_uniform(r: f64) -> f64 {
+    fn to_uniform(r: f64) -> f64
+    where
+        Self: Sized,
+    {
         r
     }
     /// For a `keep` on uniforms that holds below some point and fails above it, the
     /// smallest raw value `c` (an integer) of the generator's range with
     /// `!keep(to_uniform(c))`: for every raw draw `r`, `keep(to_uniform(r))` iff `r < c`.
-    /// Only called when [`UniformSource::RAW`] is true; by default NaN.
-    fn raw_partition(_keep: impl Fn(f64) -> bool) -> f64 {
+    /// Only called when [`UniformSource::has_raw_scale`]; by default NaN.
+    fn raw_partition(_keep: impl Fn(f64) -> bool) -> f64
+    where
+        Self: Sized,
+    {
         f64::NAN
     }
 }
@@ -61,7 +73,10 @@ impl UniformSource for ParkMiller {
             *u = Self::to_uniform(*u);
         }
     }
-    const RAW: bool = true;
+    #[inline]
+    fn has_raw_scale() -> bool {
+        true
+    }
     /// The states `s` themselves (from [`ParkMiller::fill_with`], several lanes at once),
     /// as `f64` (exact: `s < 2^31`).
     #[inline]

@@ -25,7 +25,7 @@ pub trait Flip: Copy + Send + Sync + std::fmt::Debug + Serialize + serde::de::De
     /// draws that flip are those below (or above) one raw value, found by bisection.
     #[inline]
     fn raw_threshold<R: UniformSource>(threshold: f64) -> f64 {
-        if !R::RAW {
+        if !R::has_raw_scale() {
             return threshold;
         }
         match Self::RULE {
