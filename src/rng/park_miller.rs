@@ -41,6 +41,83 @@ impl ParkMiller {
     pub fn state(&self) -> u32 {
         self.state
     }
+
+    /// `a^j mod m`, the multiplier that advances the state by `j` draws at once:
+    /// `s(n + j) = a^j s(n) mod m`.
+    pub const fn jump(j: u64) -> u32 {
+        let (mut r, mut b, mut e) = (1u64, Self::MULTIPLIER as u64, j);
+        let m = Self::MODULUS as u64;
+        while e > 0 {
+            if e & 1 == 1 {
+                r = r * b % m;
+            }
+            b = b * b % m;
+            e >>= 1;
+        }
+        r as u32
+    }
+
+    /// Fills `out` with the next `out.len()` states, in order: the numbers that as many
+    /// calls of [`ParkMiller::next_state`] return, and the generator ends where they would
+    /// leave it.
+    ///
+    /// [`LANES`] lanes draw the one sequence: lane `l` holds `s(n + l)` and advances by
+    /// `a^LANES mod m` ([`ParkMiller::jump`]), so the lanes' multiplications are independent
+    /// and run side by side (vector instructions) instead of one chain of `out.len()` steps.
+    #[inline]
+    pub fn fill_states(&mut self, out: &mut [u32]) {
+        self.fill_with(out, |s| s);
+    }
+
+    /// [`ParkMiller::fill_states`] with each state converted by `convert` as it is written.
+    #[inline(always)]
+    pub fn fill_with<T: Copy>(&mut self, out: &mut [T], convert: impl Fn(u32) -> T) {
+        let whole = out.len() / LANES * LANES;
+        let (lanes_part, rest) = out.split_at_mut(whole);
+        if whole > 0 {
+            let mut lanes = [0u32; LANES];
+            for lane in &mut lanes {
+                *lane = self.next_state();
+            }
+            // Plain index loops over fixed-size arrays: they unroll into vector instructions
+            // in every profile.
+            let chunks = whole / LANES;
+            for c in 0..chunks {
+                let chunk: &mut [T; LANES] = (&mut lanes_part[c * LANES..(c + 1) * LANES]).try_into().unwrap();
+                for l in 0..LANES {
+                    chunk[l] = convert(lanes[l]);
+                }
+                // The last chunk's lanes are not advanced: the state ends at its last draw.
+                if c + 1 < chunks {
+                    for lane in &mut lanes {
+                        *lane = mul_mod(*lane, JUMP_LANES);
+                    }
+                }
+            }
+            self.state = lanes[LANES - 1];
+        }
+        for s in rest {
+            *s = convert(self.next_state());
+        }
+    }
+}
+
+/// Lanes of [`ParkMiller::fill_states`].
+pub const LANES: usize = 16;
+
+/// `a^LANES mod m`.
+const JUMP_LANES: u32 = ParkMiller::jump(LANES as u64);
+
+/// `s b mod (2^31 - 1)` for `s, b` in `[1, 2^31 - 2]`, without a division: with
+/// `p = s b = hi 2^31 + lo` (`lo < 2^31`, `hi < 2^31`), `2^31 = 1 (mod m)` gives
+/// `p = hi + lo (mod m)`, and `hi + lo < 2m` needs at most one subtraction of `m`. The result
+/// is never 0 (m is prime), so it lies in `[1, m - 1]`: the value of `p % m`.
+#[inline(always)]
+fn mul_mod(s: u32, b: u32) -> u32 {
+    let m = ParkMiller::MODULUS;
+    let p = u64::from(s) * u64::from(b);
+    let r = (p as u32 & m) + (p >> 31) as u32;
+    if r >= m { r - m } else { r }
 }
 
 #[cfg(test)]
@@ -64,6 +141,48 @@ mod tests {
         assert_eq!(g.next_state(), 16_807);
         assert_eq!(g.next_state(), 282_475_249);
         assert_eq!(g.next_state(), 1_622_650_073);
+    }
+
+    #[test]
+    fn jump_multipliers() {
+        assert_eq!(ParkMiller::jump(0), 1);
+        assert_eq!(ParkMiller::jump(1), ParkMiller::MULTIPLIER);
+        // Fermat: a^(m-1) = 1 (mod m).
+        assert_eq!(ParkMiller::jump(u64::from(ParkMiller::MODULUS) - 1), 1);
+        let mut g = ParkMiller::new(1).unwrap();
+        for _ in 0..1000 {
+            g.next_state();
+        }
+        assert_eq!(g.state(), ParkMiller::jump(1000));
+    }
+
+    #[test]
+    fn mul_mod_is_the_remainder() {
+        let m = u64::from(ParkMiller::MODULUS);
+        let edges = [1u32, 2, 16_807, 1 << 30, (1 << 31) - 3, (1 << 31) - 2];
+        let mut g = ParkMiller::new(7).unwrap();
+        let mut cases: Vec<(u32, u32)> = edges.iter().flat_map(|&a| edges.iter().map(move |&b| (a, b))).collect();
+        cases.extend((0..10_000).map(|_| (g.next_state(), g.next_state())));
+        for (a, b) in cases {
+            assert_eq!(u64::from(mul_mod(a, b)), u64::from(a) * u64::from(b) % m, "{a} * {b}");
+        }
+    }
+
+    /// Every length, from every lane offset: the same states as one draw at a time, and the
+    /// generator left where the single draws leave it.
+    #[test]
+    fn filled_states_are_the_sequence() {
+        for seed in [1, 2_147_483_646, 123_456_789] {
+            for len in (0..3 * LANES + 2).chain([1000, 1001]) {
+                let mut one = ParkMiller::new(seed).unwrap();
+                let mut many = one.clone();
+                let want: Vec<u32> = (0..len).map(|_| one.next_state()).collect();
+                let mut got = vec![0; len];
+                many.fill_states(&mut got);
+                assert_eq!(got, want, "seed {seed}, {len} draws");
+                assert_eq!(many, one);
+            }
+        }
     }
 
     #[test]

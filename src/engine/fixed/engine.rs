@@ -75,6 +75,10 @@ fn select(mask: u64, a: f64, b: f64) -> f64 {
     f64::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
 }
 
+/// Junctions per block of [`FixedEngine::junction_pass`]: the block's uniforms and terms
+/// of `F_b` (4 KiB) stay in the L1 cache.
+const BLOCK: usize = 256;
+
 /// What one pass over the junctions found.
 #[derive(Clone, Copy, Debug)]
 struct Pass {
@@ -177,11 +181,22 @@ where
     /// pending update (4) to each `x_i`:
     /// `xi_i ~ U(0,1)`, one per junction in index order; `k = q_i ? k_off(f(x_i)) : k_on`;
     /// flip per `F`; re-attachment rule; `F_b = sum_i q_i f^x(x_i)` with the new `q`.
+    ///
+    /// The junctions go in blocks of [`BLOCK`]: the block's draws are made at once, on the
+    /// generator's raw scale ([`UniformSource::raws`]: Park-Miller's states, several lanes
+    /// at once, the same numbers in the same order), then each junction is updated with no
+    /// dependence on its neighbours (the compiler vectorises it), and last the block's
+    /// terms of `F_b` are added to the sum one by one in index order, as a
+    /// junction-by-junction loop adds them. The thresholds shared by many junctions are
+    /// moved to the raw scale once per step ([`Flip::raw_threshold`], exact), so a draw is
+    /// compared without its division; a weak bond's own threshold is compared with the
+    /// draw's uniform ([`UniformSource::to_uniform`]).
     #[inline(always)]
     fn junction_pass<O: Observer>(&mut self, t: f64, on_threshold: f64, obs: &mut O) -> Pass {
         let (dx, relax) = (self.pending_dx, self.pending_relax);
         let (law, bond, dt) = (self.law, self.bond, self.dt);
-        let off_threshold = self.strong_off_threshold;
+        let off_cut = F::raw_threshold::<R>(self.strong_off_threshold);
+        let on_cut = F::raw_threshold::<R>(on_threshold);
         let unstretched = self.unstretched;
         let rng = &mut self.rng;
         let mut sum = 0.0;
@@ -191,40 +206,60 @@ where
         // Every choice that depends on it is a bitwise select under a mask computed from
         // the stored byte (`0` or `!0`), which the compiler cannot turn back into a branch.
         let keep_formed = if unstretched { 0 } else { !0u64 };
-        for (i, (qi, xi)) in self.q.iter_mut().zip(self.x.iter_mut()).enumerate() {
-            let q_old = *qi;
-            let was = mask(q_old);
-            // Step n-1's update (4): x_i(t_n).
-            let x_n = select(was, *xi + dx, *xi * relax);
-            // Rates from the state at t_n; strong-bond thresholds are hoisted.
-            let threshold = if B::IS_WEAK {
-                if q_old != 0 { F::threshold(bond.k_off(law.tension(x_n)) * dt) } else { on_threshold }
-            } else {
-                select(was, off_threshold, on_threshold)
-            };
-            let flip = F::flips(rng.uniform(), threshold);
-            let q_new = q_old ^ u8::from(flip);
-            let now = mask(q_new);
-            let formed = now & !was;
-            // Re-attachment: `x_i = 0` for a formation when `reattach = "unstretched"`.
-            let x_new = f64::from_bits(x_n.to_bits() & (keep_formed | !formed));
-            *xi = x_new;
-            *qi = q_new;
-            ruptures += u64::from(q_old & !q_new);
-            formations += u64::from(q_new & !q_old);
-            if L::IS_LINEAR {
-                sum += select(now, x_new, 0.0);
-            } else if q_new != 0 {
-                sum += law.force_x(x_new);
+        let mut draws = [0.0; BLOCK];
+        // Linear law: `q_i x_i` per junction. Other laws: the attached junctions' `x_i`,
+        // packed in index order, then their `f^x(x_i)`.
+        let mut terms = [0.0; BLOCK];
+        for (block, (qs, xs)) in self.q.chunks_mut(BLOCK).zip(self.x.chunks_mut(BLOCK)).enumerate() {
+            let draws = &mut draws[..qs.len()];
+            rng.raws(draws);
+            let mut packed = 0;
+            for (j, ((qi, xi), &r)) in qs.iter_mut().zip(xs.iter_mut()).zip(draws.iter()).enumerate() {
+                let q_old = *qi;
+                let was = mask(q_old);
+                // Step n-1's update (4): x_i(t_n).
+                let x_n = select(was, *xi + dx, *xi * relax);
+                // Rates from the state at t_n; strong-bond thresholds are hoisted.
+                let flip = if B::IS_WEAK && q_old != 0 {
+                    F::flips(R::to_uniform(r), F::threshold(bond.k_off(law.tension(x_n)) * dt))
+                } else {
+                    F::flips(r, select(was, off_cut, on_cut))
+                };
+                let q_new = q_old ^ u8::from(flip);
+                let now = mask(q_new);
+                let formed = now & !was;
+                // Re-attachment: `x_i = 0` for a formation when `reattach = "unstretched"`.
+                let x_new = f64::from_bits(x_n.to_bits() & (keep_formed | !formed));
+                *xi = x_new;
+                *qi = q_new;
+                ruptures += u64::from(q_old & !q_new);
+                formations += u64::from(q_new & !q_old);
+                if L::IS_LINEAR {
+                    // A detached junction adds +0.0, which leaves the sum's bits unchanged
+                    // (the sum starts at +0.0, so it is never -0.0).
+                    terms[j] = select(now, x_new, 0.0);
+                } else {
+                    terms[packed] = x_new;
+                    packed += usize::from(q_new);
+                }
+                if O::EVENTS && flip {
+                    obs.event(&JunctionEvent {
+                        t,
+                        junction: (block * BLOCK + j) as u32,
+                        kind: if q_old != 0 { EventKind::Rupture } else { EventKind::Formation },
+                        extension: x_new,
+                        tension: law.tension(x_new),
+                    });
+                }
             }
-            if O::EVENTS && flip {
-                obs.event(&JunctionEvent {
-                    t,
-                    junction: i as u32,
-                    kind: if q_old != 0 { EventKind::Rupture } else { EventKind::Formation },
-                    extension: x_new,
-                    tension: law.tension(x_new),
-                });
+            let terms = if L::IS_LINEAR {
+                &terms[..qs.len()]
+            } else {
+                law.force_x_many(&mut terms[..packed]);
+                &terms[..packed]
+            };
+            for &term in terms {
+                sum += term;
             }
         }
         self.pending_dx = 0.0;
@@ -246,21 +281,39 @@ where
         if L::IS_LINEAR {
             self.law.force_x(pass.attached_extension + self.attached as f64 * dx)
         } else {
-            let law = self.law;
-            self.q.iter().zip(&self.x).filter(|(q, _)| **q != 0).fold(0.0, |s, (_, &x)| s + law.force_x(x + dx))
+            self.attached_force(dx)
         }
     }
 
     /// `F_b` at `t_n` from `(q, x)` before step `n`'s flips.
     fn bond_force_now(&self) -> f64 {
         let dx = self.pending_dx;
-        let attached = self.q.iter().zip(&self.x).filter(|(q, _)| **q != 0).map(|(_, &x)| x + dx);
         if L::IS_LINEAR {
-            self.law.force_x(attached.fold(0.0, |s, x| s + x))
+            // Detached junctions add +0.0: the sum of the attached `x_i + dX` in index order.
+            let sum = self.q.iter().zip(&self.x).fold(0.0, |s, (&q, &x)| s + select(mask(q), x + dx, 0.0));
+            self.law.force_x(sum)
         } else {
-            let law = self.law;
-            attached.fold(0.0, |s, x| s + law.force_x(x))
+            self.attached_force(dx)
         }
+    }
+
+    /// `sum_i q_i f^x(x_i + dx)`, added in index order: the attached junctions' `x_i + dx`
+    /// packed block by block and their forces evaluated together ([`ForceLaw::force_x_many`]).
+    fn attached_force(&self, dx: f64) -> f64 {
+        let mut packed = [0.0; BLOCK];
+        let mut sum = 0.0;
+        for (qs, xs) in self.q.chunks(BLOCK).zip(self.x.chunks(BLOCK)) {
+            let mut k = 0;
+            for (&q, &x) in qs.iter().zip(xs) {
+                packed[k] = x + dx;
+                k += usize::from(q);
+            }
+            self.law.force_x_many(&mut packed[..k]);
+            for &f in &packed[..k] {
+                sum += f;
+            }
+        }
+        sum
     }
 
     /// The friction (driving-spring) force `F = K (V t_n - X_n)`.

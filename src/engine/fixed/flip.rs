@@ -7,6 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::rng::UniformSource;
 use crate::scene::FlipRule;
 
 /// A flip rule, chosen once per run (a type parameter of the engine).
@@ -17,6 +18,24 @@ pub trait Flip: Copy + Send + Sync + std::fmt::Debug + Serialize + serde::de::De
     fn threshold(k_dt: f64) -> f64;
     /// Whether a junction with uniform `xi` flips against `threshold`.
     fn flips(xi: f64, threshold: f64) -> bool;
+    /// The threshold on a generator's raw draws that flips the same draws as `threshold`
+    /// does on their uniforms: `flips(r, raw_threshold::<R>(th)) == flips(R::to_uniform(r),
+    /// th)` for every raw draw `r` of `R` ([`UniformSource::raws`]). Exact (no rounding
+    /// argument): `flips` is monotone in `xi` and `to_uniform` non-decreasing, so the
+    /// draws that flip are those below (or above) one raw value, found by bisection.
+    #[inline]
+    fn raw_threshold<R: UniformSource>(threshold: f64) -> f64 {
+        if !R::has_raw_scale() {
+            return threshold;
+        }
+        match Self::RULE {
+            // `xi > th`: the draws that do not flip are those below the cut; a raw draw
+            // (an integer) flips iff it exceeds `cut - 1`.
+            FlipRule::AsPrinted => R::raw_partition(|u| !Self::flips(u, threshold)) - 1.0,
+            // `xi < th`: the draws that flip are those below the cut.
+            _ => R::raw_partition(|u| Self::flips(u, threshold)),
+        }
+    }
     /// The one-step flip probability `P(flips(xi, threshold(k dt)))` for `xi ~ U(0, 1)`.
     #[inline]
     fn probability(k_dt: f64) -> f64 {
@@ -109,6 +128,32 @@ mod tests {
         assert_eq!(ExponentialFlip::threshold(f64::INFINITY), 1.0);
         assert_eq!(ExponentialFlip::threshold(0.0), 0.0);
         assert!(ExponentialFlip::flips(0.39, th) && !ExponentialFlip::flips(0.40, th));
+    }
+
+    /// Park-Miller: every state flips against the raw threshold exactly when its uniform
+    /// flips against the threshold, checked at the states around each cut.
+    #[test]
+    fn raw_thresholds_flip_the_same_draws() {
+        use crate::rng::ParkMiller;
+        fn check<F: Flip>(k_dt: f64) {
+            let th = F::threshold(k_dt);
+            let raw = F::raw_threshold::<ParkMiller>(th);
+            let m = f64::from(ParkMiller::MODULUS);
+            let near = (raw.max(1.0) - 3.0).max(1.0);
+            let states = (0..8).map(|i| near + f64::from(i)).chain([1.0, 2.0, m - 2.0, m - 1.0]);
+            for r in states.filter(|&r| (1.0..m).contains(&r)) {
+                let want = F::flips(ParkMiller::to_uniform(r), th);
+                assert_eq!(F::flips(r, raw), want, "{:?} k dt = {k_dt}, state {r}, raw threshold {raw}", F::RULE);
+            }
+        }
+        let mut g = ParkMiller::new(3).unwrap();
+        let mut cases = vec![0.0, 1e-12, 0.01, 0.1, 0.5, 1.0, 2.0, f64::INFINITY, f64::NAN];
+        cases.extend((0..100).map(|_| g.uniform()));
+        for k_dt in cases {
+            check::<LinearFlip>(k_dt);
+            check::<ExponentialFlip>(k_dt);
+            check::<AsPrintedFlip>(k_dt);
+        }
     }
 
     #[test]

@@ -8,6 +8,7 @@
 //! another law's physics. [`MethodVisitor`] hands the law to the engine's code for its method
 //! with that capability in its type (physics names the methods; the engines implement them).
 
+pub mod hypot;
 mod method;
 
 pub use method::{
@@ -117,6 +118,14 @@ pub trait ForceLaw: Copy + Send + Sync + std::fmt::Debug + Serialize + Deseriali
     #[inline]
     fn tension_and_force_x(&self, x: f64) -> (f64, f64) {
         (self.tension(x), self.force_x(x))
+    }
+    /// Replaces every `x` of `xs` by `f^x(x)`: bit for bit [`ForceLaw::force_x`] one by one
+    /// (a law may evaluate several at once).
+    #[inline]
+    fn force_x_many(&self, xs: &mut [f64]) {
+        for x in xs {
+            *x = self.force_x(*x);
+        }
     }
     /// `d f^x / dx`, the junction's horizontal stiffness.
     fn stiffness_x(&self, x: f64) -> f64;
