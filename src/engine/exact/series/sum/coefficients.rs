@@ -195,7 +195,7 @@ pub fn tilted_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
 
 /// The first `M` coefficients of `sum_(k<=p) (a_k + al_k) z^k` re-centred at `z = t0`, all
 /// side by side as polynomials in `t0` ([`recentred_in`]), in 256-bit vectors where the
-/// processor has AVX2 (the same operations, so the same values bit for bit; [`direct_sums`]).
+/// processor has AVX2 (the same operations, so the same values bit for bit; [`direct_sums`](super::graded::direct_sums)).
 #[inline]
 pub(super) fn recentred<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: usize, t0: f64) -> [f64; M] {
     #[cfg(target_arch = "x86_64")]

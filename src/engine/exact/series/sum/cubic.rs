@@ -2,7 +2,7 @@
 //! steps instead of the series when their excursion is small.
 
 /// The cubic Taylor polynomial of the series about a point `at`,
-/// `S(z) ~ c0 + c1 e + c2 e^2 + c3 e^3`, `e = z - at` ([`SeriesSum::taylor_at`]).
+/// `S(z) ~ c0 + c1 e + c2 e^2 + c3 e^3`, `e = z - at` ([`super::SeriesSum::taylor_at`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LocalCubic {
     pub at: f64,

@@ -3,7 +3,7 @@
 //! **Graded orders.** Direct mode's order `p` is set by the worst junction, one at `x0 = 0`
 //! (`R = l0`), whose expansion converges with ratio `rho/l0 = 1/4`. A junction at
 //! `R = sqrt(x0^2 + l0^2)` converges faster: by the coefficient bound of the module doc of
-//! [`super::sum`], `|phi_k(x0)| rho^k <= kappa l0 (l0/R) r^k` with `r = rho/R`, so its
+//! [`super`], `|phi_k(x0)| rho^k <= kappa l0 (l0/R) r^k` with `r = rho/R`, so its
 //! expansion truncated at order `m` leaves at most
 //!
 //! - `kappa l0 (l0/R) r^(m+1)/(1-r)` in `S`, and
@@ -183,7 +183,7 @@ unsafe fn direct_sums_avx2(e: &[f64], base_off: f64, g: &Grades, law: &Tilted) -
     direct_sums_in(e, base_off, g, law)
 }
 
-/// Whether `phi_taylor_lanes` takes `x` (module doc of [`super::sum`]: `max(|x|, l0)` in
+/// Whether `phi_taylor_lanes` takes `x` (module doc of [`super`]: `max(|x|, l0)` in
 /// `[1e-150, 1e150]`).
 #[inline(always)]
 fn in_range(x: f64, l0: f64) -> bool {
