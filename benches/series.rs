@@ -1,4 +1,4 @@
-//! Cost of the tilted law's bond-force series (`engine::exact::series::SeriesSum`, src/engine/exact/series/sum.rs):
+//! Cost of the tilted law's bond-force series (`engine::exact::series::SeriesSum`, src/engine/exact/series/sum/mod.rs):
 //! add + remove of one junction, `force_and_stiffness`, `integral`, and a re-base, with
 //! 1e5 anchors spread uniformly over 25 l0 (100 bins of width l0/4), default `rtol = 1e-10`
 //! (`p = 17`); the direct O(N) sum over the same anchors for scale. Direct mode (the

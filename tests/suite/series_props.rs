@@ -1,5 +1,5 @@
 //! Property tests of `stickslip::engine::exact::series::SeriesSum` (the tilted law's bond force as a
-//! series, `src/engine/exact/series/sum.rs`) against a direct double-double sum over the anchors.
+//! series, `src/engine/exact/series/sum/mod.rs`) against a direct double-double sum over the anchors.
 //!
 //! Random laws, anchor clouds (clustered at the plate, spread over tens of `l0`, or far) and
 //! random sequences of add / remove / rebase / shift; after every operation `S`, `dS/dy` and

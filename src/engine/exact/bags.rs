@@ -165,20 +165,6 @@ impl Bags {
     }
 }
 
-/// Asks the processor to bring `r`'s cache line in ahead of its use (x86-64's `prefetcht0`;
-/// a no-op elsewhere). A hint only: it never faults and changes no result.
-#[inline(always)]
-pub fn prefetch<T>(r: &T) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        // SAFETY: `r` is a valid reference, and a prefetch reads nothing the program sees.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>((r as *const T).cast()) }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = r;
-}
-
 /// Asks the kernel to back a large buffer with transparent huge pages: uniform picks touch
 /// random pages of the bags, and with 4 KiB pages most of them also miss the TLB.
 /// Linux only; a no-op elsewhere and for small buffers; failure is harmless.

@@ -23,6 +23,7 @@ pub mod direct;
 pub mod frame;
 pub mod horizon;
 pub mod linear;
+mod linear_path;
 pub mod motion;
 pub mod pick;
 pub mod rupture;

@@ -2,7 +2,7 @@
 //! type parameter of [`super::ExactLinear`].
 //!
 //! - [`Dynamic`]: the plate equation `M y'' + eta y' + (K + kappa N_att) y = a + b s`, in
-//!   closed form ([`Trajectory`]).
+//!   closed form ([`Trajectory`]; its [`PlatePath`] is in `linear_path.rs`).
 //! - [`Kinematic`] (`plate.kinematic = true`): the plate follows its drive, `y = V tau` in
 //!   local coordinates; no plate equation, no propagator, no integrals of it.
 //!
@@ -13,10 +13,10 @@
 //! `if` vanishes) and the kinematic engine without any of the propagator's work. The rupture
 //! models see the plate through [`PlatePath`] (position and bounds over a horizon), which both
 //! a [`Trajectory`] and a [`Drive`] implement, monomorphised per run.
+//!
+//! [`Trajectory`]: crate::engine::exact::linear::propagator::Trajectory
 
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
-
-use crate::engine::exact::linear::propagator::Trajectory;
 
 /// The plate's position along the current piece, as the rupture models need it.
 pub trait PlatePath {
@@ -24,17 +24,6 @@ pub trait PlatePath {
     fn position(&self, s: f64) -> f64;
     /// Proven bounds `(y_lo, y_hi)` of `y` over `[0, h]`.
     fn bounds(&self, h: f64) -> (f64, f64);
-}
-
-impl PlatePath for Trajectory {
-    #[inline(always)]
-    fn position(&self, s: f64) -> f64 {
-        self.at(s).0
-    }
-    #[inline(always)]
-    fn bounds(&self, h: f64) -> (f64, f64) {
-        Trajectory::bounds(self, h)
-    }
 }
 
 /// A plate at constant speed: `y(s) = y0 + v s`.

@@ -24,9 +24,14 @@ use crate::engine::exact::rupture::{Bracket, EXPONENT_CAP, RuptureModel, WeakRup
 use crate::physics::{ForceLaw, Tilted};
 use crate::rng::{Pcg64, UniformSource};
 
-/// Target spread `a (y_hi - y_lo)` of a step (weak bonds): acceptance stays above `e^-1 / 2`.
-pub const SPREAD: f64 = 1.0;
-/// Largest `a = beta dx kappa` whose spread `SPREAD / a` a step is made to keep.
+/// A step's spread: the largest `a (y_hi - y_lo)` (dimensionless, `a = beta dx kappa`) over
+/// the plate's range `[y_lo, y_hi]` within one plate step of the tilted law (weak bonds), so
+/// a step travels at most `STEP_SPREAD / a` and a candidate's acceptance stays above
+/// `e^-1 / 2`. (The linear law's thinning horizon has its own target,
+/// [`horizon::SPREAD`](crate::engine::exact::horizon::SPREAD), over a horizon of its
+/// closed-form trajectory.)
+pub const STEP_SPREAD: f64 = 1.0;
+/// Largest `a = beta dx kappa` whose spread `STEP_SPREAD / a` a step is made to keep.
 const A_RESOLVABLE: f64 = 1e12;
 
 /// How attached junctions rupture, for the series engine.
@@ -202,7 +207,7 @@ impl Kinetics for WeakKinetics {
     fn max_spread(&self) -> f64 {
         // Beyond A_RESOLVABLE no plate step can keep the spread (rates change by e over less
         // than 1e-12 lengths): no limit, and the envelope overflows into immediate ruptures.
-        if self.a() > 0.0 && self.a() <= A_RESOLVABLE { SPREAD / self.a() } else { f64::INFINITY }
+        if self.a() > 0.0 && self.a() <= A_RESOLVABLE { STEP_SPREAD / self.a() } else { f64::INFINITY }
     }
     fn thin<F: FnMut(f64) -> Result<f64, EngineError>>(
         &mut self,

@@ -11,11 +11,11 @@
 //! (docs/engines.md, "Plate between events (tilted law): a series, Taylor steps and a stiff integrator").
 //!
 //! Layout: `engine` (the kernel of the exact core: the series, its error bound, the plate
-//! step with thinning), `motion` (the plate), `kinetics` (ruptures), `sum` (the series),
-//! `graded` (direct mode's per-junction orders and re-base).
+//! step with thinning), `motion` (the plate), `kinetics` (ruptures), `sum` (the series: its
+//! coefficients, double-double arithmetic, the bins' and direct mode's stores with direct
+//! mode's graded orders and re-base, the error bound, the wire format and the local cubic).
 
 mod engine;
-mod graded;
 pub mod kinetics;
 pub mod motion;
 pub mod sum;

@@ -3,7 +3,7 @@
 //! **Graded orders.** Direct mode's order `p` is set by the worst junction, one at `x0 = 0`
 //! (`R = l0`), whose expansion converges with ratio `rho/l0 = 1/4`. A junction at
 //! `R = sqrt(x0^2 + l0^2)` converges faster: by the coefficient bound of the module doc of
-//! [`super::sum`], `|phi_k(x0)| rho^k <= kappa l0 (l0/R) r^k` with `r = rho/R`, so its
+//! [`super`], `|phi_k(x0)| rho^k <= kappa l0 (l0/R) r^k` with `r = rho/R`, so its
 //! expansion truncated at order `m` leaves at most
 //!
 //! - `kappa l0 (l0/R) r^(m+1)/(1-r)` in `S`, and
@@ -34,7 +34,9 @@
 
 use std::sync::OnceLock;
 
-use super::sum::{BLOCK, LANES, PMAX, Q_D, dd_add, dd_add_all, phi_taylor, phi_taylor_lanes, tails_at, two_sum};
+use super::bound::{OP_ROUNDOFF, Q_D, tails_at};
+use super::coefficients::{LANES, PMAX, phi_taylor, phi_taylor_lanes};
+use super::dd::{dd_add, dd_add_all, two_sum};
 use crate::physics::Tilted;
 
 /// `R/l0` beyond which no search is made (an order that needs more keeps the next one).
@@ -48,6 +50,16 @@ const BUCKETS: usize = 81 << SUB_BITS;
 /// The bucket index of `u / l0^2 = 1` in the bits of an `f64` shifted right by
 /// `52 - SUB_BITS` (exponent bias 1023).
 const FIRST: usize = 1023 << SUB_BITS;
+/// Batches summed in plain `f64` (per lane and coefficient) between two folds into the
+/// double-double series: each lane's block sum has at most `BLOCK` terms.
+pub(super) const BLOCK: usize = 8;
+/// Round-off of one present junction's term in a direct re-base, in units of
+/// `eps kappa l0 / (1 - q)`: its coefficients (`OP_ROUNDOFF`, which covers `phi_taylor` at
+/// `rho = l0/4`: unit test `direct_coefficients_roundoff`) plus the plain-`f64` block sums,
+/// `(BLOCK - 1) u` per lane and `2 u` for adding the four lanes (`u = eps/2`; first order,
+/// Higham's bound for recursive summation), the fold into the double-double series exact
+/// to `O(eps^2)`.
+pub(super) const REBUILD_ROUNDOFF: f64 = OP_ROUNDOFF + 0.5 * (BLOCK as f64 + 1.0);
 
 /// Per-junction orders of direct mode at order `p`, looked up by the bucket of
 /// `u / l0^2 = (x^2 + l0^2) / l0^2` (sixteen to an octave): each bucket holds the
@@ -171,7 +183,7 @@ unsafe fn direct_sums_avx2(e: &[f64], base_off: f64, g: &Grades, law: &Tilted) -
     direct_sums_in(e, base_off, g, law)
 }
 
-/// Whether `phi_taylor_lanes` takes `x` (module doc of [`super::sum`]: `max(|x|, l0)` in
+/// Whether `phi_taylor_lanes` takes `x` (module doc of [`super`]: `max(|x|, l0)` in
 /// `[1e-150, 1e150]`).
 #[inline(always)]
 fn in_range(x: f64, l0: f64) -> bool {

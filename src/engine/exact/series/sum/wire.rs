@@ -1,0 +1,110 @@
+//! The series' serialised form (checkpoints): [`Wire`], and the conversions that drop and
+//! rebuild what is derived (the grid-index cache, direct mode's position table and orders).
+
+use serde::{Deserialize, Serialize};
+
+use super::SeriesSum;
+use super::bins::{Bin, Dense};
+use super::coefficients::PMAX;
+use super::direct::{Direct, DirectWire};
+use super::graded::Grades;
+use crate::physics::Tilted;
+
+/// Serialized form of `SeriesSum`. `n_rb` and `resid` are absent from checkpoints written
+/// before the O(p) update: such a state is read as re-based with every present junction
+/// counted through the bins (`n_rb = n`, `resid = 0`), which is what it was. Direct mode
+/// writes `direct` and no `bins`, `free`, `index` (a reader that knows only the bins then
+/// refuses the state instead of misreading it); bins mode writes the same bytes as before
+/// direct mode existed.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct Wire {
+    law: Tilted,
+    p: usize,
+    base: f64,
+    origin: f64,
+    base_off: f64,
+    n: u64,
+    x0: [f64; 2],
+    a: [f64; PMAX],
+    al: [f64; PMAX],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    bins: Option<Vec<Bin>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    free: Option<Vec<u32>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    index: Option<Vec<(i64, u32)>>,
+    roff: f64,
+    spread: f64,
+    #[serde(default)]
+    n_rb: Option<u64>,
+    #[serde(default)]
+    resid: u64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    direct: Option<DirectWire>,
+    /// Direct mode's series holds each junction to its own order (graded orders). Absent
+    /// from checkpoints written before them, whose series is then rebuilt on reading.
+    #[serde(default)]
+    graded: bool,
+}
+
+impl From<Wire> for SeriesSum {
+    fn from(w: Wire) -> SeriesSum {
+        let mut s = SeriesSum {
+            law: w.law,
+            p: w.p.min(PMAX - 1),
+            base: w.base,
+            origin: w.origin,
+            base_off: w.base_off,
+            n: w.n,
+            x0: w.x0,
+            a: w.a,
+            al: w.al,
+            bins: w.bins.unwrap_or_default(),
+            free: w.free.unwrap_or_default(),
+            index: w.index.unwrap_or_default(),
+            roff: w.roff,
+            spread: w.spread,
+            n_rb: w.n_rb.unwrap_or(w.n),
+            resid: w.resid,
+            dense: Dense::default(),
+            direct: w.direct.map(|d| Direct::from_wire(d, Grades::new(w.law.l0, w.p.min(PMAX - 1)))),
+        };
+        if s.direct.is_some() && !w.graded {
+            // Written with every junction to order `p`: rebuilt at its base with graded
+            // orders, so that a removal subtracts what the series holds.
+            s.rebase_direct(s.base);
+        }
+        if let Some(&(j, slot)) = s.index.last() {
+            let index = std::mem::take(&mut s.index);
+            s.dense.set(j, slot, &index);
+            s.index = index;
+        }
+        s
+    }
+}
+
+impl From<SeriesSum> for Wire {
+    fn from(s: SeriesSum) -> Wire {
+        let bins_mode = s.direct.is_none();
+        Wire {
+            law: s.law,
+            p: s.p,
+            base: s.base,
+            origin: s.origin,
+            base_off: s.base_off,
+            n: s.n,
+            x0: s.x0,
+            a: s.a,
+            al: s.al,
+            bins: bins_mode.then_some(s.bins),
+            free: bins_mode.then_some(s.free),
+            index: bins_mode.then_some(s.index),
+            roff: s.roff,
+            spread: s.spread,
+            n_rb: Some(s.n_rb),
+            resid: s.resid,
+            direct: s.direct.map(|d| DirectWire { e: d.e, handle: d.handle, free: d.free }),
+            graded: !bins_mode,
+        }
+    }
+}
