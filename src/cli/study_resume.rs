@@ -70,6 +70,9 @@ fn rerun(dir: &Path, header: &Header) -> Result<ExitCode, String> {
             args.out = Some(dir.to_path_buf());
             Ok(fit::fit(&args))
         }
-        _ => Err(format!("its command line is not a sweep, a compare, a friction law or a fit ({})", header.study.as_str())),
+        _ => Err(format!(
+            "its command line is not a sweep, a compare, a friction law or a fit ({})",
+            header.study.as_str()
+        )),
     }
 }
