@@ -4,8 +4,9 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use super::run::{load_scene, prepare_out_dir};
-use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
+use super::args::load_scene;
+use super::args::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
+use super::out_dir::prepare_out_dir;
 use crate::estimate::{self, BASELINE_BYTES, bytes};
 use crate::output::atomic::write_whole;
 use crate::studies::scaling::{self, Row, Spec};

@@ -3,8 +3,10 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use super::run::{load_scene, prepare_out_dir};
-use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail, study};
+use super::args::load_scene;
+use super::args::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
+use super::out_dir::prepare_out_dir;
+use super::study;
 use crate::studies::compare::{JobRecord, Plan, StudyError, default_dts, report};
 use crate::studies::journal::{Header, StudyKind};
 

@@ -9,8 +9,10 @@ use std::process::ExitCode;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::run::{load_scene, prepare_out_dir};
-use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail, signals, study};
+use super::args::load_scene;
+use super::args::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
+use super::out_dir::prepare_out_dir;
+use super::{signals, study};
 use crate::fit::data::DataSet;
 use crate::fit::free::parse_free;
 use crate::fit::model::{Evaluation, FitError, Objective, PoolSimulator, Problem};

@@ -9,8 +9,8 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use super::args::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
 use super::sweep::{AxisArgs, Finished, SweepArgs, run_study};
-use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
 use crate::studies::law::{
     self, DEFAULT_DEGREE, FrictionLaw, LawInput, PointRuns, ScaleArgs, T_FIELD, V_FIELD, from_outcome, read_sweep_dir,
     vt_axes,
@@ -98,7 +98,7 @@ pub(crate) fn friction_law(args: &FrictionLawArgs) -> ExitCode {
                 Err(e) => return fail(EXIT_BAD_INPUT, e),
             };
             let out = args.out.clone().unwrap_or_else(|| dir.clone());
-            let held = match super::run::prepare_out_dir(&out) {
+            let held = match super::out_dir::prepare_out_dir(&out) {
                 Ok(h) => h,
                 Err(m) => return fail(EXIT_BAD_INPUT, m),
             };

@@ -1,12 +1,13 @@
 //! `stickslip resume DIR`: continues a killed run from the checkpoint in its output
-//! directory, or a killed study from its journal ([`super::study_resume`]) (docs/runs.md).
+//! directory, (a killed study resumes from its journal: [`super::study_resume`]) (docs/runs.md).
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use super::run::{draw_plot, prepare_out_dir, summary_lines};
+use super::args::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, fail};
+use super::out_dir::prepare_out_dir;
+use super::run::{draw_plot, summary_lines};
 use super::stdout::emit;
-use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, fail};
 use crate::output::Summary;
 use crate::runner::{self, Resumed, RunOptions};
 use crate::scene::Scene;
@@ -32,10 +33,8 @@ pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
     Ok(v)
 }
 
+/// Resumes a run (the dispatch tries [`super::study_resume::resume`] first).
 pub(crate) fn resume(args: &ResumeArgs) -> ExitCode {
-    if let Some(code) = super::study_resume::resume(&args.dir, args.checkpoint_every) {
-        return code;
-    }
     let opts = RunOptions { checkpoint_every: args.checkpoint_every, progress: true, stop: None };
     // A directory that cannot be written, or that another run holds, is reported before
     // anything else is done; it is held until the run is done.

@@ -9,7 +9,7 @@
 use std::io::{self, Write};
 use std::process::ExitCode;
 
-use super::{EXIT_RUN_FAILED, fail};
+use super::args::{EXIT_RUN_FAILED, fail};
 
 /// Exit status a shell reports for a process ended by `SIGPIPE` (128 + 13): what [`emit`]
 /// returns if a closed pipe reaches it as an error (when `SIGPIPE` could not be restored).

@@ -7,7 +7,8 @@ use std::process::ExitCode;
 
 use serde::de::DeserializeOwned;
 
-use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, fail, signals};
+use super::args::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, fail};
+use super::signals;
 use crate::studies::execute::{Continuation, Interrupted};
 use crate::studies::journal::{self, Header, Invocation, Journal, Opened, StudyKind};
 

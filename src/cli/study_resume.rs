@@ -8,7 +8,9 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
-use super::{Cli, Command, EXIT_BAD_INPUT, compare, fail, fit, friction_law, sweep};
+use super::args::{EXIT_BAD_INPUT, clap_one_line, fail};
+use super::command::{Cli, Command};
+use super::{compare, fit, friction_law, sweep};
 use crate::studies::journal::{self, Header};
 
 /// Resumes the study in `dir` if it holds a study journal; `None` if it holds none (a
@@ -47,7 +49,7 @@ fn rerun(dir: &Path, header: &Header) -> Result<ExitCode, String> {
         ));
     };
     let cli = Cli::try_parse_from(&command.argv)
-        .map_err(|e| format!("its command line does not parse: {}", super::clap_one_line(&e)))?;
+        .map_err(|e| format!("its command line does not parse: {}", clap_one_line(&e)))?;
     match cli.command {
         Command::Sweep(mut args) => {
             args.scene.scene = command.cwd.join(&args.scene.scene);

@@ -13,8 +13,10 @@ use std::process::ExitCode;
 use clap::{Arg, ArgAction, ArgMatches};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::run::{OutDir, load_scene, prepare_out_dir};
-use super::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail, study};
+use super::args::load_scene;
+use super::args::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
+use super::out_dir::{OutDir, prepare_out_dir};
+use super::study;
 use crate::output::Summary;
 use crate::scene::error::printable;
 use crate::studies::journal::{Header, StudyKind};

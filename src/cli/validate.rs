@@ -3,8 +3,8 @@
 use std::fmt::Write as _;
 use std::process::ExitCode;
 
-use super::SceneArgs;
-use super::run::load_scene;
+use super::args::SceneArgs;
+use super::args::load_scene;
 use super::stdout::emit;
 
 pub(crate) fn validate(args: &SceneArgs) -> ExitCode {

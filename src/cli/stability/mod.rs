@@ -6,8 +6,7 @@ pub mod report;
 
 use std::process::ExitCode;
 
-use super::SceneArgs;
-use super::run::load_scene;
+use super::args::{SceneArgs, load_scene};
 use super::stdout::emit;
 use crate::engine::fixed::stability::analyse;
 
