@@ -147,7 +147,7 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
         }
     };
     let name = args.data.file_name().map_or_else(|| origin.clone(), |n| n.to_string_lossy().into_owned());
-    if let Err(e) = crate::fit::report::write(&problem, &r, &out, &name) {
+    if let Err(e) = crate::plot::files::write_fit(&problem, &r, &out, &name) {
         return study::write_failed(e, &out);
     }
     println!(

@@ -36,7 +36,7 @@ pub fn files(scene: &Scene, work: &Work, checkpoints: bool) -> Vec<OutputFile> {
     }
     if o.plot {
         // Drawn from at most 2 points per bucket of the time axis.
-        let points = work.samples.min(2 * crate::plot::trace::BUCKETS as u64);
+        let points = work.samples.min(2 * crate::output::TRACE_SVG_BUCKETS as u64);
         files.push(OutputFile { name: "trace.svg", bytes: 30_000 + 120 * points, field: "output.plot" });
     }
     if checkpoints {

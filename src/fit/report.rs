@@ -1,22 +1,15 @@
 //! A fit's files: `fit.json` (parameters with their intervals, misfit, degrees of freedom,
 //! p-value, evaluations), `fit.csv` (per data point: conditions, data, sigma, fitted value,
 //! band, residual), `fit.toml` (the scene with the fitted values, for `stickslip run`) and
-//! `fit.svg` ([`crate::plot::fit`]), each written atomically.
-
-use std::path::Path;
+//! `fit.svg` ([`crate::plot::fit`]); [`crate::plot::files::write_fit`] writes them.
 
 use serde_json::{Map, Value, json};
 
 use super::model::Problem;
 use super::solve::FitResult;
-use crate::output::atomic::write_files;
-use crate::plot::PlotError;
 
 /// The method of the intervals, as `fit.json` states it.
 pub const METHOD: &str = "profile likelihood: 95 % interval where the misfit, re-optimised over the other free parameters, rises by the threshold above its minimum";
-
-/// Why a fit's files could not be written: the figure, or a file (the studies' error).
-pub use crate::studies::sweep::WriteError;
 
 /// A number for JSON: `null` when not finite.
 fn num(v: f64) -> Value {
@@ -121,18 +114,4 @@ pub fn fit_toml(prob: &Problem, r: &FitResult) -> Result<String, String> {
     );
     head.push_str(&toml::to_string(&scene.to_file()).map_err(|e| e.to_string())?);
     Ok(head)
-}
-
-/// Writes the four files into `dir`; the figure is drawn before anything is written.
-pub fn write(prob: &Problem, r: &FitResult, dir: &Path, data_path: &str) -> Result<(), WriteError> {
-    let svg = crate::plot::fit::fit_svg(prob, r)?;
-    let toml = fit_toml(prob, r).map_err(PlotError)?;
-    let files = [
-        ("fit.csv", fit_csv(prob, r)),
-        ("fit.toml", toml),
-        ("fit.svg", svg),
-        ("fit.json", fit_json(prob, r, data_path)),
-    ];
-    write_files(dir, &files)?;
-    Ok(())
 }

@@ -9,3 +9,9 @@ pub mod state_codec;
 pub mod summary;
 
 pub use summary::Summary;
+
+/// Number of time buckets `trace.svg` thins a long trace to ([`crate::plot::trace`]): one
+/// per pixel column of the 1000-pixel-wide figure or finer, so the drawn envelope is the same
+/// as the full trace's (SVG coordinates are whole pixels) while the file stays small. Here,
+/// beside the files it sizes, so that the output estimate does not depend on the figures.
+pub const TRACE_SVG_BUCKETS: usize = 1000;

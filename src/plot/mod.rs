@@ -10,11 +10,12 @@
 //! Output is deterministic: the same panels give the same bytes.
 //!
 //! Figures read the results of the runs and studies they draw (`crate::studies`,
-//! `crate::scene`) and return text, and nothing they read depends on them. A study's figure
-//! is written by the study's `files` module (the layer above both); a run's `trace.svg` is
+//! `crate::fit`, `crate::scene`) and return text, and nothing they read depends on them. A
+//! study's or fit's files, figure included, are written by [`files`] (the layer above both); a run's `trace.svg` is
 //! drawn from its `trace.csv` after the run, by [`trace::write_trace_svg`].
 
 pub mod compare;
+pub mod files;
 pub mod fit;
 pub mod heatmap;
 pub mod scaling;

@@ -12,10 +12,7 @@ use super::{Axis, PALETTE, Panel, PlotError, Series, render_svg};
 use crate::output::atomic::{WriteFileError, write_files};
 use crate::scene::Scene;
 
-/// Number of time buckets a long trace is thinned to: one per pixel column of the
-/// 1000-pixel-wide figure or finer, so the drawn envelope is the same as the full trace's
-/// (SVG coordinates are whole pixels) while the file stays small.
-pub const BUCKETS: usize = 1000;
+pub use crate::output::TRACE_SVG_BUCKETS as BUCKETS;
 
 /// A point `(t, y)`.
 type Point = (f64, f64);

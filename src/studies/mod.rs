@@ -14,7 +14,7 @@
 //!
 //! Layers, each depending only on those before it: a study's data (plan, runs, outcome,
 //! tables) -> its figure ([`crate::plot`], which reads the outcome and draws) -> its files
-//! (`sweep::files`, `compare::files`: tables and figure written to disk) -> the CLI.
+//! ([`crate::plot::files`]: tables and figure written to disk) -> the CLI.
 
 pub mod compare;
 pub mod execute;

@@ -51,12 +51,11 @@
 //! [`crate::engine::fixed::stability::analyse`]).
 //!
 //! Layout: this file plans, runs and aggregates (data only); [`fit`] the bias model,
-//! [`report`] `compare.csv` and `compare.md`, [`files`] writes them with `compare.svg`
-//! ([`crate::plot::compare`]).
+//! [`report`] `compare.csv` and `compare.md` ([`crate::plot::files`] writes them with
+//! `compare.svg`, [`crate::plot::compare`]).
 //!
 //! [`PlateLimit::radius_all`]: crate::engine::fixed::stability::PlateLimit::radius_all
 
-pub mod files;
 pub mod fit;
 pub mod report;
 

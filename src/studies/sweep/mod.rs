@@ -51,10 +51,9 @@
 //! are not reproducible, are only in `sweep.json`.
 //!
 //! Files: [`plan`] (spec, preparation, runs), [`values`] (value lists from the command line),
-//! [`outcome`] (aggregation), [`tables`] (the text of the files), [`files`] (writing them,
-//! with the figure of [`crate::plot::sweep`]).
+//! [`outcome`] (aggregation), [`tables`] (the text of the files; [`crate::plot::files`] writes
+//! them with the figure of [`crate::plot::sweep`]).
 
-pub mod files;
 pub mod outcome;
 pub mod plan;
 pub mod tables;
@@ -64,7 +63,6 @@ use std::time::Instant;
 
 use indicatif::ProgressBar;
 
-pub use files::WriteError;
 pub use outcome::{Majority, OutcomeError, Row, SweepOutcome, Timing};
 pub use plan::{GridPoint, MAX_AXES, MAX_RUNS, RunSpec, SpecError, Sweep, SweepAxis, SweepSpec};
 pub use tables::{RUNS_COLUMNS, SWEEP_COLUMNS};
