@@ -7,7 +7,7 @@ pub mod force;
 pub mod plate;
 pub mod rates;
 
-pub use bond::{Bond, BondParams, Strong, Weak};
+pub use bond::{Bond, BondKind, BondParams, BondVisitor, Strong, Weak};
 pub use force::{
     ClosedForm, Direct, ExactMethod, ExactMethodOf, ForceLaw, ForceLawKind, LawParams, LawVisitor, Linear, LinearLaw,
     MethodVisitor, ParamError, Series, SeriesLaw, Tilted, exact_method,

@@ -1,68 +1,19 @@
 //! A scene's force law and bond kind, built: [`with_force_law`] (the law table is in
 //! `physics::force`, beside the laws: adding a law is one file there and one line of that
-//! table, docs/engines.md, "Adding a force law") and the table of bond kinds below
-//! ([`with_bond`]). The fixed engine, the exact engine, validation and the stability analysis
+//! table, docs/engines.md, "Adding a force law") and [`with_bond`] (the table of bond kinds
+//! is in `physics::bond`). The fixed engine, the exact engine, validation and the stability analysis
 //! all go through them. Also the one place where physics values are built from a scene.
-
-use serde::{Deserialize, Serialize};
 
 use super::params::{JunctionParams, Scene};
 use crate::physics::{
     Bond, BondParams, ExactMethod, ForceLaw, Formation, LawParams, Linear, ParamError, Plate, Strong, Tilted, Weak,
     exact_method,
 };
-pub use crate::physics::{ForceLawKind, LawVisitor};
+pub use crate::physics::{BondKind, BondVisitor, ForceLawKind, LawVisitor};
 
-/// Something to do with a bond kind once its type is known.
-pub trait BondVisitor {
-    type Output;
-    fn visit<B: Bond>(self, bond: B) -> Self::Output;
-}
-
-/// Generates the scene's name enum of bond kinds (serde names: the variant in kebab case,
-/// which a test checks against the type's `NAME`), its `ALL` list and `name()`, and the
-/// dispatch function that builds the type named by the scene and hands it to a visitor.
-macro_rules! table {
-    (
-        $(#[$meta:meta])*
-        enum $Kind:ident, field $field:ident, $Trait:ident::new($params:ident), fn $with:ident<$Visitor:ident>;
-        $( $(#[$vmeta:meta])* $Variant:ident => $Type:ty, )+
-    ) => {
-        $(#[$meta])*
-        #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-        #[serde(rename_all = "kebab-case")]
-        pub enum $Kind {
-            $( $(#[$vmeta])* $Variant, )+
-        }
-
-        impl $Kind {
-            /// Every choice, in the table's order.
-            pub const ALL: [$Kind; [$(stringify!($Variant)),+].len()] = [$($Kind::$Variant),+];
-            /// The scene's name of this choice.
-            pub fn name(self) -> &'static str {
-                match self {
-                    $($Kind::$Variant => <$Type as $Trait>::NAME,)+
-                }
-            }
-        }
-
-        /// Builds the type the scene names and hands it to `visitor`; the type is fixed from
-        /// here on, so everything the visitor runs is specialised to it.
-        pub fn $with<V: $Visitor>(j: &JunctionParams, visitor: V) -> Result<V::Output, ParamError> {
-            match j.$field {
-                $($Kind::$Variant => Ok(visitor.visit(<$Type as $Trait>::new(&$params(j))?)),)+
-            }
-        }
-    };
-}
-
-table! {
-    /// Bond kind (docs/model.md, "Equations", item 6).
-    enum BondKind, field bond, Bond::new(bond_params), fn with_bond<BondVisitor>;
-    /// `k_off = k0`, independent of force.
-    Strong => Strong,
-    /// `k_off = k0 exp(beta f dx)`.
-    Weak => Weak,
+/// Builds the scene's bond kind and hands it to `visitor` (`physics::bond::with_bond_kind`).
+pub fn with_bond<V: BondVisitor>(j: &JunctionParams, visitor: V) -> Result<V::Output, ParamError> {
+    crate::physics::bond::with_bond_kind(j.bond, &bond_params(j), visitor)
 }
 
 /// Builds the scene's force law and hands it to `visitor` (`physics::force::with_law`).

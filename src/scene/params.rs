@@ -7,7 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
-pub use super::laws::{BondKind, ForceLawKind};
+pub use crate::physics::{BondKind, ForceLawKind};
 
 /// What a junction's extension is when it re-forms (docs/model.md, "Equations", item 4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
