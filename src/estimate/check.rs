@@ -4,8 +4,9 @@
 
 use std::path::Path;
 
+use super::memory::BASELINE_BYTES;
+use super::run::{Estimate, bytes};
 use super::system::{Available, available_memory, free_disk};
-use super::{BASELINE_BYTES, Estimate, bytes};
 use crate::scene::Scene;
 
 /// Why a run or study is refused before it starts. Each is one line naming the field.

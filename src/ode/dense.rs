@@ -14,9 +14,9 @@
 //! accepted `y_new` (not `cont0 + cont1`, which may differ in the last bit), so that a level
 //! reached exactly at a step end is seen as reached.
 
-use super::OdeError;
 use super::root::first_crossing;
 use super::stepper::Dop853;
+use super::system::OdeError;
 
 /// Where a time falls in the last step.
 #[derive(Clone, Copy, Debug)]

@@ -1,6 +1,6 @@
 //! Crossing detection on the dense output of a step, and Brent's bracketing root finder.
 
-use super::OdeError;
+use super::system::OdeError;
 
 /// Iteration cap of [`brent`]; never reached in practice (≈ 10–60 evaluations), it only
 /// bounds the work for pathological functions.

@@ -46,7 +46,7 @@ use serde::{Deserialize, Serialize};
 use super::lu::{Lu, MAX_DIM};
 use super::rodas4::{A, ALPHA, C, D, GAMMA, H2, H3, M, STAGES};
 use super::stepper::MIN_RTOL;
-use super::{OdeError, OdeStats};
+use super::system::{OdeError, OdeStats};
 
 /// A system `y' = f(t, y)` with its Jacobian, for the linearly implicit integrator.
 pub trait StiffSystem {

@@ -10,7 +10,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::coefficients::{A, B, BHH, C, D, ER, STAGES, STAGES_EXT};
-use super::{OdeError, OdeStats, OdeSystem};
+use super::system::{OdeError, OdeStats, OdeSystem};
 
 /// Smallest accepted relative tolerance, `4 eps ~ 8.9e-16`: below it the error estimate is
 /// round-off and the step size can collapse to a crawl (not an underflow) instead of failing.
