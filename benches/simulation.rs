@@ -1,5 +1,5 @@
 //! What the `runner::Simulation` handle costs against the engine it erases: the same
-//! engine advanced directly (type known: the test kit's `Direct`) and through the handle (one
+//! engine advanced directly (type known: the test kit's `Concrete`) and through the handle (one
 //! virtual call per advance). `cargo bench --bench simulation`; figures in
 //! docs/performance.md.
 //!
@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use stickslip::Scene;
 use stickslip::runner::{Observed, Simulation, core_observers};
-use stickslip_testkit::{Direct, fig1_with, scaled_linear};
+use stickslip_testkit::{Concrete, fig1_with, scaled_linear};
 
 /// One workload: a scene, the time to warm up to, the span of one advance, advances per
 /// iteration, and whether the core observers are fed.
@@ -27,9 +27,9 @@ struct Work<'a> {
 }
 
 /// Times `iters` iterations of the workload on a fresh engine, advanced directly (the
-/// kit's [`Direct`]: the engine's type known, a local variable).
+/// kit's [`Concrete`]: the engine's type known, a local variable).
 fn direct(w: Work, iters: u64) -> Duration {
-    Direct { scene: w.scene, warm: w.warm, span: w.span, advances: iters * w.advances, core: w.core, boxed: false }
+    Concrete { scene: w.scene, warm: w.warm, span: w.span, advances: iters * w.advances, core: w.core, boxed: false }
         .run()
         .elapsed
 }

@@ -16,7 +16,7 @@
 
 use stickslip::Scene;
 use stickslip::runner::{Observed, Simulation, core_observers};
-use stickslip_testkit::{Direct, fig1_with, scaled_linear};
+use stickslip_testkit::{Concrete, fig1_with, scaled_linear};
 
 /// The work: advances of `span` from `t = 0`, with or without the core observers.
 #[derive(Clone, Copy)]
@@ -27,10 +27,10 @@ struct Work<'a> {
     core: bool,
 }
 
-/// Advances the engine directly (the test kit's [`Direct`]), as a local variable or
+/// Advances the engine directly (the test kit's [`Concrete`]), as a local variable or
 /// (`boxed`) behind a pointer the optimiser cannot see through, as behind a handle.
 fn direct(w: Work, boxed: bool) -> f64 {
-    Direct { scene: w.scene, warm: 0.0, span: w.span, advances: w.advances.into(), core: w.core, boxed }.run().friction
+    Concrete { scene: w.scene, warm: 0.0, span: w.span, advances: w.advances.into(), core: w.core, boxed }.run().friction
 }
 
 fn handle(w: Work) -> f64 {

@@ -11,16 +11,16 @@
 //!   library's [`stickslip::runner::Simulation`] handle, with no engine visitor;
 //! - [`creep`]: the Bell theory of low-velocity creep that `examples/creep.rs` and
 //!   `tests/suite/creep.rs` compare the exact engine with;
-//! - [`direct`]: the kit's one engine visitor, [`Direct`]: work on the concrete engine, the
+//! - [`concrete`]: the kit's one engine visitor, [`Concrete`]: work on the concrete engine, the
 //!   reference of the handle's cost.
 
 pub mod creep;
-pub mod direct;
+pub mod concrete;
 pub mod kinds;
 pub mod runs;
 pub mod scenes;
 
-pub use direct::{Direct, DirectRun};
+pub use concrete::{Concrete, ConcreteRun};
 pub use kinds::{BONDS, LAWS, law_bond_pairs};
 pub use runs::{Trace, events_of, first_rupture, samples_of, steps, verdict_of};
 pub use scenes::{

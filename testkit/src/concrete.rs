@@ -13,7 +13,7 @@ use stickslip::runner::core_observers;
 /// Advances `k = 1 ..= advances` to `t = warm + k span` after a first advance to `warm`,
 /// feeding the core observers (`core`) or none.
 #[derive(Clone, Copy)]
-pub struct Direct<'a> {
+pub struct Concrete<'a> {
     pub scene: &'a Scene,
     pub warm: f64,
     pub span: f64,
@@ -24,25 +24,25 @@ pub struct Direct<'a> {
     pub boxed: bool,
 }
 
-/// What a [`Direct`] run did.
+/// What a [`Concrete`] run did.
 #[derive(Clone, Copy, Debug)]
-pub struct DirectRun {
+pub struct ConcreteRun {
     /// Wall time of the advances after the warm-up.
     pub elapsed: Duration,
     /// The friction at the end (the same work through the handle gives the same).
     pub friction: f64,
 }
 
-impl Direct<'_> {
+impl Concrete<'_> {
     /// Runs the work on a fresh engine.
-    pub fn run(self) -> DirectRun {
+    pub fn run(self) -> ConcreteRun {
         with_engine(self.scene, self).expect("engine")
     }
 }
 
-impl EngineVisitor for Direct<'_> {
-    type Output = DirectRun;
-    fn visit<E: Engine>(self, e: E) -> DirectRun {
+impl EngineVisitor for Concrete<'_> {
+    type Output = ConcreteRun;
+    fn visit<E: Engine>(self, e: E) -> ConcreteRun {
         if self.boxed { work(self, &mut *std::hint::black_box(Box::new(e))) } else { work(self, &mut { e }) }
     }
 }
@@ -51,7 +51,7 @@ impl EngineVisitor for Direct<'_> {
 /// (a recorder, a recorder and the core observers), never called: the same code the
 /// handle's program holds.
 #[inline(always)]
-fn work<E: Engine>(w: Direct, e: &mut E) -> DirectRun {
+fn work<E: Engine>(w: Concrete, e: &mut E) -> ConcreteRun {
     let mut core = core_observers(w.scene);
     let mut rec = Recorder::default();
     e.advance(w.warm, &mut core).unwrap();
@@ -66,5 +66,5 @@ fn work<E: Engine>(w: Direct, e: &mut E) -> DirectRun {
         }
     }
     let elapsed = start.elapsed();
-    DirectRun { elapsed, friction: e.sample().friction + rec.events.len() as f64 }
+    ConcreteRun { elapsed, friction: e.sample().friction + rec.events.len() as f64 }
 }
