@@ -30,7 +30,9 @@ struct Work<'a> {
 /// Advances the engine directly (the test kit's [`Concrete`]), as a local variable or
 /// (`boxed`) behind a pointer the optimiser cannot see through, as behind a handle.
 fn direct(w: Work, boxed: bool) -> f64 {
-    Concrete { scene: w.scene, warm: 0.0, span: w.span, advances: w.advances.into(), core: w.core, boxed }.run().friction
+    Concrete { scene: w.scene, warm: 0.0, span: w.span, advances: w.advances.into(), core: w.core, boxed }
+        .run()
+        .friction
 }
 
 fn handle(w: Work) -> f64 {

@@ -6,7 +6,8 @@
 //!
 //! - [`scene`]: the problem: a scene file, its validation into typed parameters, and the one
 //!   table of force laws and bond kinds (`scene::laws`);
-//! - [`physics`]: the model's pure functions: force laws, bond kinds, formation rate, plate;
+//! - [`physics`]: the model's pure functions: force laws and bond kinds (each with its table),
+//!   formation rate, plate;
 //! - [`engine`]: the methods that advance a scene: [`engine::fixed`] (the letter's
 //!   fixed-step scheme, and [`engine::fixed::stability`], where each of its plate integrators
 //!   is stable) and [`engine::exact`] (event-driven kinetic Monte Carlo: one core, with the
@@ -22,7 +23,8 @@
 //!   that refuse what will not fit;
 //! - [`studies`]: many scenes at once: sweeps, work-precision comparisons;
 //! - [`fit`]: calibration: scene fields fitted to a measured friction curve, with intervals;
-//! - [`plot`]: the figures of runs and studies (SVG);
+//! - [`plot`]: the figures of runs and studies (SVG), and the files of studies and fits
+//!   written with their figure ([`plot::files`]);
 //! - [`cli`]: the `stickslip` command line, and the text of its reports (such as the
 //!   stability table).
 

@@ -45,7 +45,7 @@ use serde::{Deserialize, Serialize};
 
 use super::lu::{Lu, MAX_DIM};
 use super::rodas4::{A, ALPHA, C, D, GAMMA, H2, H3, M, STAGES};
-use super::stepper::MIN_RTOL;
+use super::stepper::{check_control, check_limits};
 use super::system::{OdeError, OdeStats};
 
 /// A system `y' = f(t, y)` with its Jacobian, for the linearly implicit integrator.
@@ -68,7 +68,7 @@ pub trait StiffSystem {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct RosenbrockConfig {
-    /// Relative tolerance, at least [`MIN_RTOL`].
+    /// Relative tolerance, at least [`MIN_RTOL`](super::MIN_RTOL).
     pub rtol: f64,
     /// Absolute tolerance, `> 0`.
     pub atol: f64,
@@ -108,33 +108,8 @@ impl Default for RosenbrockConfig {
 impl RosenbrockConfig {
     /// Checks every setting's domain.
     pub fn validate(&self) -> Result<(), OdeError> {
-        let bad = |name: &'static str, value: f64| Err(OdeError::InvalidConfig { name, value });
-        if !(self.rtol.is_finite() && self.rtol >= MIN_RTOL) {
-            return bad("rtol", self.rtol);
-        }
-        if !(self.atol.is_finite() && self.atol > 0.0) {
-            return bad("atol", self.atol);
-        }
-        if !(self.safety > 1e-4 && self.safety < 1.0) {
-            return bad("safety", self.safety);
-        }
-        if !(self.fac_min > 0.0 && self.fac_min < 1.0) {
-            return bad("fac_min", self.fac_min);
-        }
-        if !(self.fac_max > 1.0 && self.fac_max.is_finite()) {
-            return bad("fac_max", self.fac_max);
-        }
-        for (name, value) in [("h_max", self.h_max), ("h_init", self.h_init)] {
-            if let Some(h) = value {
-                if !(h > 0.0 && h.is_finite()) {
-                    return bad(name, h);
-                }
-            }
-        }
-        if self.max_consecutive_rejections == 0 {
-            return bad("max_consecutive_rejections", 0.0);
-        }
-        Ok(())
+        check_control(self.rtol, self.atol, self.safety, self.fac_min, self.fac_max)?;
+        check_limits(self.h_max, self.h_init, self.max_consecutive_rejections)
     }
 }
 

@@ -68,41 +68,55 @@ impl Default for Dop853Config {
 impl Dop853Config {
     /// Checks every setting's domain.
     pub fn validate(&self) -> Result<(), OdeError> {
-        let bad = |name: &'static str, value: f64| Err(OdeError::InvalidConfig { name, value });
-        if !(self.rtol.is_finite() && self.rtol >= MIN_RTOL) {
-            return bad("rtol", self.rtol);
-        }
-        if !(self.atol.is_finite() && self.atol > 0.0) {
-            return bad("atol", self.atol);
-        }
-        if !(self.safety > 1e-4 && self.safety < 1.0) {
-            return bad("safety", self.safety);
-        }
-        if !(self.fac_min > 0.0 && self.fac_min < 1.0) {
-            return bad("fac_min", self.fac_min);
-        }
-        if !(self.fac_max > 1.0 && self.fac_max.is_finite()) {
-            return bad("fac_max", self.fac_max);
-        }
+        check_control(self.rtol, self.atol, self.safety, self.fac_min, self.fac_max)?;
         if !(0.0..=0.2).contains(&self.beta) {
-            return bad("beta", self.beta);
+            return Err(OdeError::InvalidConfig { name: "beta", value: self.beta });
         }
-        // (No let-chains: the crate declares rust-version 1.85.)
-        for (name, value) in [("h_max", self.h_max), ("h_init", self.h_init)] {
-            if let Some(h) = value {
-                if !(h > 0.0 && h.is_finite()) {
-                    return bad(name, h);
-                }
-            }
-        }
-        if self.max_consecutive_rejections == 0 {
-            return bad("max_consecutive_rejections", 0.0);
-        }
+        check_limits(self.h_max, self.h_init, self.max_consecutive_rejections)?;
         if self.event_samples == 0 {
-            return bad("event_samples", 0.0);
+            return Err(OdeError::InvalidConfig { name: "event_samples", value: 0.0 });
         }
         Ok(())
     }
+}
+
+/// The step-size control both steppers share: `rtol >= MIN_RTOL` and `atol > 0` finite,
+/// `safety` in `(1e-4, 1)`, `fac_min` in `(0, 1)`, `fac_max > 1` finite.
+pub(super) fn check_control(rtol: f64, atol: f64, safety: f64, fac_min: f64, fac_max: f64) -> Result<(), OdeError> {
+    let bad = |name: &'static str, value: f64| Err(OdeError::InvalidConfig { name, value });
+    if !(rtol.is_finite() && rtol >= MIN_RTOL) {
+        return bad("rtol", rtol);
+    }
+    if !(atol.is_finite() && atol > 0.0) {
+        return bad("atol", atol);
+    }
+    if !(safety > 1e-4 && safety < 1.0) {
+        return bad("safety", safety);
+    }
+    if !(fac_min > 0.0 && fac_min < 1.0) {
+        return bad("fac_min", fac_min);
+    }
+    if !(fac_max > 1.0 && fac_max.is_finite()) {
+        return bad("fac_max", fac_max);
+    }
+    Ok(())
+}
+
+/// The limits both steppers share: `h_max` and `h_init`, when given, `> 0` and finite; at
+/// least one rejection allowed.
+pub(super) fn check_limits(h_max: Option<f64>, h_init: Option<f64>, rejections: u32) -> Result<(), OdeError> {
+    // (No let-chains: the crate declares rust-version 1.85.)
+    for (name, value) in [("h_max", h_max), ("h_init", h_init)] {
+        if let Some(h) = value {
+            if !(h > 0.0 && h.is_finite()) {
+                return Err(OdeError::InvalidConfig { name, value: h });
+            }
+        }
+    }
+    if rejections == 0 {
+        return Err(OdeError::InvalidConfig { name: "max_consecutive_rejections", value: 0.0 });
+    }
+    Ok(())
 }
 
 /// Scratch buffers, allocated once (at construction, or at the first use after

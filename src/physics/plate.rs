@@ -13,12 +13,6 @@ pub struct Plate {
 }
 
 impl Plate {
-    /// Driving-spring force `F = K (V t - X)`, written with the lag `u = X - V t` that
-    /// engines may track directly: `F = -K u`.
-    #[inline]
-    pub fn spring_force(&self, lag: f64) -> f64 {
-        -self.k * lag
-    }
     /// Net force on the plate `-(eta Xd + F_b + K u)`, with `u = X - V t`: the plate
     /// equation is `M Xdd = ` this (and `0 = ` this with `M = 0`).
     #[inline]

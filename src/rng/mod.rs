@@ -118,12 +118,6 @@ pub fn pcg(seed: u64) -> Pcg64 {
     Pcg64::seed_from_u64(seed)
 }
 
-/// A standard exponential variate `-ln(xi)`, `xi` uniform in `(0, 1)`.
-#[inline]
-pub fn exp1<R: UniformSource + ?Sized>(rng: &mut R) -> f64 {
-    -rng.uniform().ln()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -248,16 +248,4 @@ impl Scene {
         let (j, p) = (&self.junctions, &self.plate);
         super::thermal::Reference { k0: j.k0, kon0: j.kon0, kappa: j.kappa, k: p.k, eta: p.eta }
     }
-
-    /// The five coefficients of the temperature map.
-    pub fn thermal_coefficients(&self) -> super::thermal::Coefficients {
-        let (j, p) = (&self.junctions, &self.plate);
-        super::thermal::Coefficients {
-            e_off: j.e_off,
-            e_on: j.e_on,
-            kappa_slope: j.kappa_slope,
-            k_slope: p.k_slope,
-            eta_slope: p.eta_slope,
-        }
-    }
 }

@@ -14,8 +14,8 @@
 //! - [`concrete`]: the kit's one engine visitor, [`Concrete`]: work on the concrete engine, the
 //!   reference of the handle's cost.
 
-pub mod creep;
 pub mod concrete;
+pub mod creep;
 pub mod kinds;
 pub mod runs;
 pub mod scenes;
