@@ -133,20 +133,6 @@ pub fn pcg_seed(base: u64, role: Role, point: u64, replica: u64) -> u64 {
 /// The Park–Miller period `2^31 - 2`.
 pub const PARK_MILLER_PERIOD: u64 = ParkMiller::MODULUS as u64 - 1;
 
-/// `b^e mod m` for `m < 2^32`.
-fn pow_mod(mut b: u64, mut e: u64, m: u64) -> u64 {
-    let mut r = 1u64;
-    b %= m;
-    while e > 0 {
-        if e & 1 == 1 {
-            r = r * b % m;
-        }
-        b = b * b % m;
-        e >>= 1;
-    }
-    r
-}
-
 /// The Park–Miller seeds of `replicas` replicas of one fixed-step point of a study, each
 /// allowed `draws` numbers: disjoint consecutive blocks of the cycle starting at a hashed
 /// state. `None` if the blocks do not fit in one period.
@@ -157,7 +143,7 @@ pub fn park_miller_seeds(base: u64, point: u64, replicas: usize, draws: u64) -> 
     }
     let m = u64::from(ParkMiller::MODULUS);
     let start = 1 + chain(base, &[Role::Fixed as u64, point, u64::MAX]) % PARK_MILLER_PERIOD;
-    let jump = pow_mod(u64::from(ParkMiller::MULTIPLIER), draws % PARK_MILLER_PERIOD, m);
+    let jump = u64::from(ParkMiller::jump(draws % PARK_MILLER_PERIOD));
     let mut s = start;
     Some(
         (0..replicas)
