@@ -1,5 +1,6 @@
 //! What a closed-form piece of the linear engine reports: its raw time integrals
-//! ([`Piece`]) from the propagator's integrals, with no division.
+//! ([`Piece`]) from the propagator's integrals, with no division; or, for an observer that
+//! takes stretches, the pieces summed ([`Sums`]) and reported as one [`Stretch`] per advance.
 //!
 //! With `w(s) = y(s) - y0 - V s` the lag is `lag0 + w(s)` and the friction `F = -K lag`, so
 //! with `i1 = int (y - y0)` and `i2 = int w^2` over `[0, h]` ([`Integrals`]):
@@ -8,9 +9,17 @@
 //!     int (F - F0) = -K int w = -K (i1 - V h^2 / 2),      int (F - F0)^2 = K^2 i2,
 //!     int F_b = kappa (N_att (h y0 + i1) - h C),          int eta y' = eta (y1 - y0).
 //! ```
+//!
+//! [`Sums`] keeps the lag's shifted sums about the lag `r` at its first piece,
+//! `S1 = sum int (lag - r)` and `S2 = sum int (lag - r)^2` (with `d = lag0 - r`, a piece adds
+//! `h d + int w` and `h d^2 + 2 d int w + int w^2`: multiply-adds alone), the time and the
+//! attached count's integral; the friction's sums are `-K` and `K^2` times the lag's, and
+//! the bond and viscous forces' integrals follow from the plate's state at the stretch's
+//! two ends ([`Stretch`]).
 
 use crate::engine::exact::linear::propagator::Integrals;
-use crate::observe::Piece;
+use crate::observe::shifted::ShiftedSums;
+use crate::observe::{Piece, Stretch};
 use crate::physics::Plate;
 
 /// Where a piece starts: absolute time `t0`, local position `y0` and lag `lag0`; the
@@ -40,6 +49,82 @@ pub(super) fn piece(start: &Start, t1: f64, h: f64, y1: f64, ints: Integrals, p:
         bond: kappa * (n * (h * start.y0 + ints.i1) - h * start.anchor_sum),
         viscous: p.eta * (y1 - start.y0),
         attached: start.n_att as u64,
+    }
+}
+
+/// The pieces summed since the last report (lag units, local positions): empty when
+/// `weight = 0`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct Sums {
+    /// Absolute start time and the lag `r` at it.
+    t0: f64,
+    lag_ref: f64,
+    /// `W = sum h`, `S1`, `S2` (module doc).
+    weight: f64,
+    s1: f64,
+    s2: f64,
+    /// `sum h N_att`.
+    attached: f64,
+    /// Absolute end time of the last piece.
+    t1: f64,
+    /// The plate's local position and velocity at the start and at the end.
+    y0: f64,
+    v0: f64,
+    y1: f64,
+    v1: f64,
+}
+
+impl Sums {
+    /// Adds the piece `[start.t0, t1]` of length `h` from velocity `v0`, ending at
+    /// `(y1, v1)`, with the propagator's integrals `ints` (drift `v`).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn add(&mut self, start: &Start, v0: f64, t1: f64, h: f64, y1: f64, v1: f64, ints: Integrals, v: f64) {
+        if self.weight == 0.0 {
+            self.t0 = start.t0;
+            self.lag_ref = start.lag0;
+            self.y0 = start.y0;
+            self.v0 = v0;
+        }
+        let d = start.lag0 - self.lag_ref;
+        let w1 = ints.i1 - 0.5 * v * h * h;
+        let hd = h * d;
+        self.weight += h;
+        self.s1 += hd + w1;
+        self.s2 += hd * d + (2.0 * d * w1 + ints.i2);
+        self.attached += h * start.n_att as f64;
+        self.t1 = t1;
+        self.y1 = y1;
+        self.v1 = v1;
+    }
+
+    /// The local origin moved by `dy` in position.
+    #[inline]
+    pub(super) fn shifted(&mut self, dy: f64) {
+        self.y0 -= dy;
+        self.y1 -= dy;
+    }
+
+    /// The stretch summed (empty, at `now`, if nothing was), for plate `p`; `self` empties.
+    #[inline]
+    pub(super) fn take(&mut self, p: &Plate, now: f64) -> Stretch {
+        let s = std::mem::take(self);
+        if s.weight == 0.0 {
+            return Stretch { t0: now, t1: now, ..Stretch::default() };
+        }
+        let k = p.k;
+        let friction = ShiftedSums { reference: -k * s.lag_ref, weight: s.weight, s1: -k * s.s1, s2: (k * k) * s.s2 };
+        // int F = -K int lag; M X'' + eta X' = F - F_b over the stretch.
+        let int_f = -k * (s.lag_ref * s.weight + s.s1);
+        let viscous = p.eta * (s.y1 - s.y0);
+        Stretch {
+            t0: s.t0,
+            t1: s.t1,
+            friction,
+            bond: int_f - viscous - p.mass * (s.v1 - s.v0),
+            viscous,
+            attached: s.attached,
+        }
     }
 }
 
