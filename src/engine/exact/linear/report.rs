@@ -162,7 +162,8 @@ mod tests {
     /// boundary to another (the runner stops at both): the window statistics summed from
     /// the pieces ([`piece`], shifted sums folded at stops) equal a direct quadrature of the
     /// piecewise path (friction's mean and standard deviation, bond and viscous force,
-    /// attached fraction).
+    /// attached fraction); and so do the same pieces summed ([`Sums`]) and reported as
+    /// stretches at the stops.
     #[test]
     fn summed_pieces_equal_a_quadrature_of_the_path() {
         let mut rng = pcg(38);
@@ -181,6 +182,8 @@ mod tests {
             });
             let (t_lo, t_hi) = (ends[1], ends[hs.len() - 2]);
             let mut stats = WindowStats::new(t_lo, t_hi, 40);
+            // The same pieces summed in the kernel's way, reported at random stops.
+            let (mut summed, mut sums) = (WindowStats::new(t_lo, t_hi, 40), Sums::default());
             let (mut tau, mut y, mut v) = (0.0, 2.0 * (u() - 0.5), u() - 0.5);
             let (mut want_f, mut want_f2, mut want_b, mut want_v, mut want_a, mut covered) =
                 (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
@@ -194,8 +197,12 @@ mod tests {
                 let (y1, v1, ints) = tr.at_with_integrals(h, p.v);
                 let start = Start { t0: epoch + tau, y0: y, lag0: (y - p.v * tau) + lag_ref, n_att, anchor_sum };
                 stats.piece(&piece(&start, epoch + (tau + h), h, y1, ints, &p, kappa));
+                if start.t0 >= t_lo && epoch + (tau + h) <= t_hi {
+                    sums.add(&start, v, epoch + (tau + h), h, y1, v1, ints, p.v);
+                }
                 if u() < 0.3 {
                     stats.stop();
+                    summed.stretch(&sums.take(&p, epoch + (tau + h)));
                 }
                 // The reference: the path on the pieces inside the window.
                 if start.t0 >= t_lo && epoch + (tau + h) <= t_hi {
@@ -209,6 +216,7 @@ mod tests {
                 }
                 (tau, y, v) = (tau + h, y1, v1);
             }
+            summed.stretch(&sums.take(&p, epoch + tau));
             let mean = want_f / covered;
             let std = (want_f2 / covered - mean * mean).sqrt();
             let scale = mean.abs() + std;
@@ -222,6 +230,14 @@ mod tests {
             assert!((stats.bond_force_mean() - want_b / covered).abs() < 1e-10 * bscale, "{ctx}: bond");
             assert!((stats.viscous_mean() - want_v / covered).abs() < 1e-10 * (1.0 + p.eta), "{ctx}: viscous");
             assert!((stats.attached_fraction_mean() - want_a / covered / 40.0).abs() < 1e-12, "{ctx}: attached");
+            // Summed: the bond and viscous forces from the plate equation at the ends.
+            let s = &summed;
+            assert!((s.covered() - covered).abs() < 1e-12, "{ctx}: summed covered {} of {covered}", s.covered());
+            assert!((s.friction_mean() - mean).abs() < 1e-10 * scale, "{ctx}: summed {} vs {mean}", s.friction_mean());
+            assert!((s.friction_std() - std).abs() < tol, "{ctx}: summed std {} vs {std}", s.friction_std());
+            assert!((s.bond_force_mean() - want_b / covered).abs() < 1e-10 * (bscale + scale), "{ctx}: summed bond");
+            assert!((s.viscous_mean() - want_v / covered).abs() < 1e-10 * (1.0 + p.eta), "{ctx}: summed viscous");
+            assert!((s.attached_fraction_mean() - want_a / covered / 40.0).abs() < 1e-12, "{ctx}: summed attached");
         }
     }
 }
