@@ -152,7 +152,7 @@ pub trait Observer {
         f64::INFINITY
     }
     /// The pieces an engine summed since the last report, at the end of an advance (only
-    /// when `STRETCHES`); `s.t1` is the time reached.
+    /// when `STRETCHES` and `SEGMENTS`); `s.t1` is the time reached.
     #[inline]
     fn stretch(&mut self, _s: &Stretch) {}
     /// The engine stands at a grid stop of the runner's loop (between two advances).

@@ -211,7 +211,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> LinearKernel<R, Q, M> {
                 anchor_sum: core.bags.anchor_sum(),
             };
             let t1 = core.frame.time(tau1);
-            if O::STRETCHES && start.t0 >= obs.integrals_after() && t1 <= obs.stretch_until() {
+            if O::STRETCHES && O::SEGMENTS && start.t0 >= obs.integrals_after() && t1 <= obs.stretch_until() {
                 self.sums.add(&start, pc.v0, t1, h, y1, v1, ints, core.plate.v);
             } else if !O::STRETCHES || t1 > obs.integrals_after() {
                 obs.piece(&report::piece(&start, t1, h, y1, ints, &core.plate, self.kappa));
@@ -341,7 +341,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
     /// Reports the pieces summed in this advance as one stretch.
     #[inline]
     fn stopped<O: Observer>(&mut self, core: &Core<Q>, obs: &mut O) {
-        if O::STRETCHES {
+        if O::STRETCHES && O::SEGMENTS {
             obs.stretch(&self.sums.take(&core.plate, core.frame.time(core.tau)));
         }
     }
