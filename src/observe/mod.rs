@@ -11,6 +11,9 @@
 //!   ([`Observer::EVENTS`] is a constant, so engines compile the event path away otherwise).
 //! - [`Sample`]s: the state on the runner's output grid.
 //!
+//! - [`Stretch`]es ([`Observer::stretch`]): for an observer that takes them
+//!   ([`Observer::STRETCHES`]), an engine may sum the pieces inside
+//!   `[integrals_after, stretch_until]` itself and report them once per advance.
 //! - Grid stops ([`Observer::stop`]): the runner's loop says when the engine stands at one,
 //!   so that an observer may fold what it has summed since the last.
 //!
@@ -20,8 +23,10 @@ pub mod piece;
 pub mod regime;
 pub mod shifted;
 pub mod stats;
+pub mod stretch;
 
 pub use piece::Piece;
+pub use stretch::Stretch;
 
 use serde::{Deserialize, Serialize};
 
@@ -114,6 +119,11 @@ pub trait Observer {
     /// time integrals when it is `false` (and still call [`Observer::segment`], with
     /// integrals that are not meaningful).
     const SEGMENTS: bool = true;
+    /// Whether this observer takes the pieces inside
+    /// `[integrals_after(), stretch_until()]` summed by the engine, as one [`Stretch`] per
+    /// advance ([`Observer::stretch`]), in place of one [`Observer::piece`] each (an engine
+    /// that sums them reports no piece that ends before `integrals_after()` either).
+    const STRETCHES: bool = false;
     /// A junction ruptured or formed. Only called when `EVENTS` is true.
     #[inline]
     fn event(&mut self, _e: &JunctionEvent) {}
@@ -135,6 +145,16 @@ pub trait Observer {
     fn integrals_after(&self) -> f64 {
         f64::NEG_INFINITY
     }
+    /// The time after which this observer reads no stretch: a piece that ends after it is
+    /// reported as a piece. `+inf` by default; the window's end for window statistics.
+    #[inline]
+    fn stretch_until(&self) -> f64 {
+        f64::INFINITY
+    }
+    /// The pieces an engine summed since the last report, at the end of an advance (only
+    /// when `STRETCHES` and `SEGMENTS`); `s.t1` is the time reached.
+    #[inline]
+    fn stretch(&mut self, _s: &Stretch) {}
     /// The engine stands at a grid stop of the runner's loop (between two advances).
     #[inline]
     fn stop(&mut self) {}
@@ -147,6 +167,7 @@ pub trait Observer {
 pub struct Nothing;
 impl Observer for Nothing {
     const SEGMENTS: bool = false;
+    const STRETCHES: bool = true;
     #[inline]
     fn integrals_after(&self) -> f64 {
         f64::INFINITY
@@ -157,6 +178,7 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
     const EVENTS: bool = A::EVENTS || B::EVENTS;
     const FORMATIONS: bool = (A::EVENTS && A::FORMATIONS) || (B::EVENTS && B::FORMATIONS);
     const SEGMENTS: bool = A::SEGMENTS || B::SEGMENTS;
+    const STRETCHES: bool = A::STRETCHES && B::STRETCHES;
     #[inline]
     fn event(&mut self, e: &JunctionEvent) {
         if A::EVENTS {
@@ -181,6 +203,15 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
         self.0.integrals_after().min(self.1.integrals_after())
     }
     #[inline]
+    fn stretch_until(&self) -> f64 {
+        self.0.stretch_until().min(self.1.stretch_until())
+    }
+    #[inline]
+    fn stretch(&mut self, s: &Stretch) {
+        self.0.stretch(s);
+        self.1.stretch(s);
+    }
+    #[inline]
     fn stop(&mut self) {
         self.0.stop();
         self.1.stop();
@@ -195,6 +226,7 @@ impl<A: Observer> Observer for Option<A> {
     const EVENTS: bool = A::EVENTS;
     const FORMATIONS: bool = A::FORMATIONS;
     const SEGMENTS: bool = A::SEGMENTS;
+    const STRETCHES: bool = A::STRETCHES;
     #[inline]
     fn event(&mut self, e: &JunctionEvent) {
         if let Some(a) = self {
@@ -221,6 +253,19 @@ impl<A: Observer> Observer for Option<A> {
         }
     }
     #[inline]
+    fn stretch_until(&self) -> f64 {
+        match self {
+            Some(a) => a.stretch_until(),
+            None => f64::INFINITY,
+        }
+    }
+    #[inline]
+    fn stretch(&mut self, s: &Stretch) {
+        if let Some(a) = self {
+            a.stretch(s)
+        }
+    }
+    #[inline]
     fn stop(&mut self) {
         if let Some(a) = self {
             a.stop()
@@ -237,6 +282,7 @@ impl<A: Observer + ?Sized> Observer for &mut A {
     const EVENTS: bool = A::EVENTS;
     const FORMATIONS: bool = A::FORMATIONS;
     const SEGMENTS: bool = A::SEGMENTS;
+    const STRETCHES: bool = A::STRETCHES;
     #[inline]
     fn event(&mut self, e: &JunctionEvent) {
         (**self).event(e)
@@ -252,6 +298,14 @@ impl<A: Observer + ?Sized> Observer for &mut A {
     #[inline]
     fn integrals_after(&self) -> f64 {
         (**self).integrals_after()
+    }
+    #[inline]
+    fn stretch_until(&self) -> f64 {
+        (**self).stretch_until()
+    }
+    #[inline]
+    fn stretch(&mut self, s: &Stretch) {
+        (**self).stretch(s)
     }
     #[inline]
     fn stop(&mut self) {

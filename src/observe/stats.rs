@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::shifted::ShiftedSums;
-use super::{EventKind, JunctionEvent, Observer, Piece, Segment};
+use super::{EventKind, JunctionEvent, Observer, Piece, Segment, Stretch};
 
 /// Time-weighted mean and second central moment, merged segment by segment with the
 /// pairwise update of Chan, Golub & LeVeque (stable: no `E[F^2] - E[F]^2` cancellation).
@@ -98,6 +98,7 @@ impl WindowStats {
 }
 
 impl Observer for WindowStats {
+    const STRETCHES: bool = true;
     #[inline]
     fn segment(&mut self, s: &Segment) {
         let lo = s.t0.max(self.t_lo);
@@ -136,6 +137,23 @@ impl Observer for WindowStats {
     #[inline]
     fn integrals_after(&self) -> f64 {
         self.t_lo
+    }
+
+    /// Nothing after the window is read.
+    #[inline]
+    fn stretch_until(&self) -> f64 {
+        self.t_hi
+    }
+
+    /// A stretch inside the window (the engine summed only such pieces), merged as it is.
+    #[inline]
+    fn stretch(&mut self, s: &Stretch) {
+        if s.friction.weight > 0.0 {
+            s.friction.fold_into(&mut self.friction);
+            self.bond_force_integral += s.bond;
+            self.viscous_integral += s.viscous;
+            self.attached_integral += s.attached;
+        }
     }
 
     #[inline]
@@ -183,6 +201,7 @@ impl RuptureForces {
 
 impl Observer for RuptureForces {
     const EVENTS: bool = true;
+    const STRETCHES: bool = true;
     /// Ruptures only: engines build no event for a formation.
     const FORMATIONS: bool = false;
     #[inline]

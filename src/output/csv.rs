@@ -132,6 +132,7 @@ impl TraceWriter {
 }
 
 impl Observer for TraceWriter {
+    const STRETCHES: bool = true;
     #[inline]
     fn integrals_after(&self) -> f64 {
         f64::INFINITY
@@ -161,6 +162,7 @@ impl EventWriter {
 
 impl Observer for EventWriter {
     const EVENTS: bool = true;
+    const STRETCHES: bool = true;
     #[inline]
     fn integrals_after(&self) -> f64 {
         f64::INFINITY

@@ -8,7 +8,7 @@ use super::error::{RunError, output_error};
 use super::progress::Probe;
 use crate::observe::regime::RegimeDetector;
 use crate::observe::stats::{RuptureForces, WindowStats};
-use crate::observe::{JunctionEvent, Nothing, Observer, Piece, Sample, Segment};
+use crate::observe::{JunctionEvent, Nothing, Observer, Piece, Sample, Segment, Stretch};
 use crate::output::csv::{CsvFile, EventWriter, FilePos, TraceWriter};
 use crate::scene::Scene;
 
@@ -134,6 +134,7 @@ impl<X: EventObservers> Observer for RunObservers<X> {
     // The trace writer and the probe want no events.
     const EVENTS: bool = CoreObservers::EVENTS || X::EVENTS;
     const FORMATIONS: bool = (CoreObservers::EVENTS && CoreObservers::FORMATIONS) || (X::EVENTS && X::FORMATIONS);
+    const STRETCHES: bool = CoreObservers::STRETCHES && X::STRETCHES;
     #[inline]
     fn event(&mut self, e: &JunctionEvent) {
         if CoreObservers::EVENTS {
@@ -161,6 +162,18 @@ impl<X: EventObservers> Observer for RunObservers<X> {
     fn integrals_after(&self) -> f64 {
         let writers = self.trace.integrals_after().min(self.events.integrals_after());
         self.core.integrals_after().min(writers).min(self.probe.integrals_after())
+    }
+    #[inline]
+    fn stretch_until(&self) -> f64 {
+        let writers = self.trace.stretch_until().min(self.events.stretch_until());
+        self.core.stretch_until().min(writers).min(self.probe.stretch_until())
+    }
+    #[inline]
+    fn stretch(&mut self, s: &Stretch) {
+        self.core.stretch(s);
+        self.trace.stretch(s);
+        self.events.stretch(s);
+        self.probe.stretch(s);
     }
     #[inline]
     fn stop(&mut self) {

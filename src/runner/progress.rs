@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 
 use indicatif::{HumanDuration, ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::observe::{Observer, Piece, Segment};
+use crate::observe::{Observer, Piece, Segment, Stretch};
 
 /// A run that lasts longer than this shows progress.
 pub const SHOW_AFTER: Duration = Duration::from_millis(1500);
@@ -46,6 +46,7 @@ struct Shared {
 pub struct Probe(Arc<Shared>);
 
 impl Observer for Probe {
+    const STRETCHES: bool = true;
     #[inline]
     fn segment(&mut self, s: &Segment) {
         self.0.t.store(s.t1.to_bits(), Relaxed);
@@ -53,6 +54,10 @@ impl Observer for Probe {
     #[inline]
     fn piece(&mut self, p: &Piece) {
         self.0.t.store(p.t1.to_bits(), Relaxed);
+    }
+    #[inline]
+    fn stretch(&mut self, s: &Stretch) {
+        self.0.t.store(s.t1.to_bits(), Relaxed);
     }
     #[inline]
     fn integrals_after(&self) -> f64 {

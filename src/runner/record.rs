@@ -103,13 +103,17 @@ mod tests {
             let (stats, regime) = &r.core;
             assert_eq!(summary.counters, r.counters, "{o:?}");
             let bits = |v: f64| v.to_bits();
-            for (name, a, b) in [
-                ("friction_mean", summary.friction_mean, stats.friction_mean()),
-                ("friction_std", summary.friction_std, stats.friction_std()),
-                ("bond_force_mean", summary.bond_force_mean, stats.bond_force_mean()),
-                ("attached_fraction_mean", summary.attached_fraction_mean, stats.attached_fraction_mean()),
+            // A plain exact run sums stretches, a recording its pieces: the same statistics
+            // to rounding (the fixed engine's bit for bit).
+            let scale = stats.friction_mean().abs() + stats.friction_std();
+            let rel = if scene.run.engine == crate::scene::EngineKind::Exact { 1e-12 } else { 0.0 };
+            for (name, a, b, tol) in [
+                ("friction_mean", summary.friction_mean, stats.friction_mean(), rel * scale),
+                ("friction_std", summary.friction_std, stats.friction_std(), 1e2 * rel * scale),
+                ("bond_force_mean", summary.bond_force_mean, stats.bond_force_mean(), rel * scale),
+                ("attached_fraction_mean", summary.attached_fraction_mean, stats.attached_fraction_mean(), rel),
             ] {
-                assert_eq!(bits(a), bits(b), "{o:?}: {name} {a} vs {b}");
+                assert!((a - b).abs() <= tol, "{o:?}: {name} {a} vs {b}");
             }
             let v = regime.verdict();
             assert_eq!((summary.regime, summary.stick_slip_cycles), (v.regime, v.cycles));

@@ -295,7 +295,10 @@ pub fn regularity(ranges: &[f64]) -> (Option<f64>, Option<f64>) {
     (Some(var.sqrt() / mean), limit.is_finite().then_some(limit))
 }
 
+/// Stretches come from exact engines, which have no plate step to judge (a stretch is
+/// taken and ignored).
 impl Observer for RegimeDetector {
+    const STRETCHES: bool = true;
     /// The fixed-step engine reports one segment per step, starting at `F_n`.
     #[inline]
     fn segment(&mut self, s: &Segment) {

@@ -64,6 +64,7 @@ impl<K: Kernel> Engine for Exact<K> {
             }
             if !due {
                 k.close(core, tau_stop, obs)?;
+                k.stopped(core, obs);
                 maybe_rebase(core, k, obs);
                 k.restart(core);
                 return Ok(());

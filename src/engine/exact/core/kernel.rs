@@ -92,6 +92,10 @@ pub trait Kernel: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send 
     }
     /// Reports the current piece up to `t` as a segment and moves the plate there.
     fn close<O: Observer>(&mut self, core: &mut Core<Self::Queue>, t: f64, obs: &mut O) -> Result<(), EngineError>;
+    /// The advance ends here (its last piece closed): a kernel that sums pieces for the
+    /// observer ([`Observer::stretch`]) reports them.
+    #[inline]
+    fn stopped<O: Observer>(&mut self, _core: &Core<Self::Queue>, _obs: &mut O) {}
     /// Starts a new piece at the current time and state, after an event.
     fn open_piece(&mut self, core: &mut Core<Self::Queue>);
     /// Starts a new piece where no event happened (a stop, the end of a horizon).

@@ -137,6 +137,10 @@ pub struct LinearKernel<R: RuptureModel, Q: ChannelQueue, M: PlateMotion = Dynam
     rupture: R,
     /// The next uniform pick of a detached junction.
     next_formation: Pick,
+    /// The pieces summed for an observer that takes stretches (empty at the end of every
+    /// advance, so never written).
+    #[serde(skip)]
+    sums: report::Sums,
     #[serde(skip)]
     types: std::marker::PhantomData<(Q, M)>,
 }
@@ -173,6 +177,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
             },
             rupture,
             next_formation,
+            sums: report::Sums::default(),
             types: std::marker::PhantomData,
         };
         Ok(Exact::start(core, kernel))
@@ -181,7 +186,9 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
 
 impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> LinearKernel<R, Q, M> {
     /// Reports `[piece.tau0, tau1]` given the state and integrals at `tau1` as raw integrals
-    /// ([`report::piece`]: no division), and moves there.
+    /// ([`report::piece`]: no division), or sums it for an observer that takes stretches
+    /// ([`Observer::STRETCHES`]: inside `[integrals_after, stretch_until]`; nothing before),
+    /// and moves there.
     #[inline(always)]
     fn report_piece<O: Observer>(
         &mut self,
@@ -203,7 +210,12 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> LinearKernel<R, Q, M> {
                 n_att: core.bags.n_attached(),
                 anchor_sum: core.bags.anchor_sum(),
             };
-            obs.piece(&report::piece(&start, core.frame.time(tau1), h, y1, ints, &core.plate, self.kappa));
+            let t1 = core.frame.time(tau1);
+            if O::STRETCHES && O::SEGMENTS && start.t0 >= obs.integrals_after() && t1 <= obs.stretch_until() {
+                self.sums.add(&start, pc.v0, t1, h, y1, v1, ints, core.plate.v);
+            } else if !O::STRETCHES || t1 > obs.integrals_after() {
+                obs.piece(&report::piece(&start, t1, h, y1, ints, &core.plate, self.kappa));
+            }
         }
         core.tau = tau1;
         self.y = y1;
@@ -326,6 +338,14 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
         self.check(core)
     }
 
+    /// Reports the pieces summed in this advance as one stretch.
+    #[inline]
+    fn stopped<O: Observer>(&mut self, core: &Core<Q>, obs: &mut O) {
+        if O::STRETCHES && O::SEGMENTS {
+            obs.stretch(&self.sums.take(&core.plate, core.frame.time(core.tau)));
+        }
+    }
+
     /// Starts a new closed-form piece at the current time and state.
     #[inline]
     fn open_piece(&mut self, core: &mut Core<Q>) {
@@ -349,7 +369,8 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
     }
 
     #[inline]
-    fn shifted(&mut self, _core: &Core<Q>, _dtau: f64, _dy: f64) {
+    fn shifted(&mut self, _core: &Core<Q>, _dtau: f64, dy: f64) {
+        self.sums.shifted(dy);
         self.y = 0.0;
         self.piece.tau0 = 0.0;
         self.piece.y0 = 0.0;

@@ -1,5 +1,6 @@
 //! What a closed-form piece of the linear engine reports: its raw time integrals
-//! ([`Piece`]) from the propagator's integrals, with no division.
+//! ([`Piece`]) from the propagator's integrals, with no division; or, for an observer that
+//! takes stretches, the pieces summed ([`Sums`]) and reported as one [`Stretch`] per advance.
 //!
 //! With `w(s) = y(s) - y0 - V s` the lag is `lag0 + w(s)` and the friction `F = -K lag`, so
 //! with `i1 = int (y - y0)` and `i2 = int w^2` over `[0, h]` ([`Integrals`]):
@@ -8,9 +9,17 @@
 //!     int (F - F0) = -K int w = -K (i1 - V h^2 / 2),      int (F - F0)^2 = K^2 i2,
 //!     int F_b = kappa (N_att (h y0 + i1) - h C),          int eta y' = eta (y1 - y0).
 //! ```
+//!
+//! [`Sums`] keeps the lag's shifted sums about the lag `r` at its first piece,
+//! `S1 = sum int (lag - r)` and `S2 = sum int (lag - r)^2` (with `d = lag0 - r`, a piece adds
+//! `h d + int w` and `h d^2 + 2 d int w + int w^2`: multiply-adds alone), the time and the
+//! attached count's integral; the friction's sums are `-K` and `K^2` times the lag's, and
+//! the bond and viscous forces' integrals follow from the plate's state at the stretch's
+//! two ends ([`Stretch`]).
 
 use crate::engine::exact::linear::propagator::Integrals;
-use crate::observe::Piece;
+use crate::observe::shifted::ShiftedSums;
+use crate::observe::{Piece, Stretch};
 use crate::physics::Plate;
 
 /// Where a piece starts: absolute time `t0`, local position `y0` and lag `lag0`; the
@@ -40,6 +49,82 @@ pub(super) fn piece(start: &Start, t1: f64, h: f64, y1: f64, ints: Integrals, p:
         bond: kappa * (n * (h * start.y0 + ints.i1) - h * start.anchor_sum),
         viscous: p.eta * (y1 - start.y0),
         attached: start.n_att as u64,
+    }
+}
+
+/// The pieces summed since the last report (lag units, local positions): empty when
+/// `weight = 0`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct Sums {
+    /// Absolute start time and the lag `r` at it.
+    t0: f64,
+    lag_ref: f64,
+    /// `W = sum h`, `S1`, `S2` (module doc).
+    weight: f64,
+    s1: f64,
+    s2: f64,
+    /// `sum h N_att`.
+    attached: f64,
+    /// Absolute end time of the last piece.
+    t1: f64,
+    /// The plate's local position and velocity at the start and at the end.
+    y0: f64,
+    v0: f64,
+    y1: f64,
+    v1: f64,
+}
+
+impl Sums {
+    /// Adds the piece `[start.t0, t1]` of length `h` from velocity `v0`, ending at
+    /// `(y1, v1)`, with the propagator's integrals `ints` (drift `v`).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn add(&mut self, start: &Start, v0: f64, t1: f64, h: f64, y1: f64, v1: f64, ints: Integrals, v: f64) {
+        if self.weight == 0.0 {
+            self.t0 = start.t0;
+            self.lag_ref = start.lag0;
+            self.y0 = start.y0;
+            self.v0 = v0;
+        }
+        let d = start.lag0 - self.lag_ref;
+        let w1 = ints.i1 - 0.5 * v * h * h;
+        let hd = h * d;
+        self.weight += h;
+        self.s1 += hd + w1;
+        self.s2 += hd * d + (2.0 * d * w1 + ints.i2);
+        self.attached += h * start.n_att as f64;
+        self.t1 = t1;
+        self.y1 = y1;
+        self.v1 = v1;
+    }
+
+    /// The local origin moved by `dy` in position.
+    #[inline]
+    pub(super) fn shifted(&mut self, dy: f64) {
+        self.y0 -= dy;
+        self.y1 -= dy;
+    }
+
+    /// The stretch summed (empty, at `now`, if nothing was), for plate `p`; `self` empties.
+    #[inline]
+    pub(super) fn take(&mut self, p: &Plate, now: f64) -> Stretch {
+        let s = std::mem::take(self);
+        if s.weight == 0.0 {
+            return Stretch { t0: now, t1: now, ..Stretch::default() };
+        }
+        let k = p.k;
+        let friction = ShiftedSums { reference: -k * s.lag_ref, weight: s.weight, s1: -k * s.s1, s2: (k * k) * s.s2 };
+        // int F = -K int lag; M X'' + eta X' = F - F_b over the stretch.
+        let int_f = -k * (s.lag_ref * s.weight + s.s1);
+        let viscous = p.eta * (s.y1 - s.y0);
+        Stretch {
+            t0: s.t0,
+            t1: s.t1,
+            friction,
+            bond: int_f - viscous - p.mass * (s.v1 - s.v0),
+            viscous,
+            attached: s.attached,
+        }
     }
 }
 
@@ -77,7 +162,8 @@ mod tests {
     /// boundary to another (the runner stops at both): the window statistics summed from
     /// the pieces ([`piece`], shifted sums folded at stops) equal a direct quadrature of the
     /// piecewise path (friction's mean and standard deviation, bond and viscous force,
-    /// attached fraction).
+    /// attached fraction); and so do the same pieces summed ([`Sums`]) and reported as
+    /// stretches at the stops.
     #[test]
     fn summed_pieces_equal_a_quadrature_of_the_path() {
         let mut rng = pcg(38);
@@ -96,6 +182,8 @@ mod tests {
             });
             let (t_lo, t_hi) = (ends[1], ends[hs.len() - 2]);
             let mut stats = WindowStats::new(t_lo, t_hi, 40);
+            // The same pieces summed in the kernel's way, reported at random stops.
+            let (mut summed, mut sums) = (WindowStats::new(t_lo, t_hi, 40), Sums::default());
             let (mut tau, mut y, mut v) = (0.0, 2.0 * (u() - 0.5), u() - 0.5);
             let (mut want_f, mut want_f2, mut want_b, mut want_v, mut want_a, mut covered) =
                 (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
@@ -109,8 +197,12 @@ mod tests {
                 let (y1, v1, ints) = tr.at_with_integrals(h, p.v);
                 let start = Start { t0: epoch + tau, y0: y, lag0: (y - p.v * tau) + lag_ref, n_att, anchor_sum };
                 stats.piece(&piece(&start, epoch + (tau + h), h, y1, ints, &p, kappa));
+                if start.t0 >= t_lo && epoch + (tau + h) <= t_hi {
+                    sums.add(&start, v, epoch + (tau + h), h, y1, v1, ints, p.v);
+                }
                 if u() < 0.3 {
                     stats.stop();
+                    summed.stretch(&sums.take(&p, epoch + (tau + h)));
                 }
                 // The reference: the path on the pieces inside the window.
                 if start.t0 >= t_lo && epoch + (tau + h) <= t_hi {
@@ -124,6 +216,7 @@ mod tests {
                 }
                 (tau, y, v) = (tau + h, y1, v1);
             }
+            summed.stretch(&sums.take(&p, epoch + tau));
             let mean = want_f / covered;
             let std = (want_f2 / covered - mean * mean).sqrt();
             let scale = mean.abs() + std;
@@ -137,6 +230,14 @@ mod tests {
             assert!((stats.bond_force_mean() - want_b / covered).abs() < 1e-10 * bscale, "{ctx}: bond");
             assert!((stats.viscous_mean() - want_v / covered).abs() < 1e-10 * (1.0 + p.eta), "{ctx}: viscous");
             assert!((stats.attached_fraction_mean() - want_a / covered / 40.0).abs() < 1e-12, "{ctx}: attached");
+            // Summed: the bond and viscous forces from the plate equation at the ends.
+            let s = &summed;
+            assert!((s.covered() - covered).abs() < 1e-12, "{ctx}: summed covered {} of {covered}", s.covered());
+            assert!((s.friction_mean() - mean).abs() < 1e-10 * scale, "{ctx}: summed {} vs {mean}", s.friction_mean());
+            assert!((s.friction_std() - std).abs() < tol, "{ctx}: summed std {} vs {std}", s.friction_std());
+            assert!((s.bond_force_mean() - want_b / covered).abs() < 1e-10 * (bscale + scale), "{ctx}: summed bond");
+            assert!((s.viscous_mean() - want_v / covered).abs() < 1e-10 * (1.0 + p.eta), "{ctx}: summed viscous");
+            assert!((s.attached_fraction_mean() - want_a / covered / 40.0).abs() < 1e-12, "{ctx}: summed attached");
         }
     }
 }
