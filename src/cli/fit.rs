@@ -175,6 +175,9 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
         .p_value
         .map_or_else(|| "no p-value (sigma estimated from the residuals)".to_string(), |p| format!("p-value {p:.4}"));
     println!("  misfit chi2 = {:.4} with {} degrees of freedom; {p}", r.chi2, r.dof);
+    if let Some(w) = crate::fit::report::noise_warning(&r) {
+        eprintln!("warning: {w}");
+    }
     println!("output in {} (fit.json, fit.csv, fit.toml, fit.svg)", out.display());
     ExitCode::SUCCESS
 }

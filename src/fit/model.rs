@@ -213,6 +213,10 @@ impl<'a> Objective<'a> {
             if let Some(&i) = c.index.get(&k) {
                 return Ok(c.list[i].clone());
             }
+            // Another search (a profile's side) has failed: stop this one too.
+            if c.error.is_some() {
+                return Err(FitError::Stopped { done: c.list.len() });
+            }
             if c.list.len() >= self.max {
                 return Err(FitError::TooMany { max: self.max });
             }
@@ -240,6 +244,11 @@ impl<'a> Objective<'a> {
         }
         let e = p.evaluation(values, &friction);
         let mut c = self.state.lock().unwrap_or_else(|p| p.into_inner());
+        // Made meanwhile by another search (the same values give the same evaluation):
+        // kept once.
+        if let Some(&i) = c.index.get(&k) {
+            return Ok(c.list[i].clone());
+        }
         let n = c.list.len();
         if let Some(j) = self.journal {
             j.append(n, p.base.run.seed, &e).map_err(|err| FitError::Journal(err.to_string()))?;

@@ -1,10 +1,10 @@
 //! The whole fit: the optimum (Nelder–Mead from the scene's values, restarted once from its
-//! best point), the goodness of fit, the profile interval of every free parameter, and the
-//! band of the fitted curve.
+//! best point), the goodness of fit, the profile interval of every free parameter (the 2p
+//! sides of the profiles followed at the same time), and the band of the fitted curve.
 
 use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor};
 
-use super::intervals::{Interval, profile};
+use super::intervals::{Interval, Side, interval, side};
 use super::model::{Evaluation, FitError, Objective};
 use super::optimise::{Settings, minimise};
 
@@ -34,8 +34,14 @@ pub struct FitResult {
     /// Per data point, the least and greatest simulated friction over the evaluations in
     /// the joint 95 % region.
     pub band: Vec<(f64, f64)>,
+    /// The simulation's noise beside the data's at the optimum: the largest `se_i / sigma_i`
+    /// (sigma given or estimated). Well below 1 for intervals at their nominal coverage.
+    pub noise_ratio: f64,
     pub evaluations: usize,
 }
+
+/// A `noise_ratio` above this is reported: raise the replicas or the runs' length.
+pub const NOISE_RATIO_WARN: f64 = 0.5;
 
 fn quantile95(d: impl ContinuousCDF<f64, f64>) -> f64 {
     d.inverse_cdf(0.95)
@@ -76,9 +82,25 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
             p as f64 * quantile95(FisherSnedecor::new(p as f64, d).expect("dof > 0")),
         )
     };
+    // The 2p sides of the profiles are independent searches: each on its own thread, so
+    // that their evaluations run side by side (on the pool, or on a cluster). Each side's
+    // evaluations, and so the intervals, do not depend on what runs next to it.
+    let sides: Vec<Option<Side>> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..p)
+            .flat_map(|j| [(j, -1.0), (j, 1.0)])
+            .map(|(j, dir)| {
+                let (score_y, best_y) = (&score_y, &best_y);
+                s.spawn(move || side(score_y, best_y, score, unit, threshold, j, dir))
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap_or(None)).collect()
+    });
     let mut intervals = Vec::with_capacity(p);
+    let mut sides = sides.into_iter();
     for j in 0..p {
-        intervals.push(profile(&score_y, &best_y, score, unit, threshold, j).ok_or_else(stopped)?);
+        let (low, high) = (sides.next().flatten(), sides.next().flatten());
+        let (Some(low), Some(high)) = (low, high) else { return Err(stopped()) };
+        intervals.push(interval(best_y[j], threshold, low, high));
     }
     let values: Vec<f64> = prob.free.iter().zip(&best_y).map(|(f, &v)| f.value(v)).collect();
     let best = obj.evaluate(&values)?;
@@ -91,6 +113,13 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
                 .fold((best.mean[i], best.mean[i]), |(lo, hi), m| (lo.min(m), hi.max(m)))
         })
         .collect();
+    let noise_ratio = prob
+        .data
+        .points
+        .iter()
+        .zip(&best.se)
+        .map(|(q, se)| se / q.sigma.unwrap_or(unit.sqrt()))
+        .fold(0.0, f64::max);
     let chi2 = score / unit;
     let p_value = (has_sigma && dof > 0).then(|| 1.0 - ChiSquared::new(dof as f64).expect("dof > 0").cdf(chi2));
     Ok(FitResult {
@@ -105,6 +134,7 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
         band_threshold,
         intervals,
         band,
+        noise_ratio,
         evaluations: obj.evaluations(),
     })
 }
