@@ -71,14 +71,17 @@ pub fn profile(
     threshold: f64,
     j: usize,
 ) -> Option<Interval> {
-    let low = side(score, best, best_score, unit, threshold, j, -1.0)?;
-    let high = side(score, best, best_score, unit, threshold, j, 1.0)?;
+    let low = side(score, best, best_score, unit, threshold, j, -1.0, 0.0)?;
+    let high = side(score, best, best_score, unit, threshold, j, 1.0, 0.0)?;
     Some(interval(best[j], threshold, low, high))
 }
 
 /// One side of parameter `j`'s profile: followed from the optimum towards the lower bound
 /// (`dir = -1`) or the upper one (`dir = 1`). It depends only on the misfit, not on what
-/// else runs meanwhile. `None` if an evaluation stopped it.
+/// else runs meanwhile. Each profile point re-optimises the others until their simplex's
+/// misfits spread less than `0.02 * unit` or `noise` (the misfit's simulation noise, below
+/// which a search follows noise), whichever is larger. `None` if an evaluation stopped it.
+#[allow(clippy::too_many_arguments)]
 pub fn side(
     score: &(dyn Fn(&[f64]) -> Option<f64> + Sync),
     best: &[f64],
@@ -87,10 +90,12 @@ pub fn side(
     threshold: f64,
     j: usize,
     dir: f64,
+    noise: f64,
 ) -> Option<Side> {
     let p = best.len();
     let others = |y: &[f64]| -> Vec<f64> { y.iter().enumerate().filter(|&(k, _)| k != j).map(|(_, &v)| v).collect() };
-    let settings = Settings { step: 0.03, tolerance: 0.02 * unit, max_iters: 10 * (p as u64 - 1).max(1) + 5, unit };
+    let tolerance = (0.02 * unit).max(noise);
+    let settings = Settings { step: 0.03, tolerance, max_iters: 10 * (p as u64 - 1).max(1) + 5, unit };
     let mut points = Vec::new();
     // The rise at y_j = y, re-optimising the others from `warm`; returns (rise, others).
     let mut at = |y: f64, warm: &[f64]| -> Option<(f64, Vec<f64>)> {

@@ -148,6 +148,28 @@ impl Problem {
             .sum()
     }
 
+    /// The standard deviation of the score's simulation noise at `e`: each mean `F_sim_i`
+    /// carries noise of standard error `se_i`, which moves the score by
+    /// `2 r_i se_i / s_i^2` (`r_i = F_sim_i - F_i`; `2 r_i se_i` without sigma), so
+    /// `sqrt(sum_i (2 r_i se_i / s_i^2)^2)`. Differences of the score below it are noise:
+    /// the optimiser's tolerance is not set below it ([`super::solve`]). 0 with one replica.
+    pub fn score_noise(&self, e: &Evaluation) -> f64 {
+        self.data
+            .points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let r = e.mean[i] - p.friction;
+                let d = match p.sigma {
+                    Some(s) => 2.0 * r * e.se[i] / (s * s + e.se[i] * e.se[i]),
+                    None => 2.0 * r * e.se[i],
+                };
+                d * d
+            })
+            .sum::<f64>()
+            .sqrt()
+    }
+
     /// The arguments that decide the evaluations, as one line (for the journal's header):
     /// the free parameters, the replicas, and a checksum of the data as read.
     pub fn arguments(&self, max_evaluations: usize) -> String {

@@ -11,6 +11,10 @@ use super::optimise::{Settings, minimise};
 /// Nelder–Mead iterations per free parameter, for each of the two searches of the optimum.
 pub const ITERS_PER_PARAMETER: u64 = 80;
 
+/// The optimiser's tolerance is at least this many times the misfit's simulation noise
+/// ([`super::model::Problem::score_noise`]).
+pub const NOISE_TOLERANCE: f64 = 0.5;
+
 /// What a fit found.
 #[derive(Clone, Debug)]
 pub struct FitResult {
@@ -63,11 +67,19 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
     let mean_square = prob.data.points.iter().map(|q| q.friction * q.friction).sum::<f64>() / n as f64;
     let first_unit = if has_sigma { 1.0 } else { 1e-4 * mean_square.max(f64::MIN_POSITIVE) };
     let iters = ITERS_PER_PARAMETER * p as u64;
-    let s1 = Settings { step: 0.1, tolerance: 1e-2 * first_unit, max_iters: iters, unit: first_unit };
+    // A search stops when its simplex's misfits spread less than the tolerance, never set
+    // below NOISE_TOLERANCE times the misfit's simulation noise where the search starts:
+    // below that, the simplex would only follow the noise.
+    let noise_at = |y: &[f64]| -> Result<f64, FitError> {
+        let values: Vec<f64> = prob.free.iter().zip(y).map(|(f, &v)| f.value(v)).collect();
+        Ok(NOISE_TOLERANCE * prob.score_noise(&obj.evaluate(&values)?))
+    };
+    let tolerance = 1e-2 * first_unit;
+    let s1 = Settings { step: 0.1, tolerance: tolerance.max(noise_at(&start)?), max_iters: iters, unit: first_unit };
     let (y1, v1) = minimise(&score_y, &start, s1).ok_or_else(stopped)?;
     let dof = n - p;
     let unit = if has_sigma { 1.0 } else { (v1 / dof as f64).max(f64::MIN_POSITIVE) };
-    let s2 = Settings { step: 0.05, tolerance: 1e-3 * unit, max_iters: iters, unit };
+    let s2 = Settings { step: 0.05, tolerance: (1e-3 * unit).max(noise_at(&y1)?), max_iters: iters, unit };
     let (mut best_y, mut score) = minimise(&score_y, &y1, s2).ok_or_else(stopped)?;
     if v1 < score {
         (best_y, score) = (y1, v1);
@@ -82,6 +94,7 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
             p as f64 * quantile95(FisherSnedecor::new(p as f64, d).expect("dof > 0")),
         )
     };
+    let noise = noise_at(&best_y)?;
     // The 2p sides of the profiles are independent searches: each on its own thread, so
     // that their evaluations run side by side (on the pool, or on a cluster). Each side's
     // evaluations, and so the intervals, do not depend on what runs next to it.
@@ -90,7 +103,7 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
             .flat_map(|j| [(j, -1.0), (j, 1.0)])
             .map(|(j, dir)| {
                 let (score_y, best_y) = (&score_y, &best_y);
-                s.spawn(move || side(score_y, best_y, score, unit, threshold, j, dir))
+                s.spawn(move || side(score_y, best_y, score, unit, threshold, j, dir, noise))
             })
             .collect();
         handles.into_iter().map(|h| h.join().unwrap_or(None)).collect()
