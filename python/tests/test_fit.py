@@ -46,6 +46,8 @@ trace = false
 """
 VELOCITIES = "0.1,0.3,1,3"
 FREE = "junctions.k0,junctions.kon0"
+# The kill tests fit one parameter (a tenth of the evaluations, each a round trip to Dask).
+ONE = "junctions.k0"
 FILES = ["fit.json", "fit.csv", "fit.toml", "fit.svg"]
 
 
@@ -71,13 +73,20 @@ def inputs(cli, tmp_path_factory):
     return scene, data
 
 
-@pytest.fixture(scope="module")
-def cli_fit(cli, inputs, tmp_path_factory):
-    scene, data = inputs
-    out = tmp_path_factory.mktemp("fit-cli") / "cli"
-    p = cli("fit", scene, data, "--free", FREE, "--replicas", "2", "--threads", "2", "--out", out)
+def command_fit(cli, scene, data, free, out):
+    p = cli("fit", scene, data, "--free", free, "--replicas", "2", "--threads", "2", "--out", out)
     assert p.returncode == 0, p.stderr
     return out
+
+
+@pytest.fixture(scope="module")
+def cli_fit(cli, inputs, tmp_path_factory):
+    return command_fit(cli, *inputs, FREE, tmp_path_factory.mktemp("fit-cli") / "cli")
+
+
+@pytest.fixture(scope="module")
+def cli_fit_one(cli, inputs, tmp_path_factory):
+    return command_fit(cli, *inputs, ONE, tmp_path_factory.mktemp("fit-cli-one") / "cli")
 
 
 def same_files(a: Path, b: Path) -> None:
@@ -127,29 +136,29 @@ def kill_after(cmd: list, out: Path, lines: int) -> None:
     assert not (out / "fit.json").exists(), "killed before it finished"
 
 
-def test_a_killed_python_fit_continues_to_the_same_files(cli_fit, inputs, client, tmp_path):
+def test_a_killed_python_fit_continues_to_the_same_files(cli_fit_one, inputs, client, tmp_path):
     scene, data = inputs
-    total = journal_lines(cli_fit)
+    total = journal_lines(cli_fit_one)
     script = tmp_path / "killed.py"
     script.write_text(textwrap.dedent(KILLED))
     out = tmp_path / "cut"
-    kill_after([sys.executable, str(script), str(scene), str(data), FREE, str(out)], out, total // 3)
+    kill_after([sys.executable, str(script), str(scene), str(data), ONE, str(out)], out, total // 3)
     kept = journal_lines(out) - 1
-    r = stickslip.fit(scene, data, FREE, replicas=2, client=client, out=out)
-    same_files(cli_fit, out)
+    r = stickslip.fit(scene, data, ONE, replicas=2, client=client, out=out)
+    same_files(cli_fit_one, out)
     assert r.made == r.evaluations - kept and 0 < kept < r.evaluations
     assert journal_lines(out) == total
 
 
-def test_python_continues_a_killed_commands_journal(cli, cli_fit, inputs, client, tmp_path):
+def test_python_continues_a_killed_commands_journal(cli, cli_fit_one, inputs, client, tmp_path):
     scene, data = inputs
-    total = journal_lines(cli_fit)
+    total = journal_lines(cli_fit_one)
     out = tmp_path / "cut"
     binary = os.environ.get("STICKSLIP_BIN", str(Path(__file__).resolve().parents[2] / "target/release/stickslip"))
-    kill_after([binary, "fit", str(scene), str(data), "--free", FREE, "--replicas", "2", "--threads", "1",
+    kill_after([binary, "fit", str(scene), str(data), "--free", ONE, "--replicas", "2", "--threads", "1",
                 "--out", str(out)], out, total // 2)
-    r = stickslip.fit(scene, data, FREE, replicas=2, client=client, out=out)
-    same_files(cli_fit, out)
+    r = stickslip.fit(scene, data, ONE, replicas=2, client=client, out=out)
+    same_files(cli_fit_one, out)
     assert 0 < r.made < r.evaluations
 
 
