@@ -28,7 +28,9 @@ use crate::{bad_input, failed};
 pub fn fit_run(py: Python<'_>, scene_toml: &str, name: &str) -> PyResult<f64> {
     let scene = stickslip::Scene::from_toml_str(scene_toml, name, name, &[]).map_err(bad_input)?;
     let seed = scene.run.seed;
-    py.detach(|| run_scene(&scene, None)).map(|s| s.friction_per_junction).map_err(|e| failed(format!("seed {seed}: {e}")))
+    py.detach(|| run_scene(&scene, None))
+        .map(|s| s.friction_per_junction)
+        .map_err(|e| failed(format!("seed {seed}: {e}")))
 }
 
 /// A prepared fit: validated and seeded, not run.

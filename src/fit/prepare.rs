@@ -24,8 +24,8 @@ pub fn problem(
     friction_scale: f64,
 ) -> Result<Problem, String> {
     let origin = data.display().to_string();
-    let text = std::fs::read_to_string(data)
-        .map_err(|e| format!("cannot read data file {}: {e}", printable(&origin)))?;
+    let text =
+        std::fs::read_to_string(data).map_err(|e| format!("cannot read data file {}: {e}", printable(&origin)))?;
     let data = DataSet::parse(&text, &origin, &base, friction_scale).map_err(|e| e.to_string())?;
     let free = parse_free(free, &base, &data)?;
     let problem = Problem::new(base, data, free, replicas).map_err(|m| format!("{}: {m}", printable(&origin)))?;

@@ -110,10 +110,10 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
     });
     let mut intervals = Vec::with_capacity(p);
     let mut sides = sides.into_iter();
-    for j in 0..p {
+    for &y in &best_y {
         let (low, high) = (sides.next().flatten(), sides.next().flatten());
         let (Some(low), Some(high)) = (low, high) else { return Err(stopped()) };
-        intervals.push(interval(best_y[j], threshold, low, high));
+        intervals.push(interval(y, threshold, low, high));
     }
     let values: Vec<f64> = prob.free.iter().zip(&best_y).map(|(f, &v)| f.value(v)).collect();
     let best = obj.evaluate(&values)?;
@@ -126,13 +126,8 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
                 .fold((best.mean[i], best.mean[i]), |(lo, hi), m| (lo.min(m), hi.max(m)))
         })
         .collect();
-    let noise_ratio = prob
-        .data
-        .points
-        .iter()
-        .zip(&best.se)
-        .map(|(q, se)| se / q.sigma.unwrap_or(unit.sqrt()))
-        .fold(0.0, f64::max);
+    let noise_ratio =
+        prob.data.points.iter().zip(&best.se).map(|(q, se)| se / q.sigma.unwrap_or(unit.sqrt())).fold(0.0, f64::max);
     let chi2 = score / unit;
     let p_value = (has_sigma && dof > 0).then(|| 1.0 - ChiSquared::new(dof as f64).expect("dof > 0").cdf(chi2));
     Ok(FitResult {
