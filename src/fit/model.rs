@@ -132,20 +132,18 @@ impl Problem {
         Evaluation { values: values.to_vec(), mean, se }
     }
 
+    /// Per data point of `e`: the residual `r_i = F_sim_i - F_i`, its variance `s_i^2 =
+    /// sigma_i^2 + se_i^2` (1 without sigma) and `se_i`.
+    fn residuals<'e>(&'e self, e: &'e Evaluation) -> impl Iterator<Item = (f64, f64, f64)> + 'e {
+        self.data.points.iter().enumerate().map(|(i, p)| {
+            let se = e.se[i];
+            (e.mean[i] - p.friction, p.sigma.map_or(1.0, |s| s * s + se * se), se)
+        })
+    }
+
     /// The score of an evaluation: `chi2` with sigma given, `SSR` without.
     pub fn score(&self, e: &Evaluation) -> f64 {
-        self.data
-            .points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let r = e.mean[i] - p.friction;
-                match p.sigma {
-                    Some(s) => r * r / (s * s + e.se[i] * e.se[i]),
-                    None => r * r,
-                }
-            })
-            .sum()
+        self.residuals(e).map(|(r, var, _)| r * r / var).sum()
     }
 
     /// The standard deviation of the score's simulation noise at `e`: each mean `F_sim_i`
@@ -154,20 +152,7 @@ impl Problem {
     /// `sqrt(sum_i (2 r_i se_i / s_i^2)^2)`. Differences of the score below it are noise:
     /// the optimiser's tolerance is not set below it ([`super::solve`]). 0 with one replica.
     pub fn score_noise(&self, e: &Evaluation) -> f64 {
-        self.data
-            .points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let r = e.mean[i] - p.friction;
-                let d = match p.sigma {
-                    Some(s) => 2.0 * r * e.se[i] / (s * s + e.se[i] * e.se[i]),
-                    None => 2.0 * r * e.se[i],
-                };
-                d * d
-            })
-            .sum::<f64>()
-            .sqrt()
+        self.residuals(e).map(|(r, var, se)| (2.0 * r * se / var).powi(2)).sum::<f64>().sqrt()
     }
 
     /// The arguments that decide the evaluations, as one line (for the journal's header):
