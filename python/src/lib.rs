@@ -1,12 +1,13 @@
 //! `stickslip._stickslip`: the native module of the Python package `stickslip`
 //! (python/stickslip/). Thin bindings of the library: scenes ([`scene`]), runs ([`run`]),
-//! sweeps ([`sweep`]) and friction laws ([`law`]). Every rule (validation, seeds,
+//! sweeps ([`sweep`]), friction laws ([`law`]) and fits ([`fit`]). Every rule (validation, seeds,
 //! aggregation, the tables' text) stays in the library, so Python and the CLI cannot drift apart; the Python layer adds
 //! arrays, DataFrames and the Dask scheduling.
 //!
 //! Errors: bad input is a `ValueError` whose text is the CLI's one-line message (what
 //! `stickslip` prints after `error: `); a run that fails is a `RuntimeError`.
 
+mod fit;
 mod law;
 mod run;
 mod scene;
@@ -38,5 +39,7 @@ fn _stickslip(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sweep::parse_values, m)?)?;
     m.add_class::<law::FrictionLaw>()?;
     m.add_function(wrap_pyfunction!(law::friction_law, m)?)?;
+    m.add_class::<fit::Fit>()?;
+    m.add_function(wrap_pyfunction!(fit::fit_run, m)?)?;
     Ok(())
 }

@@ -9,6 +9,8 @@ the letter's fixed-step scheme); this package binds it with PyO3:
   without pandas);
 - :func:`sweep` -- a parameter sweep on Dask distributed (a LocalCluster when no client is
   given), the same seeds and the same ``sweep.csv`` table as ``stickslip sweep``;
+- :func:`fit` -- calibration: scene fields fitted to a measured friction curve, with 95 %
+  intervals, its evaluations on Dask distributed, the files of ``stickslip fit``;
 - :func:`friction_law` -- a map over ``plate.v`` and ``junctions.temperature`` as a friction
   law for continuum codes, the files of ``stickslip friction-law``.
 
@@ -22,6 +24,7 @@ from ._stickslip import Scene, __version__
 from ._run import Result, StabilityWarning, load, run
 from ._sweep import SweepResult, log_range, linear_range, run_sweep, sweep
 from ._law import FrictionLawResult, friction_law
+from ._fit import FitResult, fit
 
 __all__ = [
     "Scene",
@@ -29,6 +32,8 @@ __all__ = [
     "StabilityWarning",
     "SweepResult",
     "FrictionLawResult",
+    "FitResult",
+    "fit",
     "friction_law",
     "load",
     "run",

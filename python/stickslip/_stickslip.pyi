@@ -2,7 +2,7 @@
 library. Use the package's functions (``stickslip.run``, ``stickslip.sweep``); these are
 their building blocks."""
 
-from typing import Optional
+from typing import Callable, Optional
 
 __version__: str
 
@@ -96,3 +96,21 @@ def friction_law(
 ) -> FrictionLaw:
     """The law of a finished sweep's directory (a path) or of a ``SweepOutcome``: the
     arguments of :func:`stickslip.friction_law`. Raises ValueError with the CLI's message."""
+
+def fit_run(scene_toml: str, name: str) -> float:
+    """One run of a fit (no files): its mean friction per junction. RuntimeError naming
+    the seed when the run fails."""
+
+class Fit:
+    """A prepared fit (``stickslip fit``): validated and seeded, not run."""
+
+    def __init__(
+        self, base: Scene, data: str, free: list[str], replicas: int = 4, friction_scale: float = 1.0,
+        max_evaluations: int = 5000,
+    ) -> None: ...
+    def runs_per_evaluation(self) -> int: ...
+    @property
+    def free(self) -> list[str]: ...
+    def run(self, out: str, simulate: Callable[[list[str], list[str]], list[float]]) -> tuple[int, int]:
+        """Runs the fit into the existing directory ``out`` (journal, lock, the four files);
+        returns (evaluations, made now)."""

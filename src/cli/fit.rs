@@ -13,11 +13,10 @@ use super::args::load_scene;
 use super::args::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
 use super::out_dir::prepare_out_dir;
 use super::{signals, study};
-use crate::fit::data::DataSet;
-use crate::fit::free::parse_free;
-use crate::fit::model::{Evaluation, FitError, Objective, PoolSimulator, Problem};
+use crate::fit::model::{Evaluation, FitError, Objective, PoolSimulator};
+use crate::fit::prepare;
 use crate::scene::error::printable;
-use crate::studies::journal::{self, Header, StudyKind};
+use crate::studies::journal::{self, StudyKind};
 
 #[derive(clap::Args, Debug)]
 pub struct FitArgs {
@@ -58,21 +57,9 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
         Err(code) => return code,
     };
     let origin = args.data.display().to_string();
-    let text = match std::fs::read_to_string(&args.data) {
-        Ok(t) => t,
-        Err(e) => return fail(EXIT_BAD_INPUT, format!("cannot read data file {}: {e}", printable(&origin))),
-    };
-    let data = match DataSet::parse(&text, &origin, &base, args.friction_scale) {
-        Ok(d) => d,
-        Err(e) => return fail(EXIT_BAD_INPUT, e),
-    };
-    let free = match parse_free(&args.free, &base, &data) {
-        Ok(f) => f,
-        Err(m) => return fail(EXIT_BAD_INPUT, m),
-    };
-    let problem = match Problem::new(base, data, free, args.replicas as usize) {
+    let problem = match prepare::problem(base, &args.data, &args.free, args.replicas as usize, args.friction_scale) {
         Ok(p) => p,
-        Err(m) => return fail(EXIT_BAD_INPUT, format!("{}: {m}", printable(&origin))),
+        Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
     let starts: Vec<f64> = problem.free.iter().map(|f| f.start).collect();
     let scenes = match problem.scenes(&starts) {
@@ -89,7 +76,7 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
         Err(m) => return fail(EXIT_BAD_INPUT, m),
     };
     let max = args.max_evaluations as usize;
-    let header = Header::new(StudyKind::Fit, problem.arguments(max), &problem.base, max, study::invocation());
+    let header = prepare::header(&problem, max, study::invocation());
     let seeds = vec![problem.base.run.seed; max];
     let mut journal = match study::open::<Evaluation>(StudyKind::Fit, &out, &header, &seeds) {
         Ok(j) => j,
@@ -146,8 +133,7 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
             return fail(EXIT_RUN_FAILED, e);
         }
     };
-    let name = args.data.file_name().map_or_else(|| origin.clone(), |n| n.to_string_lossy().into_owned());
-    if let Err(e) = crate::plot::files::write_fit(&problem, &r, &out, &name) {
+    if let Err(e) = crate::plot::files::write_fit(&problem, &r, &out, &prepare::data_name(&args.data)) {
         return study::write_failed(e, &out);
     }
     println!(
@@ -177,6 +163,9 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
         .p_value
         .map_or_else(|| "no p-value (sigma estimated from the residuals)".to_string(), |p| format!("p-value {p:.4}"));
     println!("  misfit chi2 = {:.4} with {} degrees of freedom; {p}", r.chi2, r.dof);
+    if let Some(w) = crate::fit::report::noise_warning(&r) {
+        eprintln!("warning: {w}");
+    }
     println!("output in {} (fit.json, fit.csv, fit.toml, fit.svg)", out.display());
     ExitCode::SUCCESS
 }

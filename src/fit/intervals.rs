@@ -51,9 +51,18 @@ impl Interval {
     }
 }
 
+/// One side of a profile: where it crosses the threshold (`None`: it stays below it up to
+/// the bound) and its points `(y_j, rise)` in the order made.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Side {
+    pub end: Option<End>,
+    pub points: Vec<(f64, f64)>,
+}
+
 /// The profile interval of parameter `j` around the optimum `best` (unit coordinates), for
 /// the misfit `score` whose minimum is `best_score`, in units of `unit`, at the threshold
-/// `threshold`. `None` if an evaluation stopped it.
+/// `threshold`: its two sides ([`side`], which may run at the same time) joined by
+/// [`interval`]. `None` if an evaluation stopped it.
 pub fn profile(
     score: &(dyn Fn(&[f64]) -> Option<f64> + Sync),
     best: &[f64],
@@ -62,9 +71,31 @@ pub fn profile(
     threshold: f64,
     j: usize,
 ) -> Option<Interval> {
+    let low = side(score, best, best_score, unit, threshold, j, -1.0, 0.0)?;
+    let high = side(score, best, best_score, unit, threshold, j, 1.0, 0.0)?;
+    Some(interval(best[j], threshold, low, high))
+}
+
+/// One side of parameter `j`'s profile: followed from the optimum towards the lower bound
+/// (`dir = -1`) or the upper one (`dir = 1`). It depends only on the misfit, not on what
+/// else runs meanwhile. Each profile point re-optimises the others until their simplex's
+/// misfits spread less than `0.02 * unit` or `noise` (the misfit's simulation noise, below
+/// which a search follows noise), whichever is larger. `None` if an evaluation stopped it.
+#[allow(clippy::too_many_arguments)]
+pub fn side(
+    score: &(dyn Fn(&[f64]) -> Option<f64> + Sync),
+    best: &[f64],
+    best_score: f64,
+    unit: f64,
+    threshold: f64,
+    j: usize,
+    dir: f64,
+    noise: f64,
+) -> Option<Side> {
     let p = best.len();
     let others = |y: &[f64]| -> Vec<f64> { y.iter().enumerate().filter(|&(k, _)| k != j).map(|(_, &v)| v).collect() };
-    let settings = Settings { step: 0.03, tolerance: 0.02 * unit, max_iters: 10 * (p as u64 - 1).max(1) + 5, unit };
+    let tolerance = (0.02 * unit).max(noise);
+    let settings = Settings { step: 0.03, tolerance, max_iters: 10 * (p as u64 - 1).max(1) + 5, unit };
     let mut points = Vec::new();
     // The rise at y_j = y, re-optimising the others from `warm`; returns (rise, others).
     let mut at = |y: f64, warm: &[f64]| -> Option<(f64, Vec<f64>)> {
@@ -80,63 +111,66 @@ pub fn profile(
         points.push((y, rise));
         Some((rise, z))
     };
-    let mut ends = Vec::new();
-    for dir in [-1.0, 1.0] {
-        let (mut y_in, mut d_in, mut z_in) = (best[j], 0.0, others(best));
-        // The previous inner point, for a linear prediction of the others along the profile.
-        let mut prev: Option<(f64, Vec<f64>)> = None;
-        let mut end = None;
-        for off in OFFSETS {
-            let y = (best[j] + dir * off).clamp(0.0, 1.0);
-            if y == y_in {
-                break;
-            }
-            let warm = predict(&prev, y_in, &z_in, y);
-            let (d, z) = at(y, &warm)?;
-            if d >= threshold {
-                let (mut y_out, mut d_out) = (y, d);
-                for _ in 0..BISECTIONS {
-                    let mid = 0.5 * (y_in + y_out);
-                    let warm = predict(&prev, y_in, &z_in, mid);
-                    let (dm, zm) = at(mid, &warm)?;
-                    if dm >= threshold {
-                        (y_out, d_out) = (mid, dm);
-                    } else {
-                        prev = Some((y_in, z_in));
-                        (y_in, d_in, z_in) = (mid, dm, zm);
-                    }
-                }
-                let frac = ((threshold - d_in) / (d_out - d_in)).clamp(0.0, 1.0);
-                end = Some(End { y: y_in + frac * (y_out - y_in), at_bound: false });
-                break;
-            }
-            prev = Some((y_in, std::mem::replace(&mut z_in, z)));
-            (y_in, d_in) = (y, d);
-            if y == 0.0 || y == 1.0 {
-                break;
-            }
+    let (mut y_in, mut d_in, mut z_in) = (best[j], 0.0, others(best));
+    // The previous inner point, for a linear prediction of the others along the profile.
+    let mut prev: Option<(f64, Vec<f64>)> = None;
+    let mut end = None;
+    for off in OFFSETS {
+        let y = (best[j] + dir * off).clamp(0.0, 1.0);
+        if y == y_in {
+            break;
         }
-        let bound = if dir < 0.0 { 0.0 } else { 1.0 };
-        ends.push(end.unwrap_or(End { y: bound, at_bound: true }));
+        let warm = predict(&prev, y_in, &z_in, y);
+        let (d, z) = at(y, &warm)?;
+        if d >= threshold {
+            let (mut y_out, mut d_out) = (y, d);
+            for _ in 0..BISECTIONS {
+                let mid = 0.5 * (y_in + y_out);
+                let warm = predict(&prev, y_in, &z_in, mid);
+                let (dm, zm) = at(mid, &warm)?;
+                if dm >= threshold {
+                    (y_out, d_out) = (mid, dm);
+                } else {
+                    prev = Some((y_in, z_in));
+                    (y_in, d_in, z_in) = (mid, dm, zm);
+                }
+            }
+            let frac = ((threshold - d_in) / (d_out - d_in)).clamp(0.0, 1.0);
+            end = Some(End { y: y_in + frac * (y_out - y_in), at_bound: false });
+            break;
+        }
+        prev = Some((y_in, std::mem::replace(&mut z_in, z)));
+        (y_in, d_in) = (y, d);
+        if y == 0.0 || y == 1.0 {
+            break;
+        }
     }
-    let mut high = ends.pop().expect("two sides");
-    let mut low = ends.pop().expect("two sides");
-    if let Some((vertex, half)) = parabola(&points, best[j], threshold) {
+    Some(Side { end, points })
+}
+
+/// The interval from the two sides of a profile whose optimum is at `y_best`: the raw
+/// crossings, replaced by the smoothing parabola's where it can be fitted.
+pub fn interval(y_best: f64, threshold: f64, low: Side, high: Side) -> Interval {
+    let mut points = low.points;
+    points.extend(high.points);
+    let mut low = low.end.unwrap_or(End { y: 0.0, at_bound: true });
+    let mut high = high.end.unwrap_or(End { y: 1.0, at_bound: true });
+    if let Some((vertex, half)) = parabola(&points, y_best, threshold) {
         let (lo, hi) = (vertex - half, vertex + half);
         low = if lo <= 0.0 || low.at_bound && lo < low.y {
             End { y: 0.0, at_bound: true }
         } else {
-            End { y: lo.min(best[j]), at_bound: false }
+            End { y: lo.min(y_best), at_bound: false }
         };
         high = if hi >= 1.0 || high.at_bound && hi > high.y {
             End { y: 1.0, at_bound: true }
         } else {
-            End { y: hi.max(best[j]), at_bound: false }
+            End { y: hi.max(y_best), at_bound: false }
         };
     }
     let max_rise = points.iter().map(|p| p.1).fold(0.0, f64::max);
     let min_rise = points.iter().map(|p| p.1).fold(0.0, f64::min);
-    Some(Interval { low, high, profile: points, max_rise, min_rise })
+    Interval { low, high, profile: points, max_rise, min_rise }
 }
 
 /// The profile smoothed: a parabola `a + b d + c d^2` in `d = y - y_best` fitted by least

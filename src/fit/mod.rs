@@ -7,6 +7,7 @@
 //!   and journal of evaluations;
 //! - [`optimise`]: argmin's Nelder–Mead over the box of bounds;
 //! - [`intervals`]: profile-likelihood intervals;
+//! - [`prepare`]: a fit from the inputs of `stickslip fit` (and Python's `stickslip.fit`);
 //! - [`solve`]: the whole fit (optimum, goodness of fit, intervals, band);
 //! - [`report`]: its files (`fit.json`, `fit.csv`, `fit.toml`, `fit.svg`).
 //!
@@ -17,5 +18,6 @@ pub mod free;
 pub mod intervals;
 pub mod model;
 pub mod optimise;
+pub mod prepare;
 pub mod report;
 pub mod solve;

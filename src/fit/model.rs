@@ -132,20 +132,27 @@ impl Problem {
         Evaluation { values: values.to_vec(), mean, se }
     }
 
+    /// Per data point of `e`: the residual `r_i = F_sim_i - F_i`, its variance `s_i^2 =
+    /// sigma_i^2 + se_i^2` (1 without sigma) and `se_i`.
+    fn residuals<'e>(&'e self, e: &'e Evaluation) -> impl Iterator<Item = (f64, f64, f64)> + 'e {
+        self.data.points.iter().enumerate().map(|(i, p)| {
+            let se = e.se[i];
+            (e.mean[i] - p.friction, p.sigma.map_or(1.0, |s| s * s + se * se), se)
+        })
+    }
+
     /// The score of an evaluation: `chi2` with sigma given, `SSR` without.
     pub fn score(&self, e: &Evaluation) -> f64 {
-        self.data
-            .points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                let r = e.mean[i] - p.friction;
-                match p.sigma {
-                    Some(s) => r * r / (s * s + e.se[i] * e.se[i]),
-                    None => r * r,
-                }
-            })
-            .sum()
+        self.residuals(e).map(|(r, var, _)| r * r / var).sum()
+    }
+
+    /// The standard deviation of the score's simulation noise at `e`: each mean `F_sim_i`
+    /// carries noise of standard error `se_i`, which moves the score by
+    /// `2 r_i se_i / s_i^2` (`r_i = F_sim_i - F_i`; `2 r_i se_i` without sigma), so
+    /// `sqrt(sum_i (2 r_i se_i / s_i^2)^2)`. Differences of the score below it are noise:
+    /// the optimiser's tolerance is not set below it ([`super::solve`]). 0 with one replica.
+    pub fn score_noise(&self, e: &Evaluation) -> f64 {
+        self.residuals(e).map(|(r, var, se)| (2.0 * r * se / var).powi(2)).sum::<f64>().sqrt()
     }
 
     /// The arguments that decide the evaluations, as one line (for the journal's header):
@@ -213,6 +220,10 @@ impl<'a> Objective<'a> {
             if let Some(&i) = c.index.get(&k) {
                 return Ok(c.list[i].clone());
             }
+            // Another search (a profile's side) has failed: stop this one too.
+            if c.error.is_some() {
+                return Err(FitError::Stopped { done: c.list.len() });
+            }
             if c.list.len() >= self.max {
                 return Err(FitError::TooMany { max: self.max });
             }
@@ -240,6 +251,11 @@ impl<'a> Objective<'a> {
         }
         let e = p.evaluation(values, &friction);
         let mut c = self.state.lock().unwrap_or_else(|p| p.into_inner());
+        // Made meanwhile by another search (the same values give the same evaluation):
+        // kept once.
+        if let Some(&i) = c.index.get(&k) {
+            return Ok(c.list[i].clone());
+        }
         let n = c.list.len();
         if let Some(j) = self.journal {
             j.append(n, p.base.run.seed, &e).map_err(|err| FitError::Journal(err.to_string()))?;

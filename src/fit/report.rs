@@ -37,6 +37,17 @@ pub fn flags(r: &FitResult, j: usize) -> Vec<String> {
     f
 }
 
+/// The warning when the simulation's noise is not small beside the data's
+/// ([`super::solve::NOISE_RATIO_WARN`]), naming the remedy.
+pub fn noise_warning(r: &FitResult) -> Option<String> {
+    (r.noise_ratio > super::solve::NOISE_RATIO_WARN).then(|| {
+        format!(
+            "the simulation's standard error reaches {:.2} of sigma at the optimum: the intervals may be too narrow; raise --replicas or run.t_end",
+            r.noise_ratio
+        )
+    })
+}
+
 /// `fit.json`.
 pub fn fit_json(prob: &Problem, r: &FitResult, data_path: &str) -> String {
     let mut params = Map::new();
@@ -73,6 +84,7 @@ pub fn fit_json(prob: &Problem, r: &FitResult, data_path: &str) -> String {
         "method": METHOD,
         "threshold": num(r.threshold),
         "band_threshold": num(r.band_threshold),
+        "simulation_noise": num(r.noise_ratio),
         "evaluations": r.evaluations,
     });
     let mut s = serde_json::to_string_pretty(&value).expect("JSON values serialize");

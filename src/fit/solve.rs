@@ -1,15 +1,19 @@
 //! The whole fit: the optimum (Nelder–Mead from the scene's values, restarted once from its
-//! best point), the goodness of fit, the profile interval of every free parameter, and the
-//! band of the fitted curve.
+//! best point), the goodness of fit, the profile interval of every free parameter (the 2p
+//! sides of the profiles followed at the same time), and the band of the fitted curve.
 
 use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor};
 
-use super::intervals::{Interval, profile};
+use super::intervals::{Interval, Side, interval, side};
 use super::model::{Evaluation, FitError, Objective};
 use super::optimise::{Settings, minimise};
 
 /// Nelder–Mead iterations per free parameter, for each of the two searches of the optimum.
 pub const ITERS_PER_PARAMETER: u64 = 80;
+
+/// The optimiser's tolerance is at least this many times the misfit's simulation noise
+/// ([`super::model::Problem::score_noise`]).
+pub const NOISE_TOLERANCE: f64 = 0.5;
 
 /// What a fit found.
 #[derive(Clone, Debug)]
@@ -34,8 +38,14 @@ pub struct FitResult {
     /// Per data point, the least and greatest simulated friction over the evaluations in
     /// the joint 95 % region.
     pub band: Vec<(f64, f64)>,
+    /// The simulation's noise beside the data's at the optimum: the largest `se_i / sigma_i`
+    /// (sigma given or estimated). Well below 1 for intervals at their nominal coverage.
+    pub noise_ratio: f64,
     pub evaluations: usize,
 }
+
+/// A `noise_ratio` above this is reported: raise the replicas or the runs' length.
+pub const NOISE_RATIO_WARN: f64 = 0.5;
 
 fn quantile95(d: impl ContinuousCDF<f64, f64>) -> f64 {
     d.inverse_cdf(0.95)
@@ -57,11 +67,19 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
     let mean_square = prob.data.points.iter().map(|q| q.friction * q.friction).sum::<f64>() / n as f64;
     let first_unit = if has_sigma { 1.0 } else { 1e-4 * mean_square.max(f64::MIN_POSITIVE) };
     let iters = ITERS_PER_PARAMETER * p as u64;
-    let s1 = Settings { step: 0.1, tolerance: 1e-2 * first_unit, max_iters: iters, unit: first_unit };
+    // A search stops when its simplex's misfits spread less than the tolerance, never set
+    // below NOISE_TOLERANCE times the misfit's simulation noise where the search starts:
+    // below that, the simplex would only follow the noise.
+    let noise_at = |y: &[f64]| -> Result<f64, FitError> {
+        let values: Vec<f64> = prob.free.iter().zip(y).map(|(f, &v)| f.value(v)).collect();
+        Ok(NOISE_TOLERANCE * prob.score_noise(&obj.evaluate(&values)?))
+    };
+    let tolerance = 1e-2 * first_unit;
+    let s1 = Settings { step: 0.1, tolerance: tolerance.max(noise_at(&start)?), max_iters: iters, unit: first_unit };
     let (y1, v1) = minimise(&score_y, &start, s1).ok_or_else(stopped)?;
     let dof = n - p;
     let unit = if has_sigma { 1.0 } else { (v1 / dof as f64).max(f64::MIN_POSITIVE) };
-    let s2 = Settings { step: 0.05, tolerance: 1e-3 * unit, max_iters: iters, unit };
+    let s2 = Settings { step: 0.05, tolerance: (1e-3 * unit).max(noise_at(&y1)?), max_iters: iters, unit };
     let (mut best_y, mut score) = minimise(&score_y, &y1, s2).ok_or_else(stopped)?;
     if v1 < score {
         (best_y, score) = (y1, v1);
@@ -76,9 +94,26 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
             p as f64 * quantile95(FisherSnedecor::new(p as f64, d).expect("dof > 0")),
         )
     };
+    let noise = noise_at(&best_y)?;
+    // The 2p sides of the profiles are independent searches: each on its own thread, so
+    // that their evaluations run side by side (on the pool, or on a cluster). Each side's
+    // evaluations, and so the intervals, do not depend on what runs next to it.
+    let sides: Vec<Option<Side>> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..p)
+            .flat_map(|j| [(j, -1.0), (j, 1.0)])
+            .map(|(j, dir)| {
+                let (score_y, best_y) = (&score_y, &best_y);
+                s.spawn(move || side(score_y, best_y, score, unit, threshold, j, dir, noise))
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap_or(None)).collect()
+    });
     let mut intervals = Vec::with_capacity(p);
-    for j in 0..p {
-        intervals.push(profile(&score_y, &best_y, score, unit, threshold, j).ok_or_else(stopped)?);
+    let mut sides = sides.into_iter();
+    for &y in &best_y {
+        let (low, high) = (sides.next().flatten(), sides.next().flatten());
+        let (Some(low), Some(high)) = (low, high) else { return Err(stopped()) };
+        intervals.push(interval(y, threshold, low, high));
     }
     let values: Vec<f64> = prob.free.iter().zip(&best_y).map(|(f, &v)| f.value(v)).collect();
     let best = obj.evaluate(&values)?;
@@ -91,6 +126,8 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
                 .fold((best.mean[i], best.mean[i]), |(lo, hi), m| (lo.min(m), hi.max(m)))
         })
         .collect();
+    let noise_ratio =
+        prob.data.points.iter().zip(&best.se).map(|(q, se)| se / q.sigma.unwrap_or(unit.sqrt())).fold(0.0, f64::max);
     let chi2 = score / unit;
     let p_value = (has_sigma && dof > 0).then(|| 1.0 - ChiSquared::new(dof as f64).expect("dof > 0").cdf(chi2));
     Ok(FitResult {
@@ -105,6 +142,7 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
         band_threshold,
         intervals,
         band,
+        noise_ratio,
         evaluations: obj.evaluations(),
     })
 }

@@ -9,6 +9,7 @@
 //!   interval covers the truth at its nominal 95 % rate: a binomial check, failing (0.03 %
 //!   of the time for a correct method) when fewer than 15 cover; the larger check, two
 //!   sided over 200 seeds, is `#[ignore]`d (command in docs/testing.md);
+//! - the files do not depend on the number of threads;
 //! - a fit killed (SIGKILL) and continued with `stickslip resume` writes the `fit.json` of
 //!   an uninterrupted fit, byte for byte, also on another number of threads;
 //! - every kind of bad input is one line naming the line or field, exit code 2, and no
@@ -104,13 +105,18 @@ fn data_csv(truth: &[f64], seed: u64) -> String {
 
 /// Fits `free` to `csv` with the scene's seed `seed`, 4 replicas, on 1 thread.
 fn fit_with(csv: &str, free: &str, seed: u64, fixed: &[String]) -> (Problem, FitResult) {
+    fit_on(csv, free, seed, fixed, 1)
+}
+
+/// [`fit_with`] on `threads` threads.
+fn fit_on(csv: &str, free: &str, seed: u64, fixed: &[String], threads: usize) -> (Problem, FitResult) {
     let mut o = vec![format!("run.seed={seed}")];
     o.extend_from_slice(fixed);
     let base = scene(&o);
     let data = DataSet::parse(csv, "data.csv", &base, 1.0).unwrap();
     let free = parse_free(&[free.to_string()], &base, &data).unwrap();
     let problem = Problem::new(base, data, free, 4).unwrap();
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     let sim = PoolSimulator { pool: &pool, stop: None };
     let obj = Objective::new(&problem, &sim, Vec::new(), None, None, 100_000);
     let r = fit(&obj).unwrap();
@@ -137,6 +143,20 @@ fn two_parameters_are_recovered_within_their_intervals() {
 
     assert!(r.p_value.unwrap() > 1e-3, "chi2 {} with {} dof", r.chi2, r.dof);
     assert_eq!(r.dof, 4);
+}
+
+#[test]
+fn the_thread_count_does_not_change_the_result() {
+    // The evaluations of a batch run in parallel and the profiles' sides side by side; the
+    // files are the same bytes on 1 and on 3 threads.
+    let csv = data_csv(&truth_curve(), 14);
+    let fixed = [format!("junctions.kon0={KON0}")];
+    let files = |threads| {
+        let (p, r) = fit_on(&csv, "junctions.k0,junctions.kappa=0.03:0.3", 7, &fixed, threads);
+        (stickslip::fit::report::fit_json(&p, &r, "d.csv"), stickslip::fit::report::fit_csv(&p, &r))
+    };
+    let one = files(1);
+    assert_eq!(one, files(3));
 }
 
 #[test]
