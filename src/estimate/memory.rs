@@ -3,8 +3,8 @@
 
 use std::mem::size_of;
 
-use crate::engine::exact::bags::{Attached, Detached};
-use crate::engine::exact::sumtree::SumTree2;
+use crate::engine::exact::core::bags::{Attached, Detached};
+use crate::engine::exact::rupture::sumtree::SumTree2;
 use crate::engine::exact::{self};
 use crate::engine::exact::{BinnedRupture, uses_bins};
 use crate::physics::ExactMethod;
@@ -20,7 +20,7 @@ pub const BASELINE_BYTES: u64 = 6 << 20;
 /// Buffer of a checkpoint being written (`output::checkpoint`).
 const CHECKPOINT_BUFFER: u64 = 1 << 20;
 /// The tilted law's series engine: its anchor bins and their O(1) lookup table
-/// (`engine::exact::series::sum`): they cover the spread of the anchors, not `N`; typically well
+/// (`engine::exact::stepper::series::sum`): they cover the spread of the anchors, not `N`; typically well
 /// under this allowance (the lookup table alone is capped at 4 MiB).
 const SERIES_BINS: u64 = 1 << 20;
 

@@ -15,20 +15,9 @@
 //! per kind of event plus a sum tree for the weighted choice is exact and cheaper than a
 //! clock per junction.
 
-pub mod bags;
-pub mod binned;
-pub mod clocks;
 pub mod core;
-pub mod direct;
-pub mod frame;
-pub mod horizon;
-pub mod linear;
-mod linear_path;
-pub mod motion;
-pub mod pick;
 pub mod rupture;
-pub mod series;
-pub mod sumtree;
+pub mod stepper;
 
 use super::{EngineError, EngineVisitor};
 use crate::physics::{
@@ -37,13 +26,14 @@ use crate::physics::{
 use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};
 use crate::scene::{Scene, TiltedMethod};
 
+pub use self::core::clocks::{ArrayQueue, ChannelQueue, PqQueue};
 pub use self::core::{Core, Exact, Kernel};
-pub use binned::{BINNED_FROM, BinnedRupture, uses_bins};
-pub use clocks::{ArrayQueue, ChannelQueue, PqQueue};
-pub use direct::{DirectKernel, ExactDirect};
-pub use linear::{ExactLinear, LinearKernel};
-pub use motion::{Dynamic, Kinematic, PlateMotion};
+pub use rupture::binned::{BINNED_FROM, BinnedRupture, uses_bins};
+pub use rupture::path::{Dynamic, Kinematic, PlateMotion};
 pub use rupture::{StrongRupture, WeakRupture};
+pub use stepper::direct::{DirectKernel, ExactDirect};
+pub use stepper::linear::{ExactLinear, LinearKernel};
+use stepper::series;
 
 /// The event queue the engine uses (chosen by `benches/exact.rs`, see docs/performance.md).
 pub type DefaultQueue = ArrayQueue;

@@ -3,7 +3,7 @@
 //! what follows an event (counters, re-base, a new piece, the clocks renewed).
 
 use super::{Core, HORIZON, Kernel, REBASE, emit, reattached_extension};
-use crate::engine::exact::bags::{Detached, count};
+use crate::engine::exact::core::bags::{Detached, count};
 use crate::observe::{EventKind, Observer};
 
 /// Ruptures the attached junction in `slot` now.

@@ -2,8 +2,8 @@
 //! [`ExactSeries`](super::series::ExactSeries), [`ExactDirect`](super::ExactDirect)): each
 //! is an [`Exact`] engine, the [`Core`] it shares with the others plus a [`Kernel`] of its own.
 //!
-//! - [`Core`]: the junctions ([`super::bags::Bags`]), the channel clocks
-//!   ([`super::clocks`]), the frame ([`super::frame`]), the counters, the formation rate and
+//! - [`Core`]: the junctions ([`bags::Bags`]), the channel clocks
+//!   ([`clocks`]), the frame ([`frame`]), the counters, the formation rate and
 //!   the generator;
 //! - [`junctions`]: formation, rupture, re-attachment, the frame's re-base
 //!   ([`REBASE`]), the clocks' renewal after an event, and event emission;
@@ -15,24 +15,27 @@
 //! to what it would be with the code written into it (no `dyn`, no run-time branch on the
 //! kind of engine; a kernel's constants, such as [`Kernel::HORIZON`], fold away).
 
+pub mod bags;
+pub mod clocks;
 pub mod engine;
+pub mod frame;
 pub mod junctions;
-pub mod kernel;
+pub mod pick;
 pub mod policy;
 
 use serde::{Deserialize, Serialize};
 
-use super::bags::Bags;
-use super::clocks::{ChannelQueue, Channels};
-use super::frame::Frame;
 use crate::engine::alloc::AllocError;
 use crate::engine::{Counters, EngineError};
 use crate::physics::{Formation, Plate};
 use crate::rng::{Pcg64, UniformSource, pcg};
 use crate::scene::{Reattach, Scene};
+use bags::Bags;
+use clocks::{ChannelQueue, Channels};
+use frame::Frame;
 
+pub use super::stepper::{Kernel, Moved, Target};
 pub use engine::Exact;
-pub use kernel::{Kernel, Moved, Target};
 pub use policy::{REBASE, RebasePolicy, emit, reattached_extension};
 
 /// Channel of formation candidates.

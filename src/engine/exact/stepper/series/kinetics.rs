@@ -19,7 +19,7 @@ use rand_distr::{Distribution, Exp1};
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
 use crate::engine::EngineError;
-use crate::engine::exact::bags::Attached;
+use crate::engine::exact::core::bags::Attached;
 use crate::engine::exact::rupture::{Bracket, EXPONENT_CAP, RuptureModel, WeakRupture};
 use crate::physics::{ForceLaw, Tilted};
 use crate::rng::{Pcg64, UniformSource};
@@ -28,7 +28,7 @@ use crate::rng::{Pcg64, UniformSource};
 /// the plate's range `[y_lo, y_hi]` within one plate step of the tilted law (weak bonds), so
 /// a step travels at most `STEP_SPREAD / a` and a candidate's acceptance stays above
 /// `e^-1 / 2`. (The linear law's thinning horizon has its own target,
-/// [`horizon::SPREAD`](crate::engine::exact::horizon::SPREAD), over a horizon of its
+/// [`horizon::SPREAD`](crate::engine::exact::rupture::horizon::SPREAD), over a horizon of its
 /// closed-form trajectory.)
 pub const STEP_SPREAD: f64 = 1.0;
 /// Largest `a = beta dx kappa` whose spread `STEP_SPREAD / a` a step is made to keep.
@@ -256,7 +256,7 @@ impl Kinetics for WeakKinetics {
             let (slot, br) = self.envelope.envelope_candidate(rng, n_att);
             // The junction is read only if the squeeze cannot decide, or by the rupture:
             // start loading it now.
-            crate::engine::exact::pick::prefetch(&attached[slot]);
+            crate::engine::exact::core::pick::prefetch(&attached[slot]);
             // r_i / k0 = exp(a (l - l0)) with |x| <= l <= |x| + l0, so
             // max(1, e^{-a l0} lo) <= r_i / k0 <= hi: the squeeze decides most candidates
             // without the plate's position, the junction or an exponential, as the exact

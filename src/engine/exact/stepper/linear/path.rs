@@ -1,8 +1,8 @@
 //! The linear engine's closed-form plate trajectory as the rupture models' [`PlatePath`]
 //! (position along the piece and its proven bounds over a horizon).
 
-use super::linear::propagator::Trajectory;
-use super::motion::PlatePath;
+use super::propagator::Trajectory;
+use crate::engine::exact::rupture::path::PlatePath;
 
 impl PlatePath for Trajectory {
     #[inline(always)]

@@ -9,7 +9,7 @@
 //! `n_j Uk_j / sum`, then a *uniform* member of the bin, and is accepted with probability
 //! `r_i / b_j` (the test of [`accept`], from the member's own weights). The accepted
 //! candidates are exactly the ruptures (Lewis & Shedler 1979), as with the sum tree of
-//! [`super::rupture::WeakRupture`]; the bins' bound is at most `exp(h)` looser, so
+//! [`super::WeakRupture`]; the bins' bound is at most `exp(h)` looser, so
 //! a candidate is accepted a little less often.
 //!
 //! What this buys: the member is a uniform pick from a bag, like a strong bond's, so a
@@ -31,16 +31,16 @@
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-use super::bags::{Attached, count};
 use super::horizon::Horizon;
-use super::motion::PlatePath;
-use super::pick::{index, prefetch_ptr};
-use super::rupture::{EXPONENT_CAP, Plan, RuptureModel, accept, anchor_overflows, overflows};
+use super::path::PlatePath;
+use super::{EXPONENT_CAP, Plan, RuptureModel, accept, anchor_overflows, overflows};
 use crate::engine::alloc::{self, AllocError};
+use crate::engine::exact::core::bags::{Attached, count};
+use crate::engine::exact::core::pick::{index, prefetch_ptr};
 use crate::rng::{Pcg64, UniformSource};
 
 /// The number of junctions from which a run draws weak bonds' rupture candidates from bins
-/// (below it, from the sum tree of [`super::rupture::WeakRupture`]). Below it the tree stays
+/// (below it, from the sum tree of [`super::WeakRupture`]). Below it the tree stays
 /// in the processor's caches (2 MB at `1e5`), bounds each junction by its own weight, and
 /// needs no pass over the occupied bins after every event, so it is the cheaper one where
 /// the anchors spread over many bins: `scenarios/creep.toml` (`N = 300`, about 50 occupied
@@ -317,7 +317,7 @@ fn take_best(pool: &mut Vec<Vec<Member>>, need: usize) -> Option<Vec<Member>> {
 /// large bin is read at random, as a bag is).
 fn new_buffer(capacity: usize) -> Vec<Member> {
     let v = Vec::with_capacity(capacity);
-    super::bags::advise_huge_pages(&v);
+    crate::engine::exact::core::bags::advise_huge_pages(&v);
     v
 }
 
@@ -495,7 +495,7 @@ impl BinnedRupture {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::exact::motion::Drive;
+    use crate::engine::exact::rupture::path::Drive;
     use crate::rng::pcg;
 
     fn record(c: f64, id: u32) -> Attached {

@@ -7,12 +7,12 @@ use serde::{Deserialize, Serialize};
 
 use super::SeriesSum;
 use super::kinetics::Kinetics;
-use super::motion::{Motion, Step, StepCtx};
+use super::plate::{Motion, Step, StepCtx};
 use crate::engine::EngineError;
-use crate::engine::exact::bags::Attached;
-use crate::engine::exact::clocks::ArrayQueue;
+use crate::engine::exact::core::bags::Attached;
+use crate::engine::exact::core::clocks::ArrayQueue;
+use crate::engine::exact::core::pick::prefetch;
 use crate::engine::exact::core::{Core, Exact, FORMATION, Kernel, Moved, Target};
-use crate::engine::exact::pick::prefetch;
 use crate::observe::Observer;
 use crate::physics::{ForceLaw, Tilted};
 use crate::rng::UniformSource;
@@ -340,7 +340,7 @@ impl<K: Kinetics, P: Motion> Kernel for SeriesKernel<K, P> {
 #[cfg(test)]
 mod tests {
     use crate::engine::exact::core::junctions::rupture;
-    use crate::engine::exact::series::{DIRECT_MAX, DrivenPlate, ExactSeries, SeriesSum, StrongKinetics};
+    use crate::engine::exact::stepper::series::{DIRECT_MAX, DrivenPlate, ExactSeries, SeriesSum, StrongKinetics};
     use crate::observe::Nothing;
     use crate::physics::{ForceLaw, Tilted};
     use crate::test_scenes::fig1_with;

@@ -9,7 +9,7 @@
 //!     int F_b = kappa (N_att (h y0 + i1) - h C),          int eta y' = eta (y1 - y0).
 //! ```
 
-use crate::engine::exact::linear::propagator::Integrals;
+use crate::engine::exact::stepper::linear::propagator::Integrals;
 use crate::observe::Piece;
 use crate::physics::Plate;
 
@@ -46,7 +46,7 @@ pub(super) fn piece(start: &Start, t1: f64, h: f64, y1: f64, ints: Integrals, p:
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::exact::linear::propagator::LinearPlate;
+    use crate::engine::exact::stepper::linear::propagator::LinearPlate;
     use crate::observe::Observer;
     use crate::observe::stats::WindowStats;
     use crate::rng::{UniformSource, pcg};

@@ -22,13 +22,18 @@
 
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
-use super::bags::{Attached, count};
-use super::horizon::Horizon;
-use super::motion::PlatePath;
-use super::pick::Pick;
-use super::sumtree::SumTree2;
+pub mod binned;
+pub mod horizon;
+pub mod path;
+pub mod sumtree;
+
+use super::core::bags::{Attached, count};
+use super::core::pick::Pick;
 use crate::engine::alloc::AllocError;
 use crate::rng::{Pcg64, UniformSource};
+use horizon::Horizon;
+use path::PlatePath;
+use sumtree::SumTree2;
 
 /// Rates whose exponent `a |x|` exceeds this are treated as infinite: the junction
 /// ruptures at once (docs/model.md, "Equations", item 6: a rate that overflows means
@@ -193,7 +198,7 @@ impl WeakRupture {
         self.h.terms(self.tree.total())
     }
     /// The envelope for any plate path with `y_lo <= y <= y_hi` (tilted law,
-    /// [`crate::engine::exact::series`]): sets the bounds and returns the total candidate
+    /// [`crate::engine::exact::stepper::series`]): sets the bounds and returns the total candidate
     /// rate `B / k0 = exp(a y_hi) W- + exp(-a y_lo) W+` (in units of `k0`; may be `+inf`).
     #[inline]
     pub fn envelope(&mut self, y_lo: f64, y_hi: f64) -> f64 {
@@ -314,7 +319,7 @@ pub fn accept(ub: f64, w: [f64; 2], e_hi: f64, e_lo: f64, ey: impl FnOnce() -> f
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::exact::motion::Drive;
+    use crate::engine::exact::rupture::path::Drive;
 
     /// A plan bounds every junction's rate over its whole horizon (`b_i >= r_i`: the
     /// acceptance never exceeds 1), and the acceptance squeeze of `pick` brackets the rate:

@@ -13,14 +13,14 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::motion::PlatePath;
-use super::rupture::{FRAME_EXPONENT_LIMIT, Plan};
+use super::path::PlatePath;
+use super::{FRAME_EXPONENT_LIMIT, Plan};
 
 /// Target spread of a thinning horizon (linear law's rupture models): the largest
 /// `a (y_hi - y_lo)` (dimensionless) over the plate's proven bounds `[y_lo, y_hi]` within
 /// the horizon [`Horizon::plan`] chooses, so the candidate rate exceeds every junction's
 /// rupture rate there by at most a factor `e^SPREAD` per exponential term. (The tilted law's
-/// plate steps have their own limit, [`STEP_SPREAD`](crate::engine::exact::series::kinetics::STEP_SPREAD).)
+/// plate steps have their own limit, [`STEP_SPREAD`](crate::engine::exact::stepper::series::kinetics::STEP_SPREAD).)
 pub const SPREAD: f64 = 1.0;
 /// Longest horizon (local time units).
 const HORIZON_MAX: f64 = 1e6;

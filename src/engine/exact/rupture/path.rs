@@ -14,7 +14,7 @@
 //! models see the plate through [`PlatePath`] (position and bounds over a horizon), which both
 //! a [`Trajectory`] and a [`Drive`] implement, monomorphised per run.
 //!
-//! [`Trajectory`]: crate::engine::exact::linear::propagator::Trajectory
+//! [`Trajectory`]: crate::engine::exact::stepper::linear::propagator::Trajectory
 
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 

@@ -17,14 +17,14 @@
 
 mod engine;
 pub mod kinetics;
-pub mod motion;
+pub mod plate;
 pub mod sum;
 pub mod taylor;
 
 pub(crate) use crate::ode::{RosenbrockConfig, RosenbrockN, StiffSystem};
 pub use engine::{ExactSeries, SeriesKernel};
 pub use kinetics::{Kinetics, StrongKinetics, WeakKinetics};
-pub use motion::{DrivenPlate, Motion, RosenbrockPlate};
+pub use plate::{DrivenPlate, Motion, RosenbrockPlate};
 pub use sum::{DIRECT_MAX, LocalCubic, SeriesSum, tilted_taylor};
 
 use crate::engine::{EngineError, EngineVisitor};
@@ -35,7 +35,7 @@ use crate::scene::laws::BondVisitor;
 /// Builds the series engine for the law `law` (a law's [`SeriesLaw::tilted_form`](crate::physics::SeriesLaw::tilted_form)) on
 /// `scene`, specialised to the bond kind it visits and to the plate motion (kinematic or
 /// dynamic), and hands it to `visitor`.
-pub(super) struct Build<'a, V> {
+pub(in crate::engine::exact) struct Build<'a, V> {
     pub scene: &'a Scene,
     pub law: Tilted,
     pub visitor: V,

@@ -4,7 +4,7 @@
 //! With `f^x = kappa x` and attached junctions moving with the plate (`x_i = y - c_i`),
 //! the bond force is `F_b = kappa (N_att y - C)`, `C = sum c_i`, so between events the plate
 //! obeys the linear ODE `M y'' + eta y' + (K + kappa N_att) y = a + b s` and moves in closed
-//! form ([`crate::engine::exact::linear::propagator`]). Events:
+//! form ([`crate::engine::exact::stepper::linear::propagator`]). Events:
 //! - formation candidates at rate `kon0 N_det`, accepted with probability `g(|y'|)` at the
 //!   candidate time (thinning: exact because `g <= 1`), then a uniform detached junction;
 //! - ruptures as chosen by the [`RuptureModel`] (strong: rate `k0 N_att`; weak: thinning);
@@ -14,7 +14,7 @@
 //! event, horizon end and stop; each restart reports the exact time integrals of the
 //! observables over the finished piece as a [`Segment`].
 //!
-//! With a kinematic plate (type parameter [`Kinematic`](super::super::motion::Kinematic),
+//! With a kinematic plate (type parameter [`Kinematic`](crate::engine::exact::Kinematic),
 //! `plate.kinematic = true`) there is no plate equation: `y = V tau` in local coordinates
 //! (so the lag `X - V t` is exactly 0), `y' = V`, and `F_b = kappa (N_att V tau - C)` is
 //! linear in time between events, so a segment's mean is `F_b` at its midpoint and
@@ -27,15 +27,15 @@ use serde::{Deserialize, Serialize};
 
 use crate::engine::EngineError;
 use crate::engine::alloc::AllocError;
-use crate::engine::exact::bags::Attached;
-use crate::engine::exact::clocks::ChannelQueue;
+use crate::engine::exact::core::bags::Attached;
+use crate::engine::exact::core::clocks::ChannelQueue;
 use crate::engine::exact::core::junctions::refresh_clocks;
+use crate::engine::exact::core::pick::Pick;
 use crate::engine::exact::core::{Core, Exact, Kernel};
-use crate::engine::exact::linear::propagator::{Integrals, LinearPlate, Trajectory};
-use crate::engine::exact::linear::report;
-use crate::engine::exact::motion::{Drive, Dynamic, PlateMotion};
-use crate::engine::exact::pick::Pick;
 use crate::engine::exact::rupture::RuptureModel;
+use crate::engine::exact::rupture::path::{Drive, Dynamic, PlateMotion};
+use crate::engine::exact::stepper::linear::propagator::{Integrals, LinearPlate, Trajectory};
+use crate::engine::exact::stepper::linear::report;
 use crate::observe::{Observer, Segment};
 use crate::physics::{LinearLaw, Plate};
 use crate::rng::Pcg64;

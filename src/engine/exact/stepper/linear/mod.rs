@@ -4,6 +4,7 @@
 //! it reports (`report`).
 
 mod engine;
+mod path;
 pub mod propagator;
 mod report;
 

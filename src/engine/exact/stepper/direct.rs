@@ -22,11 +22,11 @@
 use rand_distr::{Distribution, Exp1};
 use serde::{Deserialize, Serialize};
 
-use super::clocks::ArrayQueue;
-use super::core::junctions::rebase;
-use super::core::{Core, Exact, Kernel, Moved, Target};
-use super::frame::Frame;
 use crate::engine::EngineError;
+use crate::engine::exact::core::clocks::ArrayQueue;
+use crate::engine::exact::core::frame::Frame;
+use crate::engine::exact::core::junctions::rebase;
+use crate::engine::exact::core::{Core, Exact, Kernel, Moved, Target};
 use crate::observe::{Observer, Segment};
 use crate::ode::{Dop853, Dop853Config, OdeError, OdeSystem};
 use crate::physics::{Bond, ForceLaw, Plate};
@@ -60,7 +60,7 @@ impl Layout {
 
 /// The right-hand side: plate, quadratures, hazard.
 struct System<'a, L: ForceLaw, B: Bond> {
-    attached: &'a [super::bags::Attached],
+    attached: &'a [crate::engine::exact::core::bags::Attached],
     p: Params<L, B>,
 }
 

@@ -1,15 +1,19 @@
 //! What an exact engine supplies to the [`Core`]: its [`Kernel`], the plate between events
 //! (how it moves, reports a piece, restarts) and its rupture kinetics (the rupture channel's
 //! rate, the choice of the junction, what a rupture or a formation changes in its own
-//! state). The core does the rest ([`super::junctions`], [`super::engine`]).
+//! state). The core does the rest ([`super::core::junctions`], [`super::core::engine`]).
+
+pub mod direct;
+pub mod linear;
+pub mod series;
 
 use rand::RngExt;
 use serde::{Serialize, de::DeserializeOwned};
 
-use super::Core;
+use super::core::Core;
 use crate::engine::EngineError;
-use crate::engine::exact::bags::Attached;
-use crate::engine::exact::clocks::ChannelQueue;
+use crate::engine::exact::core::bags::Attached;
+use crate::engine::exact::core::clocks::ChannelQueue;
 use crate::observe::Observer;
 use crate::rng::Pcg64;
 
@@ -43,7 +47,7 @@ pub trait Kernel: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send 
     const IS_WEAK: bool;
     /// `true` for a kinematic plate (the friction reported is the bond force).
     const KINEMATIC: bool;
-    /// The engine has a third channel, [`super::HORIZON`]: the end of a thinning horizon,
+    /// The engine has a third channel, [`super::core::HORIZON`]: the end of a thinning horizon,
     /// where the plate's piece restarts and the rupture bound is renewed.
     const HORIZON: bool = false;
 
