@@ -27,12 +27,11 @@ use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};
 use crate::scene::{Scene, TiltedMethod};
 
 pub use self::core::clocks::{ArrayQueue, ChannelQueue, PqQueue};
-pub use self::core::{Core, Exact, Kernel};
+pub use self::core::{Core, Exact, Stepper};
 pub use rupture::binned::{BINNED_FROM, BinnedRupture, uses_bins};
-pub use rupture::path::{Dynamic, Kinematic, PlateMotion};
-pub use rupture::{StrongRupture, WeakRupture};
-pub use stepper::direct::{DirectKernel, ExactDirect};
-pub use stepper::linear::{ExactLinear, LinearKernel};
+pub use rupture::{RuptureModel, StrongRupture, TreeRupture};
+pub use stepper::direct::{DirectStepper, ExactDirect};
+pub use stepper::linear::{Dynamic, ExactLinear, Kinematic, LinearStepper, PlateMotion};
 use stepper::series;
 
 /// The event queue the engine uses (chosen by `benches/exact.rs`, see docs/performance.md).
@@ -50,16 +49,16 @@ pub fn weak_linear<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<BinnedRupture,
 }
 
 /// [`weak_linear`] with the candidates drawn from a sum tree of the junctions' weights
-/// ([`WeakRupture`]) instead of bins: the same process, another random stream (what a run
+/// ([`TreeRupture`]) instead of bins: the same process, another random stream (what a run
 /// uses below [`BINNED_FROM`] junctions, and the bench's comparison for the bins).
-pub fn weak_linear_tree<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<WeakRupture, Q> {
+pub fn weak_linear_tree<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<TreeRupture, Q> {
     let j = &scene.junctions;
-    ExactLinear::new(scene, &Linear::from_scene(scene), |_| WeakRupture::new(j.k0, j.beta_dx() * j.kappa, j.n))
+    ExactLinear::new(scene, &Linear::from_scene(scene), |_| TreeRupture::new(j.k0, j.beta_dx() * j.kappa, j.n))
 }
 
 /// [`strong_linear`] with plate motion `M` ([`Kinematic`] for `plate.kinematic`).
 pub fn strong_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> ExactLinear<StrongRupture, Q, M> {
-    ExactLinear::new(scene, &Linear::from_scene(scene), |rng| StrongRupture::new(scene.junctions.k0, rng))
+    ExactLinear::new(scene, &Linear::from_scene(scene), |rng| StrongRupture::<true>::new(scene.junctions.k0, rng))
 }
 
 /// [`weak_linear`] with plate motion `M` ([`Kinematic`] for `plate.kinematic`): the rupture
@@ -161,8 +160,8 @@ impl<L: LinearLaw, V: EngineVisitor> BondVisitor for ClosedForm<'_, L, V> {
         let (k0, n) = (bond.k0(), scene.junctions.n);
         let a = bond.force_sensitivity() * law.thinning_slope();
         let binned = |rng: &mut _| BinnedRupture::try_new(k0, a, n, rng);
-        let tree = |_: &mut _| WeakRupture::try_new(k0, a, n);
-        let strong = |rng: &mut _| Ok(StrongRupture::new(k0, rng));
+        let tree = |_: &mut _| TreeRupture::try_new(k0, a, n);
+        let strong = |rng: &mut _| Ok(StrongRupture::<true>::new(k0, rng));
         let bins = uses_bins(n);
         Ok(match (B::IS_WEAK, scene.plate.kinematic) {
             (true, true) if bins => {

@@ -1,7 +1,11 @@
-//! What an exact engine supplies to the [`Core`]: its [`Kernel`], the plate between events
-//! (how it moves, reports a piece, restarts) and its rupture kinetics (the rupture channel's
-//! rate, the choice of the junction, what a rupture or a formation changes in its own
-//! state). The core does the rest ([`super::core::junctions`], [`super::core::engine`]).
+//! The plate steppers of the exact engine and their contract, [`Stepper`]: how the plate
+//! moves between events and reports a piece. The core composes one with a rupture model
+//! ([`super::rupture`]) and does the rest ([`super::core::junctions`], [`super::core::engine`]).
+//!
+//! - [`linear`]: the closed form of a law whose bond force is linear in the plate position;
+//! - [`series`]: the tilted law's bond force as a truncated series, the plate by a stiff
+//!   integrator or Taylor steps;
+//! - [`direct`]: any law, the bond force summed directly, the plate by DOP853.
 
 pub mod direct;
 pub mod linear;
@@ -14,10 +18,11 @@ use super::core::Core;
 use crate::engine::EngineError;
 use crate::engine::exact::core::bags::Attached;
 use crate::engine::exact::core::clocks::ChannelQueue;
+use crate::engine::exact::rupture::RuptureRate;
 use crate::observe::Observer;
 use crate::rng::Pcg64;
 
-/// Where [`Kernel::step`] moves the plate: local time `tau` (the first of the next candidate
+/// Where [`Stepper::step`] moves the plate: local time `tau` (the first of the next candidate
 /// and the stop), and whether the candidate, on channel `ch`, is due by then.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Target {
@@ -26,8 +31,8 @@ pub struct Target {
     pub ch: usize,
 }
 
-/// How far [`Kernel::step`] got towards its target.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// How far [`Stepper::step`] got towards its target.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Moved {
     /// At the target (the plate state checked finite): the due candidate, or the stop, is next.
     There,
@@ -36,25 +41,54 @@ pub enum Moved {
     /// The junction in this slot ruptured inside the step (weak bonds, thinned or located
     /// inside the step; the state is at the rupture time and checked finite).
     Ruptured(usize),
+    /// A plate step was taken (not yet ended): the core thins weak bonds' candidates over it
+    /// and ends it ([`Stepper::finish`]).
+    Stepped(Step),
+    /// The rates change too fast for the local time's resolution: the core moves the origin
+    /// here (a new piece) and asks again.
+    Rebase,
 }
 
-/// An exact engine's own part. The core calls these hooks at fixed points of its event
-/// loop; a hook that an engine does not need has a default that compiles to nothing.
-pub trait Kernel: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static {
+/// One plate step `[s0, s1]` and proven bounds of `y` over it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Step {
+    pub s0: f64,
+    pub s1: f64,
+    pub y_lo: f64,
+    pub y_hi: f64,
+    /// Bound on the bond force's error from evaluating a local cubic instead of the series
+    /// over the step, relative to [`series::SeriesSum::scale`] (0 when the series was evaluated).
+    pub cubic_error: f64,
+}
+
+/// How a plate stepper finds the ruptures of weak bonds (strong bonds always rupture on the
+/// channel clock at the rupture model's constant rate).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WeakRuptures {
+    /// Closed form: candidates on the rupture channel at the model's rate over a thinning
+    /// horizon ([`super::core::HORIZON`]), bounded by [`Stepper::bounds`].
+    Horizon,
+    /// Candidates thinned over each plate step ([`Moved::Stepped`], [`crate::engine::exact::rupture::thin`]).
+    Steps,
+    /// The stepper finds them itself ([`Moved::Ruptured`]).
+    Own,
+}
+
+/// A plate stepper: how the plate moves between events and reports a piece. The core calls
+/// these hooks at fixed points of its event loop and composes them with a rupture model
+/// ([`RuptureModel`](crate::engine::exact::rupture::RuptureModel)); a hook that a stepper does
+/// not need has a default that compiles to nothing.
+pub trait Stepper: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send + 'static {
     /// The engine's event queue.
     type Queue: ChannelQueue;
-    /// `true` for force-dependent rupture rates (weak bonds).
-    const IS_WEAK: bool;
+    /// What the law supplies to a weak-bond rupture model's acceptance.
+    type Rate: RuptureRate;
     /// `true` for a kinematic plate (the friction reported is the bond force).
     const KINEMATIC: bool;
-    /// The engine has a third channel, [`super::core::HORIZON`]: the end of a thinning horizon,
-    /// where the plate's piece restarts and the rupture bound is renewed.
-    const HORIZON: bool = false;
+    /// How weak bonds' ruptures are found.
+    const WEAK: WeakRuptures;
 
-    // The plate.
-
-    /// Opens the first piece at `t = 0`, once the initial junctions are drawn (and
-    /// registers them with the rupture kinetics).
+    /// Opens the first piece at `t = 0`, once the initial junctions are drawn and registered.
     fn start(&mut self, core: &mut Core<Self::Queue>);
     /// The plate's local position now.
     fn y(&self, core: &Core<Self::Queue>) -> f64;
@@ -67,6 +101,19 @@ pub trait Kernel: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send 
     }
     /// The bond force `F_b` now.
     fn bond_force(&self, core: &Core<Self::Queue>) -> f64;
+    /// The law's acceptance for weak-bond rupture candidates.
+    fn rate(&self) -> Self::Rate;
+    /// The plate's local position at local time `tau` of the current piece (or step).
+    #[inline]
+    fn position(&mut self, _tau: f64) -> Result<f64, EngineError> {
+        Ok(f64::NAN)
+    }
+    /// Proven bounds `(y_lo, y_hi)` of the plate over the next `h` of the piece just opened
+    /// ([`WeakRuptures::Horizon`]).
+    #[inline]
+    fn bounds(&self, _core: &Core<Self::Queue>, _h: f64) -> (f64, f64) {
+        (f64::NEG_INFINITY, f64::INFINITY)
+    }
     /// Moves the plate towards its target. A closed form reaches any time in one piece:
     /// [`Moved::There`] at once, the default.
     #[inline]
@@ -75,6 +122,18 @@ pub trait Kernel: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send 
         _core: &mut Core<Self::Queue>,
         _to: Target,
         _obs: &mut O,
+    ) -> Result<Moved, EngineError> {
+        Ok(Moved::There)
+    }
+    /// Ends the step just taken ([`Moved::Stepped`]) at the rupture `hit` inside it, or at its
+    /// end: what [`Stepper::step`] would have returned.
+    #[inline]
+    fn finish(
+        &mut self,
+        _core: &mut Core<Self::Queue>,
+        _step: &Step,
+        _hit: Option<(f64, usize)>,
+        _to: Target,
     ) -> Result<Moved, EngineError> {
         Ok(Moved::There)
     }
@@ -98,22 +157,11 @@ pub trait Kernel: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send 
     fn close<O: Observer>(&mut self, core: &mut Core<Self::Queue>, t: f64, obs: &mut O) -> Result<(), EngineError>;
     /// Starts a new piece at the current time and state, after an event.
     fn open_piece(&mut self, core: &mut Core<Self::Queue>);
-    /// Starts a new piece where no event happened (a stop, the end of a horizon).
-    #[inline]
-    fn restart(&mut self, core: &mut Core<Self::Queue>) {
-        self.open_piece(core);
-    }
     /// The core moved the local origin by `dtau`, `dy` (at a piece boundary): the same for
-    /// the kernel's coordinates.
+    /// the stepper's coordinates.
     fn shifted(&mut self, core: &Core<Self::Queue>, dtau: f64, dy: f64);
-
-    // The junctions.
-
     /// The law's tension `f(x)` (reported with events).
     fn tension(&self, x: f64) -> f64;
-    /// The rupture channel's rate from now on, and the absolute local time its bound holds
-    /// until ([`Kernel::HORIZON`]; `+inf` otherwise).
-    fn rupture_plan(&mut self, core: &Core<Self::Queue>) -> (f64, f64);
     /// The factor of the formation rate `kon0 N_det` (1: candidates thinned one by one).
     #[inline]
     fn formation_acceptance(&self, _core: &Core<Self::Queue>) -> f64 {
@@ -124,36 +172,13 @@ pub trait Kernel: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send 
     fn formation_slot(&mut self, rng: &mut Pcg64, n: usize) -> usize {
         rng.random_range(0..n)
     }
-    /// A rupture candidate at `t`: the slot that ruptures, or `None` if rejected. Default:
-    /// a uniform pick (strong bonds).
+    /// A junction was attached into `slot` with anchor `c` (the stepper's own bookkeeping).
     #[inline]
-    fn pick_rupture(&mut self, core: &mut Core<Self::Queue>, _t: f64) -> Option<usize> {
-        let n = core.bags.n_attached();
-        Some(core.rng.random_range(0..n))
-    }
-    /// The bond-force handle of a junction about to attach with anchor `c` (0 if the engine
-    /// keeps none).
-    #[inline]
-    fn bin(&mut self, _core: &mut Core<Self::Queue>, _c: f64) -> u32 {
-        0
-    }
-    /// A junction attached into `slot` with anchor `c`, extension `x`, the plate at `y`.
-    /// Returns `false` if its rupture rate overflows (it ruptures at once).
-    fn attached(&mut self, core: &mut Core<Self::Queue>, slot: usize, c: f64, x: f64, y: f64) -> bool;
+    fn attached(&mut self, _core: &mut Core<Self::Queue>, _slot: usize, _c: f64) {}
     /// The junction `a` left `slot` by `swap_remove` (the one in `last` moved into it).
     #[inline]
     fn detached(&mut self, _core: &mut Core<Self::Queue>, _slot: usize, _last: usize, _a: &Attached) {}
-    /// The kernel's own reason to re-base now (its weights about to overflow).
-    #[inline]
-    fn forced_rebase(&self, _core: &Core<Self::Queue>) -> bool {
-        false
-    }
-    /// After a re-base: everything recomputed from `attached`; the slots whose rate overflows.
-    #[inline]
-    fn rebuild(&mut self, _attached: &mut [Attached]) -> Vec<usize> {
-        Vec::new()
-    }
-    /// Prefetches the memory the next picks will touch.
+    /// Prefetches the memory the next event will touch.
     #[inline]
     fn prefetch(&self, _core: &Core<Self::Queue>) {}
 }

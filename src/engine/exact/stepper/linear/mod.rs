@@ -1,11 +1,11 @@
-//! The exact engine for a law whose bond force is linear in the plate position: the engine
-//! ([`ExactLinear`], the exact core with the closed-form plate and the rupture kinetics as
-//! its kernel), the plate's closed form between events ([`propagator`]) and what a piece of
-//! it reports (`report`).
+//! The closed-form plate stepper, for a law whose bond force is linear in the plate position:
+//! the stepper ([`LinearStepper`]; the engine [`ExactLinear`] is the exact core with it and a
+//! rupture model), the plate's closed form between events ([`propagator`]), what a piece of
+//! it reports (`report`), and the plate's motion, dynamic or kinematic.
 
 mod engine;
-mod path;
 pub mod propagator;
 mod report;
 
-pub use engine::{ExactLinear, LinearKernel};
+pub use crate::engine::exact::rupture::path::{Drive, Dynamic, Kinematic, PlateMotion};
+pub use engine::{ExactLinear, LinearStepper};
