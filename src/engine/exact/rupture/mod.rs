@@ -27,7 +27,6 @@
 pub mod binned;
 pub mod hazard;
 pub mod horizon;
-pub mod path;
 pub mod rate;
 pub mod strong;
 pub mod sumtree;

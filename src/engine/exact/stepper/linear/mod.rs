@@ -4,8 +4,9 @@
 //! it reports (`report`), and the plate's motion, dynamic or kinematic.
 
 mod engine;
+mod motion;
 pub mod propagator;
 mod report;
 
-pub use crate::engine::exact::rupture::path::{Drive, Dynamic, Kinematic, PlateMotion};
+pub use motion::{Drive, Dynamic, Kinematic, PlateMotion};
 pub use engine::{ExactLinear, LinearStepper};
