@@ -4,16 +4,21 @@
 //! changing rates, with no time step; the plate moves in closed form between events
 //! (`linear` law) or, for the `tilted` law, by an L-stable integrator on a truncated series
 //! of the bond force ([`series`]) or, for any law and as the tilted law's O(N) reference, by
-//! DOP853 on the direct sum ([`direct`]), each with a stated tolerance. The law's type picks
-//! the method ([`ForceLaw::Exact`]; a law gets the closed form or the series only by
-//! implementing [`LinearLaw`] or [`SeriesLaw`]; see `docs/engines.md`).
+//! DOP853 on the direct sum ([`stepper::direct`]), each with a stated tolerance. The law's
+//! type picks the method ([`ForceLaw::Exact`]; a law gets the closed form or the series only
+//! by implementing [`LinearLaw`] or [`SeriesLaw`]; see `docs/engines.md`).
+//!
+//! Layout: [`core`] (the event loop and the junctions' bookkeeping, and what every engine
+//! shares: bags, clocks, frame, picks) composes a plate stepper from [`stepper`] (`linear`,
+//! `series`, `direct`) with a rupture model from [`rupture`] (strong; weak from a sum tree or
+//! from bins, over a closed-form horizon or a plate step; the direct stepper's hazard).
 //!
 //! Why no junction needs its own clock: every rate of the model is either shared by all
 //! junctions of a state (strong rupture `k0`, formation `kon0 g(v)`) or, for weak bonds,
 //! a shared time factor times a per-junction constant weight (`k0 exp(a |y(t) - c_i|)`,
 //! bounded by `exp(a y_hi) exp(-a c_i) + exp(-a y_lo) exp(a c_i)`), so one channel clock
-//! per kind of event plus a sum tree for the weighted choice is exact and cheaper than a
-//! clock per junction.
+//! per kind of event plus a sum tree (or bins) for the weighted choice is exact and cheaper
+//! than a clock per junction.
 
 pub mod core;
 pub mod rupture;

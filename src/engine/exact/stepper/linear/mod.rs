@@ -8,5 +8,5 @@ mod motion;
 pub mod propagator;
 mod report;
 
-pub use motion::{Drive, Dynamic, Kinematic, PlateMotion};
 pub use engine::{ExactLinear, LinearStepper};
+pub use motion::{Drive, Dynamic, Kinematic, PlateMotion};

@@ -272,8 +272,13 @@ impl<P: Motion> Stepper for SeriesStepper<P> {
         hit: Option<(f64, usize)>,
         to: Target,
     ) -> Result<Moved, EngineError> {
-        if self.weak && to.due && core.n >= PREFETCH_MIN_N && to.ch == FORMATION && hit.is_none() && step.s1 >= to.tau {
-            self.prefetch_pick(core, FORMATION);
+        if self.weak && core.n >= PREFETCH_MIN_N {
+            match hit {
+                // The rupture reads the junction's handle: asked for while the step ends.
+                Some((_, slot)) => prefetch(&self.handles[slot]),
+                None if to.due && to.ch == FORMATION && step.s1 >= to.tau => self.prefetch_pick(core, FORMATION),
+                None => {}
+            }
         }
         let end = hit.map_or(step.s1, |(s, _)| s);
         self.motion.finish(step, end, &self.series)?;
