@@ -14,10 +14,10 @@
 use crate::common::{ALPHA, ks_two_sample, ks_two_sample_critical};
 use stickslip::Scene;
 use stickslip::engine::Engine;
-use stickslip::engine::exact::series::{DrivenPlate, ExactSeries, RosenbrockPlate};
+use stickslip::engine::exact::stepper::series::{DrivenPlate, ExactSeries, RosenbrockPlate};
 use stickslip::engine::exact::{BinnedRupture, DefaultQueue, ExactLinear, TreeRupture};
 use stickslip::observe::{EventKind, Nothing, Recorder};
-use stickslip::physics::{ForceLaw, Linear, Plate, Tilted};
+use stickslip::physics::{Linear, Plate, Tilted};
 use stickslip_testkit::fig1_with;
 
 /// The worked example of docs/engines.md, "Adding a rupture model", word for word
