@@ -65,12 +65,9 @@ impl<S: Stepper, R: RuptureModel> Engine for Exact<S, R> {
             let mut moved = s.step(core, to, obs)?;
             if let Moved::Stepped(step) = moved {
                 let hit = if R::IS_WEAK {
-                    let mut cands = 0;
-                    let span = (step.s0, step.s1);
-                    let attached = &core.bags.attached;
-                    let law = s.rate();
-                    let bounds = (step.y_lo, step.y_hi);
-                    let hit = thin(r, &mut core.rng, span, bounds, attached, &law, |t| s.position(t), &mut cands)?;
+                    let (mut cands, law, att) = (0, s.rate(), &core.bags.attached);
+                    let (span, bounds) = ((step.s0, step.s1), (step.y_lo, step.y_hi));
+                    let hit = thin(r, &mut core.rng, span, bounds, att, &law, |t| s.position(t), &mut cands)?;
                     *core.counters.candidates.get_or_insert(0) += cands;
                     hit
                 } else {
