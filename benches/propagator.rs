@@ -4,7 +4,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
-use stickslip::engine::exact::linear::propagator::LinearPlate;
+use stickslip::engine::exact::stepper::linear::propagator::LinearPlate;
 
 /// (name, M, eta, k): the letter's Fig. 1 plate (underdamped), an overdamped stiff plate,
 /// an exactly critical one, and the overdamped limit M = 0.

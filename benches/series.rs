@@ -1,4 +1,4 @@
-//! Cost of the tilted law's bond-force series (`engine::exact::series::SeriesSum`, src/engine/exact/series/sum/mod.rs):
+//! Cost of the tilted law's bond-force series (`engine::exact::stepper::series::SeriesSum`, src/engine/exact/stepper/series/sum/mod.rs):
 //! add + remove of one junction, `force_and_stiffness`, `integral`, and a re-base, with
 //! 1e5 anchors spread uniformly over 25 l0 (100 bins of width l0/4), default `rtol = 1e-10`
 //! (`p = 17`); the direct O(N) sum over the same anchors for scale. Direct mode (the
@@ -11,7 +11,7 @@ use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::time::Duration;
-use stickslip::engine::exact::series::SeriesSum;
+use stickslip::engine::exact::stepper::series::SeriesSum;
 use stickslip::physics::{ForceLaw, Tilted};
 
 const N: usize = 100_000;

@@ -11,9 +11,9 @@
 //! - [`engine`]: the methods that advance a scene: [`engine::fixed`] (the letter's
 //!   fixed-step scheme, and [`engine::fixed::stability`], where each of its plate integrators
 //!   is stable) and [`engine::exact`] (event-driven kinetic Monte Carlo: one core, with the
-//!   event loop and the junctions' bookkeeping, and a kernel per method: the linear engine
-//!   with its closed-form propagator, the series engine with its bond-force series, the
-//!   direct engine);
+//!   event loop and the junctions' bookkeeping, composing a plate stepper (the closed form
+//!   with its propagator, the series with its bond-force series, the direct sum) with a
+//!   rupture model (strong; weak from a sum tree or from bins));
 //! - [`ode`]: the adaptive integrators the exact engines use (DOP853, Rosenbrock);
 //! - [`rng`]: the named, portable random generators (Park–Miller, PCG);
 //! - [`runner`]: the loop that drives an engine along the output grid and feeds the

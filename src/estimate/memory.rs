@@ -3,8 +3,8 @@
 
 use std::mem::size_of;
 
-use crate::engine::exact::bags::{Attached, Detached};
-use crate::engine::exact::sumtree::SumTree2;
+use crate::engine::exact::core::bags::{Attached, Detached};
+use crate::engine::exact::rupture::sumtree::SumTree2;
 use crate::engine::exact::{self};
 use crate::engine::exact::{BinnedRupture, uses_bins};
 use crate::physics::ExactMethod;
@@ -15,12 +15,12 @@ use crate::scene::{BondKind, EngineKind, Scene};
 /// stacks, the allocator's arenas and the runner's fixed buffers (part-file buffers,
 /// regime detector, progress). Measured as the peak resident set of a run at `N = 10`
 /// (`tests/suite/estimate.rs` measures it again and bounds the difference).
-pub const BASELINE_BYTES: u64 = 6 << 20;
+pub const BASELINE_BYTES: u64 = 7 << 20;
 
 /// Buffer of a checkpoint being written (`output::checkpoint`).
 const CHECKPOINT_BUFFER: u64 = 1 << 20;
 /// The tilted law's series engine: its anchor bins and their O(1) lookup table
-/// (`engine::exact::series::sum`): they cover the spread of the anchors, not `N`; typically well
+/// (`engine::exact::stepper::series::sum`): they cover the spread of the anchors, not `N`; typically well
 /// under this allowance (the lookup table alone is capped at 4 MiB).
 const SERIES_BINS: u64 = 1 << 20;
 
@@ -89,6 +89,9 @@ pub fn engine_parts(scene: &Scene) -> Vec<Part> {
         return vec![part("junction states and extensions", FIXED_PER_JUNCTION)];
     }
     let mut parts = vec![part("attached and detached bags", BAGS_PER_JUNCTION)];
+    if method == Method::Series {
+        parts.push(part("series handles", size_of::<u32>()));
+    }
     if let Some(store) = RuptureStore::of(scene) {
         let bytes = store.bytes(n);
         parts.push(Part { what: store.name(), bytes, per_junction: bytes as f64 / n.max(1) as f64 });
@@ -96,9 +99,9 @@ pub fn engine_parts(scene: &Scene) -> Vec<Part> {
     parts
 }
 
-/// The weak-bond rupture model's store in the exact engine: the closed form thins against
-/// bins of anchors from [`BINNED_FROM`](crate::engine::exact::BINNED_FROM) junctions on, against a sum tree below, as the
-/// series method does; the direct method, and strong bonds, need none.
+/// The weak-bond rupture model's store in the exact engine: the closed form and the series
+/// thin against bins of anchors from [`BINNED_FROM`](crate::engine::exact::BINNED_FROM)
+/// junctions on, against a sum tree below; the direct method, and strong bonds, need none.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum RuptureStore {
     Tree,
@@ -111,7 +114,7 @@ impl RuptureStore {
             return None;
         }
         match Method::of(scene) {
-            Method::ClosedForm if uses_bins(scene.junctions.n) => Some(RuptureStore::Bins),
+            Method::ClosedForm | Method::Series if uses_bins(scene.junctions.n) => Some(RuptureStore::Bins),
             Method::ClosedForm | Method::Series => Some(RuptureStore::Tree),
             Method::Fixed | Method::Direct => None,
         }
@@ -146,13 +149,14 @@ pub fn fixed_buffers(scene: &Scene, checkpoints: bool) -> u64 {
 }
 
 /// Bytes of `checkpoint.bin` (MessagePack, structs as maps): per junction at most a bag
-/// entry with its field names (31 bytes), the fixed engine's state byte and extension (10),
-/// and a sum tree node (77 bytes per 64-byte node) or the rupture bins
+/// entry with its field names (31 bytes; the series adds a handle, at most 5), the fixed
+/// engine's state byte and extension (10), and a sum tree node (77 bytes per 64-byte node) or the rupture bins
 /// ([`BinnedRupture::encoded_bytes_for`]); plus 4 KiB of header and plate state.
 pub fn checkpoint_bytes(scene: &Scene) -> u64 {
     let n = scene.junctions.n as u64;
     let junctions = match Method::of(scene) {
         Method::Fixed => 10 * n,
+        Method::Series => 36 * n,
         _ => 31 * n,
     };
     let rupture = RuptureStore::of(scene).map_or(0, |s| s.encoded_bytes(scene.junctions.n));

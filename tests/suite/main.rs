@@ -36,6 +36,7 @@ mod renewal;
 mod resume;
 mod rosenbrock;
 mod run_fuzz;
+mod rupture_models;
 mod scaling;
 mod scenarios;
 mod scene_fuzz;

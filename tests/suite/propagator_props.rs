@@ -1,4 +1,4 @@
-//! Property tests of `stickslip::engine::exact::linear::propagator` against an independent double-double reference.
+//! Property tests of `stickslip::engine::exact::stepper::linear::propagator` against an independent double-double reference.
 //!
 //! The reference never uses the closed form: it propagates the ODE as a linear system
 //! `x' = A x` (forcing carried as extra states), lifted to quadratic monomials for `int w^2`,
@@ -19,7 +19,7 @@
 #![allow(clippy::needless_range_loop)] // index-heavy matrix code reads better with ranges
 
 use proptest::prelude::*;
-use stickslip::engine::exact::linear::propagator::{Branch, LinearPlate, Trajectory};
+use stickslip::engine::exact::stepper::linear::propagator::{Branch, LinearPlate, Trajectory};
 use twofloat::TwoFloat as D;
 
 fn dd(x: f64) -> D {

@@ -10,7 +10,7 @@ use crate::rosenbrock_support;
 
 use proptest::prelude::*;
 use rosenbrock_support::{CubicPlate, Explicit, LinPlate, Mixed, VanDerPol};
-use stickslip::engine::exact::linear::propagator::LinearPlate;
+use stickslip::engine::exact::stepper::linear::propagator::LinearPlate;
 use stickslip::ode::{Dop853, OdeError, Rosenbrock, RosenbrockConfig, StiffSystem};
 
 /// Closed form of `LinPlate` from `(x0, v0)` at time `t` (`M = 0`: `v0` ignored).

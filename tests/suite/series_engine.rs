@@ -4,7 +4,7 @@
 
 use stickslip::Scene;
 use stickslip::engine::Counters;
-use stickslip::engine::exact::series::{DIRECT_MAX, SeriesSum};
+use stickslip::engine::exact::stepper::series::{DIRECT_MAX, SeriesSum};
 use stickslip::observe::EventKind;
 use stickslip::runner::Recording;
 use stickslip_testkit::{BONDS, scene};

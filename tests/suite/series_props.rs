@@ -1,5 +1,5 @@
-//! Property tests of `stickslip::engine::exact::series::SeriesSum` (the tilted law's bond force as a
-//! series, `src/engine/exact/series/sum/mod.rs`) against a direct double-double sum over the anchors.
+//! Property tests of `stickslip::engine::exact::stepper::series::SeriesSum` (the tilted law's bond force as a
+//! series, `src/engine/exact/stepper/series/sum/mod.rs`) against a direct double-double sum over the anchors.
 //!
 //! Random laws, anchor clouds (clustered at the plate, spread over tens of `l0`, or far) and
 //! random sequences of add / remove / rebase / shift; after every operation `S`, `dS/dy` and
@@ -14,8 +14,8 @@ use proptest::prelude::*;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 use serde::Serialize;
-use stickslip::engine::exact::series::sum::phi_taylor;
-use stickslip::engine::exact::series::{SeriesSum, tilted_taylor};
+use stickslip::engine::exact::stepper::series::sum::phi_taylor;
+use stickslip::engine::exact::stepper::series::{SeriesSum, tilted_taylor};
 use stickslip::physics::{ForceLaw, Tilted};
 use twofloat::TwoFloat as D;
 

@@ -4,7 +4,7 @@
 //! cumulative interval finds that slot (for both weight components).
 
 use proptest::prelude::*;
-use stickslip::engine::exact::sumtree::SumTree2;
+use stickslip::engine::exact::rupture::sumtree::SumTree2;
 
 /// `(slot, weights)` updates; weight 0 clears a slot.
 fn updates(cap: usize) -> impl Strategy<Value = Vec<(usize, [f64; 2])>> {

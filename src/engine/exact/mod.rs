@@ -4,31 +4,25 @@
 //! changing rates, with no time step; the plate moves in closed form between events
 //! (`linear` law) or, for the `tilted` law, by an L-stable integrator on a truncated series
 //! of the bond force ([`series`]) or, for any law and as the tilted law's O(N) reference, by
-//! DOP853 on the direct sum ([`direct`]), each with a stated tolerance. The law's type picks
-//! the method ([`ForceLaw::Exact`]; a law gets the closed form or the series only by
-//! implementing [`LinearLaw`] or [`SeriesLaw`]; see `docs/engines.md`).
+//! DOP853 on the direct sum ([`stepper::direct`]), each with a stated tolerance. The law's
+//! type picks the method ([`ForceLaw::Exact`]; a law gets the closed form or the series only
+//! by implementing [`LinearLaw`] or [`SeriesLaw`]; see `docs/engines.md`).
+//!
+//! Layout: [`core`] (the event loop and the junctions' bookkeeping, and what every engine
+//! shares: bags, clocks, frame, picks) composes a plate stepper from [`stepper`] (`linear`,
+//! `series`, `direct`) with a rupture model from [`rupture`] (strong; weak from a sum tree or
+//! from bins, over a closed-form horizon or a plate step; the direct stepper's hazard).
 //!
 //! Why no junction needs its own clock: every rate of the model is either shared by all
 //! junctions of a state (strong rupture `k0`, formation `kon0 g(v)`) or, for weak bonds,
 //! a shared time factor times a per-junction constant weight (`k0 exp(a |y(t) - c_i|)`,
 //! bounded by `exp(a y_hi) exp(-a c_i) + exp(-a y_lo) exp(a c_i)`), so one channel clock
-//! per kind of event plus a sum tree for the weighted choice is exact and cheaper than a
-//! clock per junction.
+//! per kind of event plus a sum tree (or bins) for the weighted choice is exact and cheaper
+//! than a clock per junction.
 
-pub mod bags;
-pub mod binned;
-pub mod clocks;
 pub mod core;
-pub mod direct;
-pub mod frame;
-pub mod horizon;
-pub mod linear;
-mod linear_path;
-pub mod motion;
-pub mod pick;
 pub mod rupture;
-pub mod series;
-pub mod sumtree;
+pub mod stepper;
 
 use super::{EngineError, EngineVisitor};
 use crate::physics::{
@@ -37,13 +31,13 @@ use crate::physics::{
 use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};
 use crate::scene::{Scene, TiltedMethod};
 
-pub use self::core::{Core, Exact, Kernel};
-pub use binned::{BINNED_FROM, BinnedRupture, uses_bins};
-pub use clocks::{ArrayQueue, ChannelQueue, PqQueue};
-pub use direct::{DirectKernel, ExactDirect};
-pub use linear::{ExactLinear, LinearKernel};
-pub use motion::{Dynamic, Kinematic, PlateMotion};
-pub use rupture::{StrongRupture, WeakRupture};
+pub use self::core::clocks::{ArrayQueue, ChannelQueue, PqQueue};
+pub use self::core::{Core, Exact, Stepper};
+pub use rupture::binned::{BINNED_FROM, BinnedRupture, uses_bins};
+pub use rupture::{RuptureModel, StrongRupture, TreeRupture};
+pub use stepper::direct::{DirectStepper, ExactDirect};
+pub use stepper::linear::{Dynamic, ExactLinear, Kinematic, LinearStepper, PlateMotion};
+use stepper::series;
 
 /// The event queue the engine uses (chosen by `benches/exact.rs`, see docs/performance.md).
 pub type DefaultQueue = ArrayQueue;
@@ -60,16 +54,16 @@ pub fn weak_linear<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<BinnedRupture,
 }
 
 /// [`weak_linear`] with the candidates drawn from a sum tree of the junctions' weights
-/// ([`WeakRupture`]) instead of bins: the same process, another random stream (what a run
+/// ([`TreeRupture`]) instead of bins: the same process, another random stream (what a run
 /// uses below [`BINNED_FROM`] junctions, and the bench's comparison for the bins).
-pub fn weak_linear_tree<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<WeakRupture, Q> {
+pub fn weak_linear_tree<Q: ChannelQueue>(scene: &Scene) -> ExactLinear<TreeRupture, Q> {
     let j = &scene.junctions;
-    ExactLinear::new(scene, &Linear::from_scene(scene), |_| WeakRupture::new(j.k0, j.beta_dx() * j.kappa, j.n))
+    ExactLinear::new(scene, &Linear::from_scene(scene), |_| TreeRupture::new(j.k0, j.beta_dx() * j.kappa, j.n))
 }
 
 /// [`strong_linear`] with plate motion `M` ([`Kinematic`] for `plate.kinematic`).
 pub fn strong_linear_with<Q: ChannelQueue, M: PlateMotion>(scene: &Scene) -> ExactLinear<StrongRupture, Q, M> {
-    ExactLinear::new(scene, &Linear::from_scene(scene), |rng| StrongRupture::new(scene.junctions.k0, rng))
+    ExactLinear::new(scene, &Linear::from_scene(scene), |rng| StrongRupture::<true>::new(scene.junctions.k0, rng))
 }
 
 /// [`weak_linear`] with plate motion `M` ([`Kinematic`] for `plate.kinematic`): the rupture
@@ -171,8 +165,8 @@ impl<L: LinearLaw, V: EngineVisitor> BondVisitor for ClosedForm<'_, L, V> {
         let (k0, n) = (bond.k0(), scene.junctions.n);
         let a = bond.force_sensitivity() * law.thinning_slope();
         let binned = |rng: &mut _| BinnedRupture::try_new(k0, a, n, rng);
-        let tree = |_: &mut _| WeakRupture::try_new(k0, a, n);
-        let strong = |rng: &mut _| Ok(StrongRupture::new(k0, rng));
+        let tree = |_: &mut _| TreeRupture::try_new(k0, a, n);
+        let strong = |rng: &mut _| Ok(StrongRupture::<true>::new(k0, rng));
         let bins = uses_bins(n);
         Ok(match (B::IS_WEAK, scene.plate.kinematic) {
             (true, true) if bins => {

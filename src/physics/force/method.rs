@@ -119,7 +119,7 @@ pub trait LinearLaw: ForceLaw {
 }
 
 /// A law of the tilted form `f^x = kappa (x - l0 x / sqrt(x^2 + l0^2))`, the form the series
-/// engine's bond-force series (`engine::exact::series::SeriesSum`: its Taylor coefficients and
+/// engine's bond-force series (`engine::exact::stepper::series::SeriesSum`: its Taylor coefficients and
 /// its proven remainder bound) is written for. The series engine is built from
 /// [`SeriesLaw::tilted_form`], never from a scene's numbers.
 pub trait SeriesLaw: ForceLaw {

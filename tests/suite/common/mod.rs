@@ -27,6 +27,32 @@ pub fn ks_critical(n: usize, alpha: f64) -> f64 {
     ((2.0 / alpha).ln() / 2.0).sqrt() / (n as f64).sqrt()
 }
 
+/// Two-sample Kolmogorov–Smirnov statistic `D = sup |F_a - F_b|` of the empirical cdfs.
+pub fn ks_two_sample(a: &mut [f64], b: &mut [f64]) -> f64 {
+    a.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    b.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    let (n, m) = (a.len() as f64, b.len() as f64);
+    let (mut i, mut j, mut d) = (0, 0, 0.0f64);
+    while i < a.len() && j < b.len() {
+        let x = a[i].min(b[j]);
+        while i < a.len() && a[i] <= x {
+            i += 1;
+        }
+        while j < b.len() && b[j] <= x {
+            j += 1;
+        }
+        d = d.max((i as f64 / n - j as f64 / m).abs());
+    }
+    d
+}
+
+/// Asymptotic two-sample KS critical value at level `alpha` for samples of `n` and `m`:
+/// `sqrt(ln(2/alpha)/2) sqrt((n + m)/(n m))`.
+pub fn ks_two_sample_critical(n: usize, m: usize, alpha: f64) -> f64 {
+    let (n, m) = (n as f64, m as f64);
+    ((2.0 / alpha).ln() / 2.0).sqrt() * ((n + m) / (n * m)).sqrt()
+}
+
 /// Upper `1 - alpha` quantile of chi-square with `df` degrees of freedom.
 pub fn chi2_critical(df: usize, alpha: f64) -> f64 {
     ChiSquared::new(df as f64).unwrap().inverse_cdf(1.0 - alpha)

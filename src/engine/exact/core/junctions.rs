@@ -1,55 +1,69 @@
-//! The junction bookkeeping of every exact engine, written once over its [`Kernel`]:
-//! rupture and formation (with re-attachment and event emission), the frame's re-base, and
-//! what follows an event (counters, re-base, a new piece, the clocks renewed).
+//! The junction bookkeeping of every exact engine, written once over its [`Stepper`] and
+//! [`RuptureModel`]: rupture and formation (with re-attachment and event emission), the
+//! frame's re-base, and what follows an event (counters, re-base, a new piece, the clocks
+//! renewed).
 
-use super::{Core, HORIZON, Kernel, REBASE, emit, reattached_extension};
-use crate::engine::exact::bags::{Detached, count};
+use super::{Core, HORIZON, REBASE, Stepper, WeakRuptures, emit, reattached_extension};
+use crate::engine::exact::core::bags::{Detached, count};
+use crate::engine::exact::rupture::{Plan, RuptureModel};
 use crate::observe::{EventKind, Observer};
 
 /// Ruptures the attached junction in `slot` now.
 #[inline]
-pub fn rupture<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K, slot: usize, obs: &mut O) {
+pub fn rupture<S: Stepper, R: RuptureModel, O: Observer>(
+    core: &mut Core<S::Queue>,
+    s: &mut S,
+    r: &mut R,
+    slot: usize,
+    obs: &mut O,
+) {
     let last = core.bags.n_attached() - 1;
     let a = core.bags.take_attached(slot);
-    k.detached(core, slot, last, &a);
-    let x = k.y(core) - a.c;
+    s.detached(core, slot, last, &a);
+    r.detached(&mut core.bags.attached, slot, last, &a);
+    let x = s.y(core) - a.c;
     core.bags.detached.push(Detached { x, t: core.tau, id: a.id });
     core.counters.ruptures += 1;
-    emit(obs, core.time(), EventKind::Rupture, a.id, x, |x| k.tension(x));
+    emit(obs, core.time(), EventKind::Rupture, a.id, x, |x| s.tension(x));
 }
 
-/// Attaches a detached junction ([`Kernel::formation_slot`]) now, with its re-attached
-/// extension; if its rupture rate overflows (weak bonds), it ruptures at once. A kernel that
-/// needs it re-bases first ([`Kernel::forced_rebase`]: with no junction attached the plate
-/// may have moved far since the last re-base, and the new anchor's weights must be
+/// Attaches a detached junction ([`Stepper::formation_slot`]) now, with its re-attached
+/// extension; if its rupture rate overflows (weak bonds), it ruptures at once. A model that
+/// needs it re-bases first ([`RuptureModel::needs_rebase`]: with no junction attached the
+/// plate may have moved far since the last re-base, and the new anchor's weights must be
 /// representable).
 #[inline]
-pub fn form<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K, obs: &mut O) {
-    if k.forced_rebase(core) {
-        rebase(core, k, obs);
+pub fn form<S: Stepper, R: RuptureModel, O: Observer>(core: &mut Core<S::Queue>, s: &mut S, r: &mut R, obs: &mut O) {
+    if r.needs_rebase(s.y(core), core.tau) {
+        rebase(core, s, r, obs);
     }
-    let slot = k.formation_slot(&mut core.rng, core.bags.n_detached());
+    let slot = s.formation_slot(&mut core.rng, core.bags.n_detached());
     let d = core.bags.take_detached(slot);
     let x = reattached_extension(core.reattach, core.lambda, &d, core.tau);
-    let y = k.y(core);
+    let y = s.y(core);
     let c = y - x;
-    let bin = k.bin(core, c);
-    core.bags.attach_in_bin(c, d.id, bin);
+    core.bags.attach_in_bin(c, d.id, 0);
     core.counters.formations += 1;
-    emit(obs, core.time(), EventKind::Formation, d.id, x, |x| k.tension(x));
+    emit(obs, core.time(), EventKind::Formation, d.id, x, |x| s.tension(x));
     let slot = core.bags.n_attached() - 1;
-    if !k.attached(core, slot, c, x, y) {
-        rupture(core, k, slot, obs);
+    s.attached(core, slot, c);
+    if !r.attached(&mut core.bags.attached, slot, c, y) {
+        rupture(core, s, r, slot, obs);
     }
 }
 
 /// Re-bases the frame if positions or times have grown ([`REBASE`]; amortised O(1) per event).
 /// Always inlined: the test runs after every event, the re-base itself is a call.
 #[inline(always)]
-pub fn maybe_rebase<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K, obs: &mut O) {
-    let y = k.y(core);
-    if REBASE.due(y, core.tau, core.events_since_rebase, core.n, k.forced_rebase(core)) {
-        rebase(core, k, obs);
+pub fn maybe_rebase<S: Stepper, R: RuptureModel, O: Observer>(
+    core: &mut Core<S::Queue>,
+    s: &mut S,
+    r: &mut R,
+    obs: &mut O,
+) {
+    let y = s.y(core);
+    if REBASE.due(y, core.tau, core.events_since_rebase, core.n, r.needs_rebase(y, core.tau)) {
+        rebase(core, s, r, obs);
     }
 }
 
@@ -59,14 +73,14 @@ pub fn maybe_rebase<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K
 /// of `N` events): kept out of the event loop's code.
 #[cold]
 #[inline(never)]
-pub fn rebase<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K, obs: &mut O) {
-    let (dtau, dy) = (core.tau, k.y(core));
+pub fn rebase<S: Stepper, R: RuptureModel, O: Observer>(core: &mut Core<S::Queue>, s: &mut S, r: &mut R, obs: &mut O) {
+    let (dtau, dy) = (core.tau, s.y(core));
     core.shift(dtau, dy);
-    k.shifted(core, dtau, dy);
-    let mut over = k.rebuild(&mut core.bags.attached);
+    s.shifted(core, dtau, dy);
+    let mut over = r.rebuild(&mut core.bags.attached);
     over.sort_unstable_by(|a, b| b.cmp(a));
     for slot in over {
-        rupture(core, k, slot, obs);
+        rupture(core, s, r, slot, obs);
     }
 }
 
@@ -74,24 +88,48 @@ pub fn rebase<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K, obs:
 /// re-base, a new piece, new rates. Always inlined: it runs after every event,
 /// its call cost a twentieth of one, and inlined `fired` is a constant.
 #[inline(always)]
-pub fn after_event<K: Kernel, O: Observer>(core: &mut Core<K::Queue>, k: &mut K, fired: Option<usize>, obs: &mut O) {
+pub fn after_event<S: Stepper, R: RuptureModel, O: Observer>(
+    core: &mut Core<S::Queue>,
+    s: &mut S,
+    r: &mut R,
+    fired: Option<usize>,
+    obs: &mut O,
+) {
     core.events_since_rebase += 1;
-    maybe_rebase(core, k, obs);
-    k.open_piece(core);
-    refresh_clocks(core, k, fired);
-    k.prefetch(core);
+    maybe_rebase(core, s, r, obs);
+    s.open_piece(core);
+    refresh_clocks(core, s, r, fired);
+    s.prefetch(core);
+    r.prefetch(&core.bags.attached);
+}
+
+/// Whether the rupture channel carries candidates over a thinning horizon (weak bonds on a
+/// closed-form plate).
+#[inline(always)]
+pub const fn horizon<S: Stepper, R: RuptureModel>() -> bool {
+    R::IS_WEAK && matches!(S::WEAK, WeakRuptures::Horizon)
 }
 
 /// Sets every channel's rate after a change of state (formation `kon0 N_det`, times the
-/// kernel's acceptance; rupture and horizon from [`Kernel::rupture_plan`]); channel `fired`
-/// draws afresh. Always inlined (it runs after every event).
+/// stepper's acceptance; rupture and horizon from the model's [`RuptureModel::plan`] over the
+/// stepper's bounds, none for weak bonds found inside plate steps); channel `fired` draws
+/// afresh. Always inlined (it runs after every event).
 #[inline(always)]
-pub fn refresh_clocks<K: Kernel>(core: &mut Core<K::Queue>, k: &mut K, fired: Option<usize>) {
+pub fn refresh_clocks<S: Stepper, R: RuptureModel>(
+    core: &mut Core<S::Queue>,
+    s: &mut S,
+    r: &mut R,
+    fired: Option<usize>,
+) {
     let now = core.tau;
-    let (rupture_rate, horizon_end) = k.rupture_plan(core);
-    let formation_rate = core.formation.kon0 * k.formation_acceptance(core) * count(core.bags.n_detached());
-    core.channels.set_rates(now, [formation_rate, rupture_rate], fired, &mut core.rng);
-    if K::HORIZON {
-        core.channels.set_time(HORIZON, horizon_end);
+    let plan = if R::IS_WEAK && !horizon::<S, R>() {
+        Plan { rate: 0.0, horizon: f64::INFINITY }
+    } else {
+        r.plan(|h| s.bounds(core, h), core.bags.n_attached())
+    };
+    let formation_rate = core.formation.kon0 * s.formation_acceptance(core) * count(core.bags.n_detached());
+    core.channels.set_rates(now, [formation_rate, plan.rate], fired, &mut core.rng);
+    if horizon::<S, R>() {
+        core.channels.set_time(HORIZON, now + plan.horizon);
     }
 }

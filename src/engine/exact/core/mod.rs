@@ -1,45 +1,49 @@
 //! The one core of the exact engines ([`ExactLinear`](super::ExactLinear),
 //! [`ExactSeries`](super::series::ExactSeries), [`ExactDirect`](super::ExactDirect)): each
-//! is an [`Exact`] engine, the [`Core`] it shares with the others plus a [`Kernel`] of its own.
+//! is an [`Exact`] engine, the [`Core`] it shares with the others composed with a plate
+//! [`Stepper`] and a [`RuptureModel`](super::rupture::RuptureModel).
 //!
-//! - [`Core`]: the junctions ([`super::bags::Bags`]), the channel clocks
-//!   ([`super::clocks`]), the frame ([`super::frame`]), the counters, the formation rate and
+//! - [`Core`]: the junctions ([`bags::Bags`]), the channel clocks
+//!   ([`clocks`]), the frame ([`frame`]), the counters, the formation rate and
 //!   the generator;
 //! - [`junctions`]: formation, rupture, re-attachment, the frame's re-base
 //!   ([`REBASE`]), the clocks' renewal after an event, and event emission;
 //! - [`engine`]: [`Exact`] and its event loop;
-//! - [`Kernel`]: what an engine supplies: how its plate moves between events and reports a
-//!   piece, and its rupture kinetics.
+//! - [`bags`], [`clocks`], [`frame`], [`pick`]: the junctions' storage, the channel clocks,
+//!   the local frame and uniform picks drawn ahead, shared by every stepper and model.
 //!
-//! Everything is generic and `#[inline]`: an engine compiles, monomorphised for its kernel,
-//! to what it would be with the code written into it (no `dyn`, no run-time branch on the
-//! kind of engine; a kernel's constants, such as [`Kernel::HORIZON`], fold away).
+//! Everything is generic and `#[inline]`: an engine compiles, monomorphised for its stepper
+//! and model, to what it would be with the code written into it (no `dyn`, no run-time branch
+//! on the kind of engine; their constants, such as [`Stepper::WEAK`], fold away).
 
+pub mod bags;
+pub mod clocks;
 pub mod engine;
+pub mod frame;
 pub mod junctions;
-pub mod kernel;
+pub mod pick;
 pub mod policy;
 
 use serde::{Deserialize, Serialize};
 
-use super::bags::Bags;
-use super::clocks::{ChannelQueue, Channels};
-use super::frame::Frame;
 use crate::engine::alloc::AllocError;
 use crate::engine::{Counters, EngineError};
 use crate::physics::{Formation, Plate};
 use crate::rng::{Pcg64, UniformSource, pcg};
 use crate::scene::{Reattach, Scene};
+use bags::Bags;
+use clocks::{ChannelQueue, Channels};
+use frame::Frame;
 
+pub use super::stepper::{Moved, Stepper, Target, WeakRuptures};
 pub use engine::Exact;
-pub use kernel::{Kernel, Moved, Target};
 pub use policy::{REBASE, RebasePolicy, emit, reattached_extension};
 
 /// Channel of formation candidates.
 pub const FORMATION: usize = 0;
 /// Channel of ruptures (strong bonds) or rupture candidates (weak bonds, linear law).
 pub const RUPTURE: usize = 1;
-/// End of the current thinning horizon (a kernel with [`Kernel::HORIZON`]).
+/// End of the current thinning horizon (weak bonds on a closed-form plate, [`WeakRuptures::Horizon`]).
 pub const HORIZON: usize = 2;
 
 /// The state every exact engine keeps, in local coordinates ([`Frame`]).
@@ -115,7 +119,7 @@ impl<Q: ChannelQueue> Core<Q> {
     }
 
     /// Moves the local origin by `dtau` in time and `dy` in position: frame, junctions and
-    /// clocks; the engine's own coordinates are its kernel's ([`Kernel::shifted`]).
+    /// clocks; the engine's own coordinates are its stepper's ([`Stepper::shifted`]).
     fn shift(&mut self, dtau: f64, dy: f64) {
         self.frame.shift(dtau, dy);
         self.bags.rebase(dtau, dy);

@@ -2,7 +2,7 @@
 //! extension of a re-formed junction ([`reattached_extension`]) and how an event is
 //! reported ([`emit`]).
 
-use super::super::bags::Detached;
+use super::bags::Detached;
 use crate::observe::{EventKind, JunctionEvent, Observer};
 use crate::scene::Reattach;
 

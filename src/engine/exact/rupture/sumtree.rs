@@ -49,7 +49,7 @@ impl SumTree2 {
         // Huge pages are asked for before the tree is written: pages touched first are
         // backed by 4 KiB ones (with the kernel's `madvise` setting, the common default).
         let mut lines = alloc::with_capacity(nodes, "the rupture sum tree")?;
-        super::bags::advise_huge_pages(&lines);
+        crate::engine::exact::core::bags::advise_huge_pages(&lines);
         lines.resize(nodes, Line::default());
         Ok(SumTree2 { cap, first_bottom: nodes - cap / ARITY, lines })
     }
@@ -182,7 +182,7 @@ impl SumTree2 {
                     if first_slot < records.len() {
                         let base = records.as_ptr().wrapping_add(first_slot).cast::<u8>();
                         for offset in (0..ARITY * ARITY * size_of::<T>()).step_by(64) {
-                            super::pick::prefetch_ptr(base.wrapping_add(offset));
+                            crate::engine::exact::core::pick::prefetch_ptr(base.wrapping_add(offset));
                         }
                     }
                 }
@@ -222,7 +222,7 @@ impl SumTree2 {
         let first = ARITY * node + 1;
         for i in 0..ARITY {
             // SAFETY: the caller's contract: `first + i <= ARITY * first_bottom < lines.len()`.
-            unsafe { super::pick::prefetch(self.line(first + i)) };
+            unsafe { crate::engine::exact::core::pick::prefetch(self.line(first + i)) };
         }
     }
     /// Rebuilds the tree from the first `weights.len()` slots (the rest are zero). O(N).

@@ -21,23 +21,12 @@ use serde::{Deserialize, Serialize, de::DeserializeOwned};
 use super::LocalCubic;
 use super::taylor::{ORDER, Plant, TimeSeries, Tol};
 use super::{RosenbrockConfig, RosenbrockN, SeriesSum, StiffSystem};
-use crate::engine::exact::direct::ode_error;
-use crate::engine::exact::frame::Frame;
+use crate::engine::exact::core::frame::Frame;
+use crate::engine::exact::stepper::Step;
+use crate::engine::exact::stepper::direct::ode_error;
 use crate::engine::{Counters, EngineError};
 use crate::observe::Segment;
 use crate::physics::Plate;
-
-/// One plate step `[s0, s1]` and proven bounds of `y` over it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Step {
-    pub s0: f64,
-    pub s1: f64,
-    pub y_lo: f64,
-    pub y_hi: f64,
-    /// Bound on the bond force's error from evaluating a local cubic instead of the series
-    /// over the step, relative to [`SeriesSum::scale`] (0 when the series was evaluated).
-    pub cubic_error: f64,
-}
 
 /// What a step may change besides the motion: the series (re-basings) and the counters.
 pub struct StepCtx<'a> {

@@ -1,20 +1,21 @@
-//! The exact engine for the `linear` force law: the closed-form plate and its rupture
-//! kinetics, as a [`Kernel`] of the exact core ([`crate::engine::exact::core`]).
+//! The exact engine for a linear law: the closed-form plate, as a [`Stepper`] of the exact
+//! core ([`crate::engine::exact::core`]).
 //!
 //! With `f^x = kappa x` and attached junctions moving with the plate (`x_i = y - c_i`),
 //! the bond force is `F_b = kappa (N_att y - C)`, `C = sum c_i`, so between events the plate
 //! obeys the linear ODE `M y'' + eta y' + (K + kappa N_att) y = a + b s` and moves in closed
-//! form ([`crate::engine::exact::linear::propagator`]). Events:
+//! form ([`crate::engine::exact::stepper::linear::propagator`]). Events:
 //! - formation candidates at rate `kon0 N_det`, accepted with probability `g(|y'|)` at the
 //!   candidate time (thinning: exact because `g <= 1`), then a uniform detached junction;
-//! - ruptures as chosen by the [`RuptureModel`] (strong: rate `k0 N_att`; weak: thinning);
+//! - ruptures as chosen by the [`RuptureModel`] (strong: rate `k0 N_att`; weak: thinning
+//!   over a horizon of the closed form, [`Stepper::bounds`]);
 //! - the end of a thinning horizon (weak bonds), and the runner's stop time.
 //!
 //! The trajectory restarts (a new closed-form solution from the current state) at every
 //! event, horizon end and stop; each restart reports the exact time integrals of the
 //! observables over the finished piece as a [`Segment`].
 //!
-//! With a kinematic plate (type parameter [`Kinematic`](super::super::motion::Kinematic),
+//! With a kinematic plate (type parameter [`Kinematic`](crate::engine::exact::Kinematic),
 //! `plate.kinematic = true`) there is no plate equation: `y = V tau` in local coordinates
 //! (so the lag `X - V t` is exactly 0), `y' = V`, and `F_b = kappa (N_att V tau - C)` is
 //! linear in time between events, so a segment's mean is `F_b` at its midpoint and
@@ -25,17 +26,15 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::{Drive, Dynamic, PlateMotion};
 use crate::engine::EngineError;
 use crate::engine::alloc::AllocError;
-use crate::engine::exact::bags::Attached;
-use crate::engine::exact::clocks::ChannelQueue;
-use crate::engine::exact::core::junctions::refresh_clocks;
-use crate::engine::exact::core::{Core, Exact, Kernel};
-use crate::engine::exact::linear::propagator::{Integrals, LinearPlate, Trajectory};
-use crate::engine::exact::linear::report;
-use crate::engine::exact::motion::{Drive, Dynamic, PlateMotion};
-use crate::engine::exact::pick::Pick;
-use crate::engine::exact::rupture::RuptureModel;
+use crate::engine::exact::core::clocks::ChannelQueue;
+use crate::engine::exact::core::pick::Pick;
+use crate::engine::exact::core::{Core, Exact, Stepper, WeakRuptures};
+use crate::engine::exact::rupture::{LinearRate, RuptureModel};
+use crate::engine::exact::stepper::linear::propagator::{Integrals, LinearPlate, Trajectory};
+use crate::engine::exact::stepper::linear::report;
 use crate::observe::{Observer, Segment};
 use crate::physics::{LinearLaw, Plate};
 use crate::rng::Pcg64;
@@ -43,7 +42,7 @@ use crate::scene::Scene;
 
 /// Exact event-driven engine, linear force law, rupture kinetics `R`, event queue `Q`, plate
 /// motion `M` (the plate equation, or a kinematic plate).
-pub type ExactLinear<R, Q, M = Dynamic> = Exact<LinearKernel<R, Q, M>>;
+pub type ExactLinear<R, Q, M = Dynamic> = Exact<LinearStepper<Q, M>, R>;
 
 /// The current closed-form piece of the plate trajectory.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -124,17 +123,18 @@ impl<'de> Deserialize<'de> for Trajectories {
     }
 }
 
-/// The linear law's part of an exact engine: the closed-form plate, the rupture kinetics
-/// `R`, the uniform picks of detached junctions drawn ahead ([`Pick`]).
+/// The closed-form plate of a linear law, and the uniform picks of detached junctions drawn
+/// ahead ([`Pick`]).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(bound = "")]
-pub struct LinearKernel<R: RuptureModel, Q: ChannelQueue, M: PlateMotion = Dynamic> {
+pub struct LinearStepper<Q: ChannelQueue, M: PlateMotion = Dynamic> {
     kappa: f64,
+    /// The drive's velocity `V` (a kinematic plate's path).
+    v: f64,
     /// Plate state at the core's local time.
     y: f64,
     yd: f64,
     piece: Piece,
-    rupture: R,
     /// The next uniform pick of a detached junction.
     next_formation: Pick,
     /// The pieces summed for an observer that takes stretches (empty at the end of every
@@ -165,8 +165,9 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
         let mut core = Core::new(scene, 3)?;
         let rupture = rupture(&mut core.rng)?;
         let next_formation = Pick::draw(&mut core.rng);
-        let kernel = LinearKernel {
+        let stepper = LinearStepper {
             kappa: law.slope(),
+            v: core.plate.v,
             y: 0.0,
             yd: 0.0,
             piece: Piece {
@@ -175,16 +176,15 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
                 v0: 0.0,
                 traj: Trajectories::holding(LinearPlate::new(1.0, 1.0, 1.0).trajectory(0.0, 0.0, 0.0, 0.0)),
             },
-            rupture,
             next_formation,
             sums: report::Sums::default(),
             types: std::marker::PhantomData,
         };
-        Ok(Exact::start(core, kernel))
+        Ok(Exact::start(core, stepper, rupture))
     }
 }
 
-impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> LinearKernel<R, Q, M> {
+impl<Q: ChannelQueue, M: PlateMotion> LinearStepper<Q, M> {
     /// Reports `[piece.tau0, tau1]` given the state and integrals at `tau1` as raw integrals
     /// ([`report::piece`]: no division), or sums it for an observer that takes stretches
     /// ([`Observer::STRETCHES`]: inside `[integrals_after, stretch_until]`; nothing before),
@@ -258,9 +258,9 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> LinearKernel<R, Q, M> {
     }
 
     /// The plate along the current piece, as a kinematic drive.
-    #[inline]
-    fn drive(&self, core: &Core<Q>) -> Drive {
-        Drive { y0: self.piece.y0, v: core.plate.v }
+    #[inline(always)]
+    fn drive(&self) -> Drive {
+        Drive { y0: self.piece.y0, v: self.v }
     }
 
     /// Non-finite plate state is an error, never an output.
@@ -271,23 +271,35 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> LinearKernel<R, Q, M> {
     }
 }
 
-impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R, Q, M> {
+impl<Q: ChannelQueue, M: PlateMotion> Stepper for LinearStepper<Q, M> {
     type Queue = Q;
-    const IS_WEAK: bool = R::IS_WEAK;
+    type Rate = LinearRate;
     const KINEMATIC: bool = M::KINEMATIC;
-    /// Only weak bonds bound their rates over a horizon (strong bonds' rate is constant
-    /// between events: the channel would stay at `+inf`).
-    const HORIZON: bool = R::IS_WEAK;
+    const WEAK: WeakRuptures = WeakRuptures::Horizon;
 
     fn start(&mut self, core: &mut Core<Q>) {
-        for slot in 0..core.bags.n_attached() {
-            let c = core.bags.attached[slot].c;
-            self.rupture.attached(&mut core.bags.attached, slot, c, 0.0);
-        }
         self.open_piece(core);
         // At rest at t = 0; for M = 0 the velocity follows from the forces. A kinematic
         // plate moves at V from the start.
         self.yd = if M::KINEMATIC { core.plate.v } else { self.piece.traj.current().at(0.0).1 };
+    }
+
+    #[inline(always)]
+    fn rate(&self) -> LinearRate {
+        LinearRate
+    }
+
+    /// Along the piece, from the closed form (or the drive).
+    #[inline(always)]
+    fn position(&mut self, tau: f64) -> Result<f64, EngineError> {
+        let s = tau - self.piece.tau0;
+        Ok(if M::KINEMATIC { self.drive().position(s) } else { self.piece.traj.current().at(s).0 })
+    }
+
+    /// The piece's proven bounds (it was just opened, at the current time).
+    #[inline(always)]
+    fn bounds(&self, _core: &Core<Q>, h: f64) -> (f64, f64) {
+        if M::KINEMATIC { self.drive().bounds(h) } else { self.piece.traj.current().bounds(h) }
     }
 
     #[inline]
@@ -305,7 +317,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
     }
 
     /// The candidate's state (and, if accepted, the piece's integrals) at `t`, from the closed
-    /// form; a kinematic plate's formations are thinned in the rate ([`Kernel::formation_acceptance`]).
+    /// form; a kinematic plate's formations are thinned in the rate ([`Stepper::formation_acceptance`]).
     #[inline]
     fn formation<O: Observer>(&mut self, core: &mut Core<Q>, t: f64, obs: &mut O) -> Result<bool, EngineError> {
         if M::KINEMATIC {
@@ -361,13 +373,6 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
         self.piece.v0 = self.yd;
     }
 
-    /// A new piece, and the rupture bound renewed over it.
-    #[inline]
-    fn restart(&mut self, core: &mut Core<Q>) {
-        self.open_piece(core);
-        refresh_clocks(core, self, None);
-    }
-
     #[inline]
     fn shifted(&mut self, _core: &Core<Q>, _dtau: f64, dy: f64) {
         self.sums.shifted(dy);
@@ -379,18 +384,6 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
     #[inline]
     fn tension(&self, x: f64) -> f64 {
         self.kappa * x.abs()
-    }
-
-    /// The rupture model's plan over the piece; its horizon ends the piece (weak bonds).
-    #[inline]
-    fn rupture_plan(&mut self, core: &Core<Q>) -> (f64, f64) {
-        let n_att = core.bags.n_attached();
-        let plan = if M::KINEMATIC {
-            self.rupture.plan(&self.drive(core), n_att)
-        } else {
-            self.rupture.plan(self.piece.traj.current(), n_att)
-        };
-        (plan.rate, if R::IS_WEAK { core.tau + plan.horizon } else { f64::INFINITY })
     }
 
     /// Constant `g(V)` for a kinematic plate: folded into the formation rate, every
@@ -405,39 +398,8 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> Kernel for LinearKernel<R
         self.next_formation.take(n, rng)
     }
 
-    #[inline]
-    fn pick_rupture(&mut self, core: &mut Core<Q>, t: f64) -> Option<usize> {
-        let s = t - self.piece.tau0;
-        if M::KINEMATIC {
-            let drive = self.drive(core);
-            self.rupture.pick(&mut core.rng, &drive, s, &core.bags.attached)
-        } else {
-            self.rupture.pick(&mut core.rng, self.piece.traj.current(), s, &core.bags.attached)
-        }
-    }
-
-    #[inline]
-    fn attached(&mut self, core: &mut Core<Q>, slot: usize, c: f64, _x: f64, y: f64) -> bool {
-        self.rupture.attached(&mut core.bags.attached, slot, c, y)
-    }
-
-    #[inline]
-    fn detached(&mut self, core: &mut Core<Q>, slot: usize, last: usize, a: &Attached) {
-        self.rupture.detached(&mut core.bags.attached, slot, last, a);
-    }
-
-    #[inline]
-    fn forced_rebase(&self, core: &Core<Q>) -> bool {
-        self.rupture.needs_rebase(self.y, core.tau)
-    }
-
-    fn rebuild(&mut self, attached: &mut [Attached]) -> Vec<usize> {
-        self.rupture.rebuild(attached)
-    }
-
     #[inline(always)]
     fn prefetch(&self, core: &Core<Q>) {
         self.next_formation.prefetch(&core.bags.detached);
-        self.rupture.prefetch(&core.bags.attached);
     }
 }

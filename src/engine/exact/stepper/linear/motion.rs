@@ -2,7 +2,7 @@
 //! type parameter of [`super::ExactLinear`].
 //!
 //! - [`Dynamic`]: the plate equation `M y'' + eta y' + (K + kappa N_att) y = a + b s`, in
-//!   closed form ([`Trajectory`]; its [`PlatePath`] is in `linear_path.rs`).
+//!   closed form ([`Trajectory`]).
 //! - [`Kinematic`] (`plate.kinematic = true`): the plate follows its drive, `y = V tau` in
 //!   local coordinates; no plate equation, no propagator, no integrals of it.
 //!
@@ -11,20 +11,12 @@
 //! bounds). A new `Trajectory` branch would add an arm to each of those matches; a type
 //! parameter compiles the dynamic engine exactly as before (`M::KINEMATIC` is a constant, its
 //! `if` vanishes) and the kinematic engine without any of the propagator's work. The rupture
-//! models see the plate through [`PlatePath`] (position and bounds over a horizon), which both
-//! a [`Trajectory`] and a [`Drive`] implement, monomorphised per run.
+//! models see the plate through its position and its bounds over a horizon, which both a
+//! [`Trajectory`] and a [`Drive`] give.
 //!
-//! [`Trajectory`]: crate::engine::exact::linear::propagator::Trajectory
+//! [`Trajectory`]: crate::engine::exact::stepper::linear::propagator::Trajectory
 
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
-
-/// The plate's position along the current piece, as the rupture models need it.
-pub trait PlatePath {
-    /// `y(s)`, `s >= 0` measured from the start of the piece.
-    fn position(&self, s: f64) -> f64;
-    /// Proven bounds `(y_lo, y_hi)` of `y` over `[0, h]`.
-    fn bounds(&self, h: f64) -> (f64, f64);
-}
 
 /// A plate at constant speed: `y(s) = y0 + v s`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,14 +25,16 @@ pub struct Drive {
     pub v: f64,
 }
 
-impl PlatePath for Drive {
+impl Drive {
+    /// `y(s)`, `s >= 0` measured from the start of the piece.
     #[inline(always)]
-    fn position(&self, s: f64) -> f64 {
+    pub fn position(&self, s: f64) -> f64 {
         self.y0 + self.v * s
     }
-    /// `y` is monotone in `s` (so is its floating-point evaluation): the end points bound it.
+    /// Proven bounds `(y_lo, y_hi)` of `y` over `[0, h]`: `y` is monotone in `s` (so is its
+    /// floating-point evaluation), the end points bound it.
     #[inline(always)]
-    fn bounds(&self, h: f64) -> (f64, f64) {
+    pub fn bounds(&self, h: f64) -> (f64, f64) {
         let (a, b) = (self.position(0.0), self.position(h));
         (a.min(b), a.max(b))
     }

@@ -17,7 +17,7 @@
 //! the bond and viscous forces' integrals follow from the plate's state at the stretch's
 //! two ends ([`Stretch`]).
 
-use crate::engine::exact::linear::propagator::Integrals;
+use crate::engine::exact::stepper::linear::propagator::Integrals;
 use crate::observe::shifted::ShiftedSums;
 use crate::observe::{Piece, Stretch};
 use crate::physics::Plate;
@@ -131,7 +131,7 @@ impl Sums {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::exact::linear::propagator::LinearPlate;
+    use crate::engine::exact::stepper::linear::propagator::LinearPlate;
     use crate::observe::Observer;
     use crate::observe::stats::WindowStats;
     use crate::rng::{UniformSource, pcg};

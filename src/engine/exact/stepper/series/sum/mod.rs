@@ -169,7 +169,7 @@
 //! **Local cubic** (`taylor_at`, `LocalCubic`): `[S, S', S''/2, S'''/6]` at a point in one
 //! Horner pass, with `r4 = sum_(k>=4) C(k,4) |A_k| rho^(k-4)` bounding `|S''''|/24` (so the
 //! cubic's remainder by `r4 e^4`) against the series; the plate's steps evaluate it instead
-//! of the series when their excursion is small (`engine::exact::series::motion`).
+//! of the series when their excursion is small (`engine::exact::stepper::series::motion`).
 
 use serde::{Deserialize, Serialize};
 

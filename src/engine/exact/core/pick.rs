@@ -24,7 +24,7 @@ const DRIFT: usize = 4;
 
 /// A queue of [`AHEAD`] pre-drawn uniform picks: the front one is used next, the back one
 /// [`AHEAD`] uses later, so its memory can be prefetched several events before it is needed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Pick {
     q: [u64; AHEAD],
     head: u8,

@@ -21,8 +21,8 @@ pub struct Attached {
     pub id: u32,
     /// The engine's handle of the junction: in the series engine, in its `SeriesSum` (the
     /// bin it was counted in, or in direct mode its slot in the offsets' table:
-    /// [`crate::engine::exact::series::SeriesSum::add`]); with weak bonds in the linear
-    /// engine, its position in its rupture bin ([`crate::engine::exact::binned`]); 0
+    /// [`crate::engine::exact::stepper::series::SeriesSum::add`]); with weak bonds in the linear
+    /// engine, its position in its rupture bin ([`crate::engine::exact::rupture::binned`]); 0
     /// otherwise. It fills what would be padding (the struct stays 16 bytes), so a rupture
     /// reads it with the anchor in one random memory access.
     #[serde(default)]

@@ -22,11 +22,11 @@
 use rand_distr::{Distribution, Exp1};
 use serde::{Deserialize, Serialize};
 
-use super::clocks::ArrayQueue;
-use super::core::junctions::rebase;
-use super::core::{Core, Exact, Kernel, Moved, Target};
-use super::frame::Frame;
 use crate::engine::EngineError;
+use crate::engine::exact::core::clocks::ArrayQueue;
+use crate::engine::exact::core::frame::Frame;
+use crate::engine::exact::core::{Core, Exact, Moved, Stepper, Target, WeakRuptures};
+use crate::engine::exact::rupture::{Hazard, LinearRate};
 use crate::observe::{Observer, Segment};
 use crate::ode::{Dop853, Dop853Config, OdeError, OdeSystem};
 use crate::physics::{Bond, ForceLaw, Plate};
@@ -60,7 +60,7 @@ impl Layout {
 
 /// The right-hand side: plate, quadratures, hazard.
 struct System<'a, L: ForceLaw, B: Bond> {
-    attached: &'a [super::bags::Attached],
+    attached: &'a [crate::engine::exact::core::bags::Attached],
     p: Params<L, B>,
 }
 
@@ -106,9 +106,6 @@ impl<L: ForceLaw, B: Bond> System<'_, L, B> {
     }
 }
 
-/// `e^EXPONENT_CAP`: rate cap relative to `k0`.
-const CAP_RATE_FACTOR: f64 = 3.7730203009299397e260;
-
 impl<L: ForceLaw, B: Bond> OdeSystem for System<'_, L, B> {
     fn rhs(&mut self, tau: f64, s: &[f64], d: &mut [f64]) {
         let y = s[Y];
@@ -132,12 +129,12 @@ impl<L: ForceLaw, B: Bond> OdeSystem for System<'_, L, B> {
 }
 
 /// Exact event-driven engine for any force law `L` with bond kind `B`: `F_b` summed directly.
-pub type ExactDirect<L, B> = Exact<DirectKernel<L, B>>;
+pub type ExactDirect<L, B> = Exact<DirectStepper<L, B>, Hazard<L, B>>;
 
-/// The direct engine's part: the law and bond kind, the integrated state and DOP853.
+/// The direct stepper: the law and bond kind, the integrated state and DOP853.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(bound = "")]
-pub struct DirectKernel<L: ForceLaw, B: Bond> {
+pub struct DirectStepper<L: ForceLaw, B: Bond> {
     law: L,
     bond: B,
     layout: Layout,
@@ -167,7 +164,7 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
             ..Dop853Config::default()
         };
         let ode = Dop853::with_config(layout.dim, cfg).map_err(|e| ode_error(e, 0.0, scene.exact.rtol))?;
-        let kernel = DirectKernel {
+        let kernel = DirectStepper {
             law,
             bond,
             layout,
@@ -178,11 +175,11 @@ impl<L: ForceLaw, B: Bond> ExactDirect<L, B> {
             hazard_target: 0.0,
             ode,
         };
-        Ok(Exact::start(core, kernel))
+        Ok(Exact::start(core, kernel, Hazard { law, bond }))
     }
 }
 
-impl<L: ForceLaw, B: Bond> DirectKernel<L, B> {
+impl<L: ForceLaw, B: Bond> DirectStepper<L, B> {
     fn system<'a>(&self, core: &'a Core<ArrayQueue>) -> System<'a, L, B> {
         System { attached: &core.bags.attached, p: self.params(core) }
     }
@@ -200,7 +197,7 @@ impl<L: ForceLaw, B: Bond> DirectKernel<L, B> {
     }
 
     fn rate_cap(&self) -> f64 {
-        CAP_RATE_FACTOR * self.bond.k_off(0.0)
+        Hazard { law: self.law, bond: self.bond }.rate_cap()
     }
 
     /// Weak bonds: the junction that ruptures now, chosen with probability `r_i / sum r`.
@@ -221,7 +218,7 @@ impl<L: ForceLaw, B: Bond> DirectKernel<L, B> {
         last
     }
 
-    /// A rupture now, chosen by [`DirectKernel::pick_weak`] (a candidate, always accepted).
+    /// A rupture now, chosen by [`DirectStepper::pick_weak`] (a candidate, always accepted).
     fn weak_rupture(&self, core: &mut Core<ArrayQueue>) -> Moved {
         core.count_candidate();
         Moved::Ruptured(self.pick_weak(core))
@@ -265,10 +262,16 @@ pub(crate) fn ode_error(e: OdeError, t: f64, rtol: f64) -> EngineError {
     }
 }
 
-impl<L: ForceLaw, B: Bond> Kernel for DirectKernel<L, B> {
+impl<L: ForceLaw, B: Bond> Stepper for DirectStepper<L, B> {
     type Queue = ArrayQueue;
-    const IS_WEAK: bool = B::IS_WEAK;
+    type Rate = LinearRate;
     const KINEMATIC: bool = false;
+    const WEAK: WeakRuptures = WeakRuptures::Own;
+
+    #[inline]
+    fn rate(&self) -> LinearRate {
+        LinearRate
+    }
 
     fn start(&mut self, core: &mut Core<ArrayQueue>) {
         self.open_piece(core);
@@ -303,7 +306,7 @@ impl<L: ForceLaw, B: Bond> Kernel for DirectKernel<L, B> {
         &mut self,
         core: &mut Core<ArrayQueue>,
         to: Target,
-        obs: &mut O,
+        _obs: &mut O,
     ) -> Result<Moved, EngineError> {
         let target = to.tau;
         if core.tau < target {
@@ -326,11 +329,7 @@ impl<L: ForceLaw, B: Bond> Kernel for DirectKernel<L, B> {
                     if core.tau == 0.0 {
                         return Ok(self.weak_rupture(core));
                     }
-                    let now = core.tau;
-                    self.close(core, now, obs)?;
-                    rebase(core, self, obs);
-                    self.open_piece(core);
-                    return Ok(Moved::Short);
+                    return Ok(Moved::Rebase);
                 }
                 return Err(ode_error(e, core.frame.time(t_before), rtol));
             }
@@ -405,25 +404,13 @@ impl<L: ForceLaw, B: Bond> Kernel for DirectKernel<L, B> {
     fn tension(&self, x: f64) -> f64 {
         self.law.tension(x)
     }
-
-    /// Strong bonds: `k0 N_att` on the rupture channel; weak bonds rupture by their hazard.
-    #[inline]
-    fn rupture_plan(&mut self, core: &Core<ArrayQueue>) -> (f64, f64) {
-        let rate = if B::IS_WEAK { 0.0 } else { self.bond.k_off(0.0) * core.bags.n_attached() as f64 };
-        (rate, f64::INFINITY)
-    }
-
-    /// Whether the junction's rupture rate at extension `x` stays below the cap.
-    #[inline]
-    fn attached(&mut self, _core: &mut Core<Self::Queue>, _slot: usize, _c: f64, x: f64, _y: f64) -> bool {
-        !(B::IS_WEAK && self.bond.k_off(self.law.tension(x)) > self.rate_cap())
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::engine::exact::rupture::EXPONENT_CAP;
+    use crate::engine::exact::rupture::hazard::CAP_RATE_FACTOR;
 
     #[test]
     fn cap_factor_is_e_to_the_cap() {

@@ -1,18 +1,21 @@
-//! The series engine's part of the exact core ([`crate::engine::exact::core`]): the bond
-//! force kept as a [`SeriesSum`] with its error tracked, the plate stepped by its [`Motion`],
-//! weak bonds thinned inside each step.
+//! The series stepper of the exact core ([`crate::engine::exact::core`]): the bond force kept
+//! as a [`SeriesSum`] with its error tracked, the plate stepped by its [`Motion`]; the core
+//! thins weak bonds' rupture candidates over each step ([`WeakRuptures::Steps`]).
 
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
 use super::SeriesSum;
-use super::kinetics::Kinetics;
-use super::motion::{Motion, Step, StepCtx};
+use super::plate::{Motion, StepCtx};
 use crate::engine::EngineError;
-use crate::engine::exact::bags::Attached;
-use crate::engine::exact::clocks::ArrayQueue;
-use crate::engine::exact::core::{Core, Exact, FORMATION, Kernel, Moved, Target};
-use crate::engine::exact::pick::prefetch;
+use crate::engine::alloc::{self, AllocError};
+use crate::engine::exact::core::bags::Attached;
+use crate::engine::exact::core::clocks::ArrayQueue;
+use crate::engine::exact::core::pick::prefetch;
+use crate::engine::exact::core::{Core, Exact, FORMATION, Moved, Stepper, Target, WeakRuptures};
+use crate::engine::exact::rupture::horizon::SPREAD;
+use crate::engine::exact::rupture::{RuptureModel, TiltedRate};
+use crate::engine::exact::stepper::Step;
 use crate::observe::Observer;
 use crate::physics::{ForceLaw, Tilted};
 use crate::rng::UniformSource;
@@ -22,21 +25,33 @@ use crate::scene::Scene;
 /// or 24 bytes a junction, under 100 KB) stay in the core's own caches, and predicting the
 /// pick (a copy of the generator and its draws) costs more than the load it would hide.
 pub const PREFETCH_MIN_N: usize = 1 << 12;
+/// Largest `a = beta dx kappa` whose spread `SPREAD / a` a step is made to keep.
+const A_RESOLVABLE: f64 = 1e12;
 
 /// Exact engine for the tilted law with the bond force kept as a [`SeriesSum`]: rupture
-/// kinetics `K`, plate motion `P`.
-pub type ExactSeries<K, P> = Exact<SeriesKernel<K, P>>;
+/// model `R`, plate motion `P`.
+pub type ExactSeries<R, P> = Exact<SeriesStepper<P>, R>;
 
-/// The series engine's part: the law, the bond-force series and its error bound, the
-/// rupture kinetics `K`, the plate motion `P`.
+/// The series stepper: the law, the bond-force series and its error bound, the plate motion
+/// `P`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(bound = "")]
-pub struct SeriesKernel<K: Kinetics, P: Motion> {
+pub struct SeriesStepper<P: Motion> {
     law: Tilted,
-    /// The attached junctions' bond force; each carries its handle (`Attached::bin`).
+    /// The law's acceptance of weak-bond rupture candidates.
+    rate: TiltedRate,
+    /// The attached junctions' bond force.
     series: SeriesSum,
-    kinetics: K,
+    /// Each attached junction's handle in `series`, by slot of the attached bag.
+    handles: Vec<u32>,
     motion: P,
+    /// Weak bonds: their candidates are thinned over each plate step, which keeps its
+    /// excursion within `max_spread` (`+inf` for strong bonds).
+    weak: bool,
+    max_spread: f64,
+    /// The series' re-base count when the current step was taken.
+    #[serde(skip)]
+    rebases_at_step: Option<u64>,
     /// `exact.rtol`: the series' stated tolerance, relative to `kappa l0 max(N_att, 1)`.
     rtol: f64,
     /// The relative error bound just after the engine last refreshed the series (see
@@ -57,10 +72,17 @@ fn yes() -> bool {
     true
 }
 
-impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
-    /// The engine at `t = 0` for `scene` under the tilted-form law `law`; `kinetics` and
+impl<R: RuptureModel, P: Motion> ExactSeries<R, P> {
+    /// The engine at `t = 0` for `scene` under the tilted-form law `law` with bond sensitivity
+    /// `beta_dx`; `rupture` (made from the generator after the initial state is drawn) and
     /// `motion` are built by the caller.
-    pub fn new(scene: &Scene, law: Tilted, kinetics: K, motion: P) -> Result<Self, EngineError> {
+    pub fn new(
+        scene: &Scene,
+        law: Tilted,
+        beta_dx: f64,
+        rupture: impl FnOnce(&mut crate::rng::Pcg64) -> Result<R, AllocError>,
+        motion: P,
+    ) -> Result<Self, EngineError> {
         let mut core = Core::new(scene, 2)?;
         core.counters.series_rebases = Some(0);
         core.counters.series_error = Some(0.0);
@@ -68,21 +90,30 @@ impl<K: Kinetics, P: Motion> ExactSeries<K, P> {
             core.counters.ode_steps = Some(0);
             core.counters.ode_rejected = Some(0);
         }
-        let kernel = SeriesKernel {
+        let rupture = rupture(&mut core.rng)?;
+        let a = beta_dx * law.kappa;
+        // Beyond A_RESOLVABLE no plate step can keep the spread (rates change by e over less
+        // than 1e-12 lengths): no limit, and the bound overflows into immediate ruptures.
+        let resolvable = a > 0.0 && a <= A_RESOLVABLE;
+        let stepper = SeriesStepper {
             law,
+            rate: TiltedRate::new(law, beta_dx),
             series: SeriesSum::for_junctions(law, scene.exact.rtol, scene.junctions.n),
-            kinetics,
+            handles: alloc::with_capacity(scene.junctions.n, "the series handles")?,
             motion,
+            weak: R::IS_WEAK,
+            max_spread: if R::IS_WEAK && resolvable { SPREAD / a } else { f64::INFINITY },
+            rebases_at_step: None,
             rtol: scene.exact.rtol,
             error_floor: 0.0,
             error_stale: true,
             last_rel: 0.0,
         };
-        Ok(Exact::start(core, kernel))
+        Ok(Exact::start(core, stepper, rupture))
     }
 }
 
-impl<K: Kinetics, P: Motion> SeriesKernel<K, P> {
+impl<P: Motion> SeriesStepper<P> {
     /// Records the largest relative bound of the series' error, `error_bound / (kappa l0
     /// max(N_att, 1))`. The bound is a function of the series' state only, so it is
     /// recomputed only when that changed (`error_stale`, or a re-basing of the series inside
@@ -129,7 +160,7 @@ impl<K: Kinetics, P: Motion> SeriesKernel<K, P> {
     /// after the thinning's uniform when `g < 1`, so both candidates), and the run's
     /// stream is untouched.
     #[inline]
-    fn prefetch_pick(core: &Core<ArrayQueue>, ch: usize) {
+    fn prefetch_pick(&self, core: &Core<ArrayQueue>, ch: usize) {
         match ch {
             FORMATION => {
                 let n = core.bags.n_detached();
@@ -143,64 +174,12 @@ impl<K: Kinetics, P: Motion> SeriesKernel<K, P> {
             _ => {
                 let n = core.bags.n_attached();
                 if n > 0 {
-                    prefetch(&core.bags.attached[core.rng.clone().random_range(0..n)]);
+                    let i = core.rng.clone().random_range(0..n);
+                    prefetch(&core.bags.attached[i]);
+                    prefetch(&self.handles[i]);
                 }
             }
         }
-    }
-
-    /// One plate step towards `target`; weak bonds thin their rupture candidates over it.
-    /// Returns the slot that ruptured inside the step, if one did (the state is then at
-    /// the rupture time).
-    fn plate_step(
-        &mut self,
-        core: &mut Core<ArrayQueue>,
-        target: f64,
-        formation_due: bool,
-    ) -> Result<Option<usize>, EngineError> {
-        let rebases = core.counters.series_rebases;
-        let mut ctx = StepCtx {
-            series: &mut self.series,
-            frame: &core.frame,
-            counters: &mut core.counters,
-            max_spread: self.kinetics.max_spread(),
-        };
-        let step: Step = self.motion.step(&mut ctx, core.tau, target)?;
-        let mut hit = None;
-        if K::IS_WEAK {
-            let mut cands = 0;
-            let motion = &mut self.motion;
-            hit = self.kinetics.thin(
-                &mut core.rng,
-                (step.s0, step.s1),
-                (step.y_lo, step.y_hi),
-                &core.bags.attached,
-                &self.law,
-                |s| motion.y_at(s),
-                &mut cands,
-            )?;
-            *core.counters.candidates.get_or_insert(0) += cands;
-            if formation_due && hit.is_none() && step.s1 >= target {
-                // The thinning has drawn its numbers: the formation due at the step's end
-                // picks from the generator as it is now, so its junction can be asked for
-                // while the step is finished.
-                Self::prefetch_pick(core, FORMATION);
-            }
-        }
-        let end = hit.map_or(step.s1, |(s, _)| s);
-        self.motion.finish(&step, end, &self.series)?;
-        core.tau = end;
-        self.motion.sync_counters(&mut core.counters);
-        // The series' bound over the step: as it was when the step took its cubic.
-        let series_rel = if self.error_stale || core.counters.series_rebases != rebases {
-            self.track_error(core)
-        } else {
-            self.last_rel
-        };
-        if step.cubic_error > 0.0 {
-            record_error(core, series_rel + step.cubic_error);
-        }
-        Ok(hit.map(|(_, slot)| slot))
     }
 }
 
@@ -213,20 +192,26 @@ fn record_error(core: &mut Core<ArrayQueue>, rel: f64) {
     }
 }
 
-impl<K: Kinetics, P: Motion> Kernel for SeriesKernel<K, P> {
+impl<P: Motion> Stepper for SeriesStepper<P> {
     type Queue = ArrayQueue;
-    const IS_WEAK: bool = K::IS_WEAK;
+    type Rate = TiltedRate;
     const KINEMATIC: bool = P::KINEMATIC;
+    const WEAK: WeakRuptures = WeakRuptures::Steps;
 
     fn start(&mut self, core: &mut Core<ArrayQueue>) {
-        for slot in 0..core.bags.n_attached() {
-            let c = core.bags.attached[slot].c;
-            core.bags.attached[slot].bin = self.series.add(c);
-            // Every initial junction is unstretched (x = 0): its rate cannot overflow.
-            self.kinetics.attached(slot, c, 0.0);
-        }
         self.track_error(core);
         self.motion.open_piece(0.0, &self.series, &core.frame);
+    }
+
+    #[inline(always)]
+    fn rate(&self) -> TiltedRate {
+        self.rate
+    }
+
+    /// Inside the step just taken.
+    #[inline(always)]
+    fn position(&mut self, tau: f64) -> Result<f64, EngineError> {
+        self.motion.y_at(tau)
     }
 
     #[inline]
@@ -248,7 +233,9 @@ impl<K: Kinetics, P: Motion> Kernel for SeriesKernel<K, P> {
         self.series.force(self.y(core))
     }
 
-    /// Plate steps towards `target` (weak bonds: thinned; a rupture inside a step ends it).
+    /// One plate step towards the target (weak bonds: the core thins over it, then ends it,
+    /// [`Stepper::finish`]). Strong bonds (with at least [`PREFETCH_MIN_N`] junctions): the
+    /// due event's pick is prefetched while the step runs.
     #[inline]
     fn step<O: Observer>(
         &mut self,
@@ -256,22 +243,62 @@ impl<K: Kinetics, P: Motion> Kernel for SeriesKernel<K, P> {
         to: Target,
         _obs: &mut O,
     ) -> Result<Moved, EngineError> {
-        let target = to.tau;
-        if core.tau < target {
-            let prefetch = to.due && core.n >= PREFETCH_MIN_N;
-            if !K::IS_WEAK && prefetch {
-                Self::prefetch_pick(core, to.ch);
+        if core.tau < to.tau {
+            if !self.weak && to.due && core.n >= PREFETCH_MIN_N {
+                self.prefetch_pick(core, to.ch);
             }
-            if let Some(slot) = self.plate_step(core, target, K::IS_WEAK && prefetch && to.ch == FORMATION)? {
-                core.finite("X", self.y(core))?;
-                return Ok(Moved::Ruptured(slot));
-            }
-            if core.tau < target {
-                return Ok(Moved::Short);
-            }
+            self.rebases_at_step = core.counters.series_rebases;
+            let mut ctx = StepCtx {
+                series: &mut self.series,
+                frame: &core.frame,
+                counters: &mut core.counters,
+                max_spread: self.max_spread,
+            };
+            return Ok(Moved::Stepped(self.motion.step(&mut ctx, core.tau, to.tau)?));
         }
         core.finite("X", self.y(core))?;
         Ok(Moved::There)
+    }
+
+    /// Ends the step at the rupture `hit` inside it, or at its end; records the series' error
+    /// bound over it. Weak bonds: once the thinning has drawn its numbers, the formation due
+    /// at the step's end picks from the generator as it is now, so its junction is asked for
+    /// while the step is finished.
+    #[inline]
+    fn finish(
+        &mut self,
+        core: &mut Core<ArrayQueue>,
+        step: &Step,
+        hit: Option<(f64, usize)>,
+        to: Target,
+    ) -> Result<Moved, EngineError> {
+        if self.weak && core.n >= PREFETCH_MIN_N {
+            match hit {
+                // The rupture reads the junction's handle: asked for while the step ends.
+                Some((_, slot)) => prefetch(&self.handles[slot]),
+                None if to.due && to.ch == FORMATION && step.s1 >= to.tau => self.prefetch_pick(core, FORMATION),
+                None => {}
+            }
+        }
+        let end = hit.map_or(step.s1, |(s, _)| s);
+        self.motion.finish(step, end, &self.series)?;
+        core.tau = end;
+        self.motion.sync_counters(&mut core.counters);
+        // The series' bound over the step: as it was when the step took its cubic.
+        let series_rel = if self.error_stale || core.counters.series_rebases != self.rebases_at_step {
+            self.track_error(core)
+        } else {
+            self.last_rel
+        };
+        if step.cubic_error > 0.0 {
+            record_error(core, series_rel + step.cubic_error);
+        }
+        core.finite("X", self.y(core))?;
+        Ok(match hit {
+            Some((_, slot)) => Moved::Ruptured(slot),
+            None if core.tau < to.tau => Moved::Short,
+            None => Moved::There,
+        })
     }
 
     /// Reports the piece up to now (the plate is there already).
@@ -301,52 +328,36 @@ impl<K: Kinetics, P: Motion> Kernel for SeriesKernel<K, P> {
         self.law.tension(x)
     }
 
+    /// The junction's handle in the series.
     #[inline]
-    fn rupture_plan(&mut self, core: &Core<ArrayQueue>) -> (f64, f64) {
-        (self.kinetics.channel_rate(core.bags.n_attached()), f64::INFINITY)
-    }
-
-    #[inline]
-    fn bin(&mut self, _core: &mut Core<ArrayQueue>, c: f64) -> u32 {
+    fn attached(&mut self, _core: &mut Core<ArrayQueue>, slot: usize, c: f64) {
+        debug_assert_eq!(slot, self.handles.len());
         self.error_stale = true;
-        self.series.add(c)
+        self.handles.push(self.series.add(c));
     }
 
     #[inline]
-    fn attached(&mut self, _core: &mut Core<ArrayQueue>, slot: usize, c: f64, _x: f64, y: f64) -> bool {
-        self.kinetics.attached(slot, c, y)
-    }
-
-    #[inline]
-    fn detached(&mut self, core: &mut Core<ArrayQueue>, slot: usize, last: usize, a: &Attached) {
-        self.series.remove(a.c, a.bin);
+    fn detached(&mut self, core: &mut Core<ArrayQueue>, slot: usize, _last: usize, a: &Attached) {
+        let h = self.handles.swap_remove(slot);
+        self.series.remove(a.c, h);
         if self.series.residue() > self.series.len() as u64 {
             self.refresh_series(core);
         }
         self.error_stale = true;
-        self.kinetics.detached(slot, last);
-    }
-
-    #[inline]
-    fn forced_rebase(&self, core: &Core<ArrayQueue>) -> bool {
-        self.kinetics.needs_rebase(self.y(core))
-    }
-
-    fn rebuild(&mut self, attached: &mut [Attached]) -> Vec<usize> {
-        self.kinetics.rebuild(attached)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use crate::engine::exact::core::junctions::rupture;
-    use crate::engine::exact::series::{DIRECT_MAX, DrivenPlate, ExactSeries, SeriesSum, StrongKinetics};
+    use crate::engine::exact::rupture::StrongRupture;
+    use crate::engine::exact::stepper::series::{DIRECT_MAX, DrivenPlate, ExactSeries, SeriesSum};
     use crate::observe::Nothing;
     use crate::physics::{ForceLaw, Tilted};
     use crate::test_scenes::fig1_with;
 
     /// The engine's series for `n` junctions (all attached, kinematic plate at rest).
-    fn engine(n: usize) -> ExactSeries<StrongKinetics, DrivenPlate> {
+    fn engine(n: usize) -> ExactSeries<StrongRupture<false>, DrivenPlate> {
         let s = fig1_with(&[
             "run.engine=exact",
             "junctions.force_law=tilted",
@@ -354,7 +365,8 @@ mod tests {
             "junctions.initial=attached",
             "plate.kinematic=true",
         ]);
-        ExactSeries::new(&s, Tilted::from_scene(&s), StrongKinetics { k0: s.junctions.k0 }, DrivenPlate::new(0.0))
+        let k0 = s.junctions.k0;
+        ExactSeries::new(&s, Tilted::from_scene(&s), 0.0, |rng| Ok(StrongRupture::new(k0, rng)), DrivenPlate::new(0.0))
             .unwrap()
     }
 
@@ -362,7 +374,7 @@ mod tests {
     #[test]
     fn series_mode_follows_the_junction_count() {
         for (n, direct) in [(1, true), (300, true), (DIRECT_MAX - 1, true), (DIRECT_MAX, false)] {
-            assert_eq!(engine(n).kernel.series.is_direct(), direct, "N = {n}");
+            assert_eq!(engine(n).stepper.series.is_direct(), direct, "N = {n}");
         }
     }
 
@@ -378,13 +390,13 @@ mod tests {
     fn series_refreshed_in_a_stick_phase() {
         for bins in [true, false] {
             let mut e = engine(4096);
-            let (core, k) = (&mut e.core, &mut e.kernel);
+            let (core, k, r) = (&mut e.core, &mut e.stepper, &mut e.rupture);
             assert!(k.series.is_direct());
             if bins {
                 k.series = SeriesSum::new(k.law, k.rtol);
                 let n = core.bags.n_attached();
-                for a in &mut core.bags.attached[..n] {
-                    a.bin = k.series.add(a.c);
+                for (h, a) in k.handles.iter_mut().zip(&core.bags.attached[..n]) {
+                    *h = k.series.add(a.c);
                 }
             }
             let base = k.series.base();
@@ -393,7 +405,7 @@ mod tests {
             let (kl0, rtol) = (k.law.kappa * k.law.l0, k.rtol);
             let y = 0.05;
             while core.bags.n_attached() > 1 {
-                rupture(core, k, core.bags.n_attached() - 1, &mut Nothing);
+                rupture(core, k, r, core.bags.n_attached() - 1, &mut Nothing);
                 let n = core.bags.n_attached();
                 assert!(k.series.residue() <= n as u64, "residue {} above {n} attached", k.series.residue());
                 let rel = k.series.error_bound() / (kl0 * n.max(1) as f64);

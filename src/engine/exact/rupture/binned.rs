@@ -9,7 +9,7 @@
 //! `n_j Uk_j / sum`, then a *uniform* member of the bin, and is accepted with probability
 //! `r_i / b_j` (the test of [`accept`], from the member's own weights). The accepted
 //! candidates are exactly the ruptures (Lewis & Shedler 1979), as with the sum tree of
-//! [`super::rupture::WeakRupture`]; the bins' bound is at most `exp(h)` looser, so
+//! [`super::TreeRupture`]; the bins' bound is at most `exp(h)` looser, so
 //! a candidate is accepted a little less often.
 //!
 //! What this buys: the member is a uniform pick from a bag, like a strong bond's, so a
@@ -31,16 +31,15 @@
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-use super::bags::{Attached, count};
 use super::horizon::Horizon;
-use super::motion::PlatePath;
-use super::pick::{index, prefetch_ptr};
-use super::rupture::{EXPONENT_CAP, Plan, RuptureModel, accept, anchor_overflows, overflows};
+use super::{EXPONENT_CAP, Plan, RuptureModel, RuptureRate, anchor_overflows, overflows};
 use crate::engine::alloc::{self, AllocError};
+use crate::engine::exact::core::bags::{Attached, count};
+use crate::engine::exact::core::pick::{index, prefetch_ptr};
 use crate::rng::{Pcg64, UniformSource};
 
 /// The number of junctions from which a run draws weak bonds' rupture candidates from bins
-/// (below it, from the sum tree of [`super::rupture::WeakRupture`]). Below it the tree stays
+/// (below it, from the sum tree of [`super::TreeRupture`]). Below it the tree stays
 /// in the processor's caches (2 MB at `1e5`), bounds each junction by its own weight, and
 /// needs no pass over the occupied bins after every event, so it is the cheaper one where
 /// the anchors spread over many bins: `scenarios/creep.toml` (`N = 300`, about 50 occupied
@@ -317,7 +316,7 @@ fn take_best(pool: &mut Vec<Vec<Member>>, need: usize) -> Option<Vec<Member>> {
 /// large bin is read at random, as a bag is).
 fn new_buffer(capacity: usize) -> Vec<Member> {
     let v = Vec::with_capacity(capacity);
-    super::bags::advise_huge_pages(&v);
+    crate::engine::exact::core::bags::advise_huge_pages(&v);
     v
 }
 
@@ -385,13 +384,28 @@ impl RuptureModel for BinnedRupture {
             }
         }
     }
-    fn plan<P: PlatePath>(&mut self, traj: &P, n_att: usize) -> Plan {
+    fn plan(&mut self, bounds: impl FnMut(f64) -> (f64, f64), n_att: usize) -> Plan {
         self.sum_up();
         let w = self.totals();
-        self.h.plan(traj, n_att, self.k0, self.a, w)
+        self.h.plan(bounds, n_att, self.k0, self.a, w)
+    }
+    /// The bins' sums are recomputed here (the attached junctions may have changed since the
+    /// last step).
+    #[inline]
+    fn bound(&mut self, y_lo: f64, y_hi: f64) -> f64 {
+        self.sum_up();
+        self.h.set_bounds(self.a, y_lo, y_hi);
+        let (m, p) = self.h.terms(self.totals());
+        self.k0 * (m + p)
     }
     #[inline]
-    fn pick<P: PlatePath>(&mut self, rng: &mut Pcg64, traj: &P, s: f64, attached: &[Attached]) -> Option<usize> {
+    fn pick<L: RuptureRate>(
+        &mut self,
+        rng: &mut Pcg64,
+        attached: &[Attached],
+        law: &L,
+        y: impl FnOnce() -> f64,
+    ) -> Option<usize> {
         if self.h.immediate {
             return Some(attached.len() - 1);
         }
@@ -406,7 +420,8 @@ impl RuptureModel for BinnedRupture {
         let u = bin.bound;
         self.request(attached);
         let ub = rng.uniform() * (e_hi * u[0] + e_lo * u[1]);
-        accept(ub, [1.0 / m.e, m.e], e_hi, e_lo, || (self.a * traj.position(s)).exp()).then_some(m.slot as usize)
+        let slot = m.slot as usize;
+        law.accept(ub, [1.0 / m.e, m.e], e_hi, e_lo, self.a, y, || attached[slot].c).then_some(slot)
     }
     /// Re-bins every junction. The old bins' buffers are reused for the new ones (the
     /// smallest that holds a new bin's count), so a re-base holds no second copy of the
@@ -495,7 +510,8 @@ impl BinnedRupture {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::exact::motion::Drive;
+    use crate::engine::exact::rupture::LinearRate;
+    use crate::engine::exact::stepper::linear::Drive;
     use crate::rng::pcg;
 
     fn record(c: f64, id: u32) -> Attached {
@@ -574,13 +590,13 @@ mod tests {
             assert!(r.attached(&mut attached, slot, c, y));
         }
         let drive = Drive { y0: y, v: 0.0 };
-        let plan = r.plan(&drive, anchors.len());
+        let plan = r.plan(|h| drive.bounds(h), anchors.len());
         let rates: Vec<f64> = anchors.iter().map(|&c| (a * (y - c).abs()).exp()).collect();
         let total: f64 = rates.iter().sum();
         let draws = 400_000;
         let mut counts = vec![0u64; anchors.len()];
         for _ in 0..draws {
-            if let Some(slot) = r.pick(&mut rng, &drive, 0.0, &attached) {
+            if let Some(slot) = r.pick(&mut rng, &attached, &LinearRate, || drive.position(0.0)) {
                 counts[slot] += 1;
             }
         }

@@ -1,5 +1,5 @@
-//! The thinning horizon of the linear law's weak-bond rupture models ([`WeakRupture`],
-//! [`BinnedRupture`]): over a horizon `[tau, tau + H]` on which the plate stays within proven
+//! The thinning horizon of the weak-bond rupture models ([`TreeRupture`], [`BinnedRupture`])
+//! over a closed-form plate: over a horizon `[tau, tau + H]` on which the plate stays within proven
 //! bounds `y_lo <= y <= y_hi`, every rate `k0 exp(a |y - c_i|)` is at most
 //! `k0 (exp(a y_hi) w0_i + exp(-a y_lo) w1_i)` for any weights `w0_i >= exp(-a c_i)`,
 //! `w1_i >= exp(a c_i)`, so candidates at the constant rate
@@ -8,19 +8,18 @@
 //! `a (y_hi - y_lo)` at most [`SPREAD`]), keeps the two factors, and says when the frame must
 //! be re-based; the models keep the weights.
 //!
-//! [`WeakRupture`]: super::rupture::WeakRupture
+//! [`TreeRupture`]: super::TreeRupture
 //! [`BinnedRupture`]: super::binned::BinnedRupture
 
 use serde::{Deserialize, Serialize};
 
-use super::motion::PlatePath;
-use super::rupture::{FRAME_EXPONENT_LIMIT, Plan};
+use super::{FRAME_EXPONENT_LIMIT, Plan};
 
-/// Target spread of a thinning horizon (linear law's rupture models): the largest
-/// `a (y_hi - y_lo)` (dimensionless) over the plate's proven bounds `[y_lo, y_hi]` within
-/// the horizon [`Horizon::plan`] chooses, so the candidate rate exceeds every junction's
-/// rupture rate there by at most a factor `e^SPREAD` per exponential term. (The tilted law's
-/// plate steps have their own limit, [`STEP_SPREAD`](crate::engine::exact::series::kinetics::STEP_SPREAD).)
+/// Target spread of a thinning bound: the largest `a (y_hi - y_lo)` (dimensionless) over the
+/// plate's proven bounds `[y_lo, y_hi]` within a horizon [`Horizon::plan`] chooses, or within
+/// a plate step of a stepped plate, so the candidate rate exceeds every junction's rupture
+/// rate there by at most a factor `e^SPREAD` per exponential term (a candidate's acceptance
+/// stays above `e^-1 / 2`).
 pub const SPREAD: f64 = 1.0;
 /// Longest horizon (local time units).
 const HORIZON_MAX: f64 = 1e6;
@@ -140,11 +139,18 @@ impl Horizon {
     pub fn terms(&self, w: [f64; 2]) -> (f64, f64) {
         (self.e_hi * w[0], self.e_lo * w[1])
     }
-    /// The candidate rate `B = k0 (exp(a y_hi) W0 + exp(-a y_lo) W1)` over the trajectory
-    /// that starts now, for `n_att` attached junctions whose weights sum to `w`, and its
+    /// The candidate rate `B = k0 (exp(a y_hi) W0 + exp(-a y_lo) W1)` over the plate's path
+    /// from now (`bounds(h)`: its proven bounds over the next `h`), for `n_att` attached junctions whose weights sum to `w`, and its
     /// horizon: the longest (within a factor 2) whose spread `a (y_hi - y_lo)` is at most
     /// [`SPREAD`] and that covers about [`CANDIDATES_PER_HORIZON`] candidates at the last rate.
-    pub fn plan<P: PlatePath>(&mut self, traj: &P, n_att: usize, k0: f64, a: f64, w: [f64; 2]) -> Plan {
+    pub fn plan(
+        &mut self,
+        mut bounds: impl FnMut(f64) -> (f64, f64),
+        n_att: usize,
+        k0: f64,
+        a: f64,
+        w: [f64; 2],
+    ) -> Plan {
         self.immediate = false;
         self.bounding = false;
         if n_att == 0 || k0 == 0.0 {
@@ -160,15 +166,15 @@ impl Horizon {
         let cap =
             if self.last_rate > 0.0 { (CANDIDATES_PER_HORIZON / self.last_rate).min(HORIZON_MAX) } else { HORIZON_MAX };
         let mut h = self.horizon.min(cap).max(HORIZON_MIN);
-        let mut b = traj.bounds(h);
+        let mut b = bounds(h);
         // Halve until the spread is resolved (about 1000 halvings at most, from HORIZON_MAX
         // to HORIZON_MIN; usually none, the search starts from the last horizon).
         while a * (b.1 - b.0) > SPREAD && h > HORIZON_MIN {
             h = (h * 0.5).max(HORIZON_MIN);
-            b = traj.bounds(h);
+            b = bounds(h);
         }
         while 2.0 * h <= cap {
-            let b2 = traj.bounds(2.0 * h);
+            let b2 = bounds(2.0 * h);
             if a * (b2.1 - b2.0) > SPREAD {
                 break;
             }

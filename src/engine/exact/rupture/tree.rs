@@ -1,0 +1,156 @@
+//! Weak bonds by thinning against each junction's own bound, the junction drawn from a sum
+//! tree of its weights `[exp(-a c), exp(a c)]` (O(log N) per candidate; the tree stays in the
+//! processor's caches below [`BINNED_FROM`](super::binned::BINNED_FROM) junctions). Over a
+//! closed-form plate its bounds hold for a horizon ([`Horizon`]); over a stepped plate for
+//! one step ([`RuptureModel::bound`]).
+
+use serde::{Deserialize, Serialize};
+
+use super::horizon::Horizon;
+use super::sumtree::SumTree2;
+use super::{Plan, RuptureModel, RuptureRate, anchor_overflows, overflows};
+use crate::engine::alloc::AllocError;
+use crate::engine::exact::core::bags::Attached;
+use crate::rng::{Pcg64, UniformSource};
+
+/// A junction's weights `[exp(-a c), exp(a c)]`, the two terms of its rate bound.
+#[inline]
+fn weights(a: f64, c: f64) -> [f64; 2] {
+    let e = (a * c).exp();
+    [1.0 / e, e]
+}
+
+/// Weak bonds: thinning against each junction's own bound, sum-tree selection.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TreeRupture {
+    pub k0: f64,
+    /// `a = beta dx c` (the bond's force sensitivity times the law's thinning slope).
+    pub a: f64,
+    /// Weights `[exp(-a c), exp(a c)]` per attached slot.
+    tree: SumTree2,
+    /// The current horizon's bounds and their factors.
+    h: Horizon,
+}
+
+impl TreeRupture {
+    pub fn new(k0: f64, a: f64, n: usize) -> TreeRupture {
+        Self::try_new(k0, a, n).unwrap_or_else(|e| panic!("{e}"))
+    }
+    /// [`TreeRupture::new`], with its sum tree reserved fallibly.
+    pub fn try_new(k0: f64, a: f64, n: usize) -> Result<TreeRupture, AllocError> {
+        Ok(TreeRupture { k0, a, tree: SumTree2::try_new(n)?, h: Horizon::default() })
+    }
+    /// `exp(a y_hi) W-` and `exp(-a y_lo) W+`.
+    #[inline]
+    fn terms(&self) -> (f64, f64) {
+        self.h.terms(self.tree.total())
+    }
+}
+
+impl RuptureModel for TreeRupture {
+    const IS_WEAK: bool = true;
+    /// Weighs the junction in `slot` with anchor `c`, the plate at `y`; `false` (and no
+    /// weight) when its rate is beyond [`EXPONENT_CAP`](super::EXPONENT_CAP).
+    #[inline]
+    fn attached(&mut self, _attached: &mut [Attached], slot: usize, c: f64, y: f64) -> bool {
+        if overflows(self.a, c, y) {
+            self.tree.set(slot, [0.0; 2]);
+            return false;
+        }
+        self.tree.set(slot, weights(self.a, c));
+        true
+    }
+    #[inline]
+    fn detached(&mut self, _attached: &mut [Attached], slot: usize, last: usize, _a: &Attached) {
+        self.tree.swap_remove(slot, last);
+    }
+    fn plan(&mut self, bounds: impl FnMut(f64) -> (f64, f64), n_att: usize) -> Plan {
+        self.h.plan(bounds, n_att, self.k0, self.a, self.tree.total())
+    }
+    #[inline]
+    fn bound(&mut self, y_lo: f64, y_hi: f64) -> f64 {
+        self.h.set_bounds(self.a, y_lo, y_hi);
+        let (m, p) = self.terms();
+        self.k0 * (m + p)
+    }
+    #[inline]
+    fn pick<L: RuptureRate>(
+        &mut self,
+        rng: &mut Pcg64,
+        attached: &[Attached],
+        law: &L,
+        y: impl FnOnce() -> f64,
+    ) -> Option<usize> {
+        if self.h.immediate {
+            return Some(attached.len() - 1);
+        }
+        let (m, p) = self.terms();
+        let (e_hi, e_lo) = (self.h.e_hi, self.h.e_lo);
+        let u = rng.uniform() * (m + p);
+        let slot = if u < m {
+            self.tree.find_prefetching(0, u / e_hi, attached)
+        } else {
+            self.tree.find_prefetching(1, (u - m) / e_lo, attached)
+        };
+        // The descent has requested the junction's record (read only if the candidate is
+        // accepted).
+        let slot = slot.min(attached.len() - 1);
+        // Accept with r_i / b_i = exp(a|y-c|) / (exp(a(y_hi-c)) + exp(a(c-y_lo))), from the
+        // leaf weights [exp(-a c), exp(a c)] just read by the descent (no access to the
+        // junction, at most one exponential).
+        let w = self.tree.get(slot);
+        let ub = rng.uniform() * (e_hi * w[0] + e_lo * w[1]);
+        law.accept(ub, w, e_hi, e_lo, self.a, y, || attached[slot].c).then_some(slot)
+    }
+    /// Every weight recomputed from `attached`; the slots whose rate is beyond
+    /// [`EXPONENT_CAP`](super::EXPONENT_CAP) (weighed zero).
+    fn rebuild(&mut self, attached: &mut [Attached]) -> Vec<usize> {
+        let a = self.a;
+        let over: Vec<usize> = (0..attached.len()).filter(|&s| anchor_overflows(a, attached[s].c)).collect();
+        self.tree.rebuild(attached.iter().map(|j| if anchor_overflows(a, j.c) { [0.0; 2] } else { weights(a, j.c) }));
+        over
+    }
+    #[inline]
+    fn needs_rebase(&self, y: f64, tau: f64) -> bool {
+        self.h.needs_rebase(self.a, y, tau)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::exact::stepper::linear::Drive;
+
+    /// A plan bounds every junction's rate over its whole horizon (`b_i >= r_i`: the
+    /// acceptance never exceeds 1), and the acceptance squeeze of `pick` brackets the rate:
+    /// `max(w0 / e_lo, w1 / e_hi) <= r_i <= max(e_hi w0, e_lo w1) <= b_i`.
+    #[test]
+    fn plan_bounds_every_rate_over_its_horizon() {
+        let a = 3.0;
+        let n = 64;
+        let mut rng = crate::rng::pcg(4);
+        let mut w = TreeRupture::new(1.0, a, n);
+        let anchors: Vec<f64> = (0..n).map(|_| (rng.uniform() - 0.5) * 4.0).collect();
+        for (slot, &c) in anchors.iter().enumerate() {
+            assert!(w.attached(&mut [], slot, c, 0.0));
+        }
+        for drive in [Drive { y0: 0.3, v: 0.7 }, Drive { y0: -0.5, v: -2.0 }, Drive { y0: 1.1, v: 1e-9 }] {
+            let plan = w.plan(|h| drive.bounds(h), n);
+            assert!(plan.rate.is_finite() && plan.horizon > 0.0);
+            for k in 0..=200 {
+                let s = plan.horizon * k as f64 / 200.0;
+                let y = drive.position(s);
+                for (slot, &c) in anchors.iter().enumerate() {
+                    let r = (a * (y - c).abs()).exp();
+                    let wt = w.tree.get(slot);
+                    let (e_hi, e_lo) = (w.h.e_hi, w.h.e_lo);
+                    let b = e_hi * wt[0] + e_lo * wt[1];
+                    let lo = (wt[0] / e_lo).max(wt[1] / e_hi);
+                    let hi = (e_hi * wt[0]).max(e_lo * wt[1]);
+                    let tol = 1.0 + 1e-12;
+                    assert!(lo <= r * tol && r <= hi * tol && hi <= b, "y {y} c {c}: {lo} {r} {hi} {b}");
+                }
+            }
+        }
+    }
+}

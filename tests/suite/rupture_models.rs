@@ -1,0 +1,133 @@
+//! Rupture models composed with the plate steppers, as docs/engines.md, "Adding a rupture
+//! model" promises. Checks:
+//!
+//! - the worked example's file is `rupture_models/scan.rs` word for word;
+//! - `Scan` (the worked example) samples the same process as the crate's sum tree on the
+//!   closed-form stepper (linear law) and on the series stepper (tilted law, kinematic plate);
+//! - the tilted law's weak bonds, on a dynamic plate: the bins and the sum tree sample the
+//!   same process.
+//!
+//! Each comparison is a two-sample Kolmogorov–Smirnov test (level [`ALPHA`], critical value
+//! from the KS distribution) of the mean rupture tension of independent runs, one per seed,
+//! the two samples on disjoint seed ranges.
+
+use crate::common::{ALPHA, ks_two_sample, ks_two_sample_critical};
+use stickslip::Scene;
+use stickslip::engine::Engine;
+use stickslip::engine::exact::stepper::series::{DrivenPlate, ExactSeries, RosenbrockPlate};
+use stickslip::engine::exact::{BinnedRupture, DefaultQueue, ExactLinear, TreeRupture};
+use stickslip::observe::{EventKind, Nothing, Recorder};
+use stickslip::physics::{Linear, Plate, Tilted};
+use stickslip_testkit::fig1_with;
+
+/// The worked example of docs/engines.md, "Adding a rupture model", word for word
+/// (`the_worked_example_is_this_file`).
+mod scan;
+
+use scan::Scan;
+
+const SEEDS: u64 = 100;
+const T_WARM: f64 = 50.0;
+const T_END: f64 = 150.0;
+
+fn scene(law: &str, seed: u64, extra: &[&str]) -> Scene {
+    let mut o = vec![
+        "run.engine=exact".to_string(),
+        format!("junctions.force_law={law}"),
+        "junctions.bond=weak".to_string(),
+        format!("run.seed={seed}"),
+    ];
+    o.extend(extra.iter().map(|s| s.to_string()));
+    fig1_with(&o.iter().map(String::as_str).collect::<Vec<_>>())
+}
+
+/// The mean tension of the ruptures in `[T_WARM, T_END]`.
+fn mean_rupture_tension<E: Engine>(mut e: E) -> f64 {
+    e.advance(T_WARM, &mut Nothing).unwrap();
+    let mut rec = Recorder::default();
+    e.advance(T_END, &mut rec).unwrap();
+    let t: Vec<f64> = rec.events.iter().filter(|e| e.kind == EventKind::Rupture).map(|e| e.tension).collect();
+    assert!(t.len() > 100, "too few ruptures to test anything: {}", t.len());
+    t.iter().sum::<f64>() / t.len() as f64
+}
+
+/// `a = beta dx kappa`, the envelope's exponent.
+fn a_of(s: &Scene) -> f64 {
+    s.junctions.beta_dx() * s.junctions.kappa
+}
+
+/// Two samples of `SEEDS` runs each (seeds `1..` and `1001..`) agree in law.
+fn same_law(what: &str, mut a: impl FnMut(u64) -> f64, mut b: impl FnMut(u64) -> f64) {
+    let mut x: Vec<f64> = (1..=SEEDS).map(&mut a).collect();
+    let mut y: Vec<f64> = (1001..=1000 + SEEDS).map(&mut b).collect();
+    let d = ks_two_sample(&mut x, &mut y);
+    let crit = ks_two_sample_critical(x.len(), y.len(), ALPHA);
+    eprintln!("{what}: D = {d:.3}, critical {crit:.3}");
+    assert!(d < crit, "{what}: KS D = {d} >= {crit}");
+}
+
+const MARKER: &str = "### Adding a rupture model";
+
+#[test]
+fn the_worked_example_is_this_file() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let doc = std::fs::read_to_string(root.join("docs/engines.md")).unwrap();
+    let at = doc.find(MARKER).expect("the section");
+    let start = doc[at..].find("```rust\n").expect("a rust block") + at + "```rust\n".len();
+    let end = doc[start..].find("```\n").expect("its end") + start;
+    let file = std::fs::read_to_string(root.join("tests/suite/rupture_models/scan.rs")).unwrap();
+    assert_eq!(doc[start..end], file);
+}
+
+/// The worked example on the closed-form stepper, against the sum tree.
+#[test]
+fn the_worked_example_runs_on_the_closed_form_stepper() {
+    let run = |seed: u64, tree: bool| {
+        let s = scene("linear", seed, &[]);
+        let (k0, a, law) = (s.junctions.k0, a_of(&s), Linear::from_scene(&s));
+        if tree {
+            mean_rupture_tension(ExactLinear::<_, DefaultQueue>::new(&s, &law, |_| TreeRupture::new(k0, a, 300)))
+        } else {
+            mean_rupture_tension(ExactLinear::<_, DefaultQueue>::new(&s, &law, |_| Scan::new(k0, a)))
+        }
+    };
+    same_law("linear law, scan against tree", |s| run(s, false), |s| run(s, true));
+}
+
+/// The worked example on the series stepper (tilted law, kinematic plate), against the tree.
+#[test]
+fn the_worked_example_runs_on_the_series_stepper() {
+    let run = |seed: u64, tree: bool| {
+        let s = scene("tilted", seed, &["plate.kinematic=true"]);
+        let (k0, a, law, v) = (s.junctions.k0, a_of(&s), Tilted::from_scene(&s), s.plate.v);
+        let bdx = s.junctions.beta_dx();
+        if tree {
+            let tree = |_: &mut _| Ok(TreeRupture::new(k0, a, 300));
+            mean_rupture_tension(ExactSeries::new(&s, law, bdx, tree, DrivenPlate::new(v)).unwrap())
+        } else {
+            mean_rupture_tension(ExactSeries::new(&s, law, bdx, |_| Ok(Scan::new(k0, a)), DrivenPlate::new(v)).unwrap())
+        }
+    };
+    same_law("tilted law, kinematic plate, scan against tree", |s| run(s, false), |s| run(s, true));
+}
+
+/// The tilted law's weak bonds on a dynamic plate: the bins (what a run uses from
+/// `BINNED_FROM` junctions on) against the sum tree, on the same scene.
+#[test]
+fn tilted_weak_bonds_bins_against_the_tree() {
+    let run = |seed: u64, bins: bool| {
+        let s = scene("tilted", seed, &[]);
+        let (k0, a, law, n) = (s.junctions.k0, a_of(&s), Tilted::from_scene(&s), s.junctions.n);
+        let bdx = s.junctions.beta_dx();
+        let rate = n as f64 * k0.max(s.junctions.kon0);
+        let plate = || RosenbrockPlate::new(Plate::from_scene(&s), law.kappa * n as f64, 1e-10, 1e-12, rate).unwrap();
+        if bins {
+            let binned = |rng: &mut _| BinnedRupture::try_new(k0, a, n, rng);
+            mean_rupture_tension(ExactSeries::new(&s, law, bdx, binned, plate()).unwrap())
+        } else {
+            let tree = |_: &mut _| TreeRupture::try_new(k0, a, n);
+            mean_rupture_tension(ExactSeries::new(&s, law, bdx, tree, plate()).unwrap())
+        }
+    };
+    same_law("tilted law, dynamic plate, bins against tree", |s| run(s, true), |s| run(s, false));
+}
