@@ -212,7 +212,7 @@ fn validate_prints_the_estimates() {
     let est: Vec<&str> = out.lines().filter(|l| l.starts_with("# estimate:")).collect();
     assert_eq!(est.len(), 4, "{out}");
     assert!(
-        est[0].contains("peak memory") && est[0].contains("40.0 B per junction") && est[0].contains("N = 1000000"),
+        est[0].contains("peak memory") && est[0].contains("44.0 B per junction") && est[0].contains("N = 1000000"),
         "{}",
         est[0]
     );

@@ -575,8 +575,9 @@ fn very_long_run_with_rare_events() {
 fn shifted_coordinates_give_the_same_statistics() {
     const T0: f64 = 1e12;
     /// Both runs continue one engine state after `t = 2`, passed through JSON text. JSON
-    /// cannot hold the infinite next time of a channel clock with rate 0 (serde_json writes
-    /// `null`): both texts carry `1e308` instead, so both runs see the same state.
+    /// cannot hold the infinite next time of a channel clock with rate 0, nor a strong-bond
+    /// series' infinite `max_spread` (serde_json writes `null`): both texts carry `1e308`
+    /// instead, so both runs see the same state.
     struct Shifted<'a>(&'a Scene, f64);
     impl EngineVisitor for Shifted<'_> {
         type Output = (Run, Run);
@@ -588,8 +589,11 @@ fn shifted_coordinates_give_the_same_statistics() {
             let mut text = serde_json::to_string(&e).expect("engine serialises");
             // Infinite times (a clock with rate 0) are `null` in JSON, as fields `"next":null`
             // and as array elements; an absent index (`Option<usize>`) is also `null` and kept.
-            text =
-                text.replace("\"next\":null", "\"next\":1e308").replace("[null", "[1e308").replace(",null", ",1e308");
+            text = text
+                .replace("\"next\":null", "\"next\":1e308")
+                .replace("\"max_spread\":null", "\"max_spread\":1e308")
+                .replace("[null", "[1e308")
+                .replace(",null", ",1e308");
             let start = text.find("\"frame\":{").expect("a frame") + "\"frame\":".len();
             let end = start + text[start..].find('}').expect("end of frame") + 1;
             let mut f: std::collections::BTreeMap<String, f64> = serde_json::from_str(&text[start..end]).unwrap();
