@@ -2,7 +2,7 @@
 //! (no division), for observers that sum them; [`Piece::segment`] gives the means of a
 //! [`Segment`].
 
-use super::Segment;
+use super::report::Segment;
 
 /// The raw time integrals of the observables over one piece `[t0, t1]` of length `h` of
 /// the trajectory, about the friction `F0` at its start:

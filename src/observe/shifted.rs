@@ -13,7 +13,7 @@
 //! subtraction loses at most the digits of `(mean - r)^2 / var`: `|mean - r|` is at most
 //! the range of `F` over the stretch, so the result is the time average to rounding.
 
-use super::stats::Moments;
+use super::moments::Moments;
 
 /// Shifted sums of one stretch.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -123,7 +123,8 @@ mod tests {
     use crate::engine::{EngineVisitor, with_engine};
     use crate::observe::Recorder;
     use crate::output::checkpoint::Loaded;
-    use crate::runner::{OutputGrid, drive_walk};
+    use crate::runner::drive::drive_walk;
+    use crate::runner::grid::OutputGrid;
     use crate::test_scenes::fig1_with;
 
     /// Everything a recorder saw, with every bit of every number.

@@ -64,7 +64,7 @@ mod tests {
     use crate::observe::Observer;
     use crate::observe::stats::RuptureForces;
     use crate::output::csv::{EventWriter, TraceWriter};
-    use crate::runner::run_scene;
+    use crate::runner::run::run_scene;
     use crate::scene::BondKind;
     use crate::test_scenes::fig1_with;
 

@@ -205,63 +205,8 @@ pub fn summarize<E: Engine>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::runner::{Resumed, StopFlag, resume};
-    use crate::test_scenes::fig1_with;
-
-    fn summary_without_wall_time(s: &Summary) -> serde_json::Value {
-        let mut v = serde_json::to_value(s).unwrap();
-        assert!(v.as_object_mut().unwrap().remove("wall_seconds").is_some());
-        v
-    }
-
-    #[test]
-    fn a_run_stopped_on_request_resumes_to_the_same_files() {
-        for overrides in [
-            &["junctions.bond=weak", "fixed.dt=0.5"][..],
-            &["run.engine=exact", "junctions.force_law=linear", "junctions.bond=weak", "run.t_warmup=20"],
-        ] {
-            let mut o = vec!["output.events=true"];
-            o.extend_from_slice(overrides);
-            let scene = fig1_with(&o);
-            let whole = tempfile::tempdir().unwrap();
-            let expected = run_scene(&scene, Some(whole.path())).unwrap();
-
-            let dir = tempfile::tempdir().unwrap();
-            let stop = StopFlag::new();
-            stop.request();
-            let opts = RunOptions { stop: Some(stop.clone()), ..RunOptions::default() };
-            let t = match run_scene_with(&scene, Some(dir.path()), &opts) {
-                Err(RunError::Stopped { t, dir: Some(d) }) => {
-                    assert_eq!(d, dir.path());
-                    t
-                }
-                other => panic!("{o:?}: expected a stop, got {other:?}"),
-            };
-            // Stopped after the first grid stop, resumable, nothing complete.
-            assert!(t > 0.0 && t <= 1.0 + 1e-9, "{o:?}: stopped at {t}");
-            let has = |name: &str| dir.path().join(name).exists();
-            assert!(has("checkpoint.bin") && has("trace.csv.part") && has("events.csv.part"), "{o:?}");
-            assert!(!has("summary.json") && !has("trace.csv") && !has("events.csv"), "{o:?}");
-
-            match resume(dir.path(), &RunOptions::default()).unwrap() {
-                Resumed::Completed { from_t, summary } => {
-                    assert_eq!(from_t, t);
-                    assert_eq!(summary_without_wall_time(&summary), summary_without_wall_time(&expected), "{o:?}");
-                }
-                Resumed::Finished => panic!("{o:?}: nothing was resumed"),
-            }
-            for name in ["trace.csv", "events.csv"] {
-                let (a, b) = (std::fs::read(whole.path().join(name)).unwrap(), std::fs::read(dir.path().join(name)));
-                assert!(a.len() > 1000 && Ok(a) == b.map_err(|_| ()), "{o:?}: {name} differs");
-            }
-            assert!(!has("checkpoint.bin"));
-
-            // Without an output directory there is nothing to resume.
-            let e = run_scene_with(&scene, None, &opts).unwrap_err();
-            assert!(matches!(e, RunError::Stopped { dir: None, .. }), "{e:?}");
-            assert_eq!(e.to_string(), format!("the run was stopped on request at t = {t}"));
-        }
-    }
+    use crate::runner::drive::StopFlag;
+    use crate::test_scenes::{fig1_with, summary_without_wall_time};
 
     #[test]
     fn a_run_without_a_stop_request_is_not_stopped() {

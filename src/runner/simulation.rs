@@ -236,7 +236,8 @@ impl EngineVisitor for Restore<'_> {
 mod tests {
     use super::*;
     use crate::observe::Segment;
-    use crate::runner::core_observers;
+    use crate::runner::drive::Termination;
+    use crate::runner::observers::core_observers;
     use crate::test_scenes::fig1_with;
 
     /// Everything a recorder saw, with every bit of every number.
@@ -378,6 +379,47 @@ mod tests {
         assert!(matches!(Simulation::from_state(&weak, &state), Err(StateError::WrongEngine { .. })));
         for bad in [&b""[..], b"not a state", &state[..state.len() / 2]] {
             assert!(matches!(Simulation::from_state(&fixed, bad), Err(StateError::Malformed(_))), "{bad:?}");
+        }
+    }
+
+    /// Scenes whose grids have a warm-up stop between samples; the fixed engine's step does
+    /// not divide the warm-up time, so it stops past it, on the next sample point.
+    const WARMUP_SCENES: [&[&str]; 3] = [
+        &["run.t_end=12", "run.t_warmup=2.5", "output.sample_dt=1", "fixed.dt=0.75", "junctions.bond=weak"],
+        &["run.engine=exact", "junctions.force_law=linear", "junctions.bond=weak", "run.t_end=30", "run.t_warmup=2.5"],
+        &["run.engine=exact", "junctions.bond=weak", "run.t_end=12", "run.t_warmup=2.5", "output.sample_dt=0.5"],
+    ];
+
+    #[test]
+    fn a_drive_stopped_at_every_stop_is_the_uninterrupted_drive() {
+        for overrides in WARMUP_SCENES {
+            let scene = fig1_with(overrides);
+            let mut whole = Recorder::default();
+            let end = Simulation::new(&scene).unwrap().drive(Observed::Recorder(&mut whole), None).unwrap();
+            assert_eq!(end.termination, Termination::ReachedEnd);
+            assert!(whole.events.len() > 10, "{overrides:?}: too few events to test anything");
+
+            // The flag stays set: every drive makes exactly one stop, then returns.
+            let (stop, mut rec) = (StopFlag::new(), Recorder::default());
+            stop.request();
+            let mut sim = Simulation::new(&scene).unwrap();
+            let mut drives = 0;
+            let last = loop {
+                let o = sim.drive(Observed::Recorder(&mut rec), Some(&stop)).unwrap();
+                drives += 1;
+                assert_eq!(o.position.stops_done, drives, "{overrides:?}: one stop per drive");
+                assert_eq!(o.state, sim.sample());
+                if o.termination == Termination::ReachedEnd {
+                    break o;
+                }
+                assert_eq!(o.termination, Termination::StopRequested);
+            };
+            assert_eq!(seen(&rec), seen(&whole), "{overrides:?}");
+            assert_eq!(last, end, "{overrides:?}");
+            assert!(drives >= 12, "{overrides:?}: {drives} stops");
+            // A finished walk stays finished.
+            let again = sim.drive(Observed::Nothing, None).unwrap();
+            assert_eq!((again.termination, again.position), (Termination::ReachedEnd, end.position));
         }
     }
 }

@@ -24,17 +24,19 @@ pub mod core;
 pub mod rupture;
 pub mod stepper;
 
-use super::{EngineError, EngineVisitor};
+use super::contract::{EngineError, EngineVisitor};
 use crate::physics::{
-    Bond, ExactMethod, ExactMethodOf, ForceLaw, Linear, LinearLaw, MethodVisitor, SeriesLaw, exact_method,
+    Bond, ExactMethod, ExactMethodOf, ForceLaw, LawParams, Linear, LinearLaw, MethodVisitor, SeriesLaw, Tilted,
+    exact_method,
 };
 use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};
 use crate::scene::{Scene, TiltedMethod};
 
 pub use self::core::clocks::{ArrayQueue, ChannelQueue, PqQueue};
-pub use self::core::{Core, Exact, Stepper};
+pub use self::core::{Core, Exact};
 pub use rupture::binned::{BINNED_FROM, BinnedRupture, uses_bins};
 pub use rupture::{RuptureModel, StrongRupture, TreeRupture};
+pub use stepper::Stepper;
 pub use stepper::direct::{DirectStepper, ExactDirect};
 pub use stepper::linear::{Dynamic, ExactLinear, Kinematic, LinearStepper, PlateMotion};
 use stepper::series;
@@ -131,7 +133,8 @@ impl<L: ForceLaw, V: EngineVisitor> MethodVisitor<L> for WithLaw<'_, V> {
             return self.direct(law);
         }
         let Self { scene, visitor } = self;
-        with_bond(&scene.junctions, series::Build { scene, law: law.tilted_form(), visitor })?
+        let LawParams { kappa, l0 } = law.tilted_form();
+        with_bond(&scene.junctions, series::Build { scene, law: Tilted { kappa, l0 }, visitor })?
     }
 
     fn direct(self, law: L) -> Self::Output

@@ -415,7 +415,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::fixed::LinearFlip;
+    use crate::engine::fixed::flip::LinearFlip;
     use crate::observe::Recorder;
     use crate::physics::{Linear, Strong};
     use crate::rng::ParkMiller;

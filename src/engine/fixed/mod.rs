@@ -15,7 +15,7 @@ pub use engine::{DIVERGENCE_LIMIT, FixedEngine};
 pub use flip::{AsPrintedFlip, ExponentialFlip, Flip, LinearFlip};
 pub use integrator::Integrator;
 
-use super::{EngineError, EngineVisitor};
+use super::contract::{EngineError, EngineVisitor};
 use crate::physics::{Bond, ForceLaw};
 use crate::rng::{self, ParkMiller, UniformSource};
 use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};

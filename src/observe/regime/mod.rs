@@ -45,8 +45,9 @@ pub mod slips;
 
 use serde::{Deserialize, Serialize};
 
-use super::Segment;
-use super::{Observer, Piece, Sample};
+use super::observer::Observer;
+use super::piece::Piece;
+use super::report::{Sample, Segment};
 use crate::scene::Scene;
 use buffer::Decimator;
 use numerics::{Numerics, NumericsDetector};

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Bond, BondParams, check_k0};
+use super::contract::{Bond, BondParams, check_k0};
 use crate::physics::force::ParamError;
 
 /// Weak bonds: `k_off = k0 exp(beta dx f)`, `beta dx = dx / temperature`.

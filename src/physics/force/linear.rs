@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{ClosedForm, ForceLaw, LawParams, LinearLaw, ParamError, check_kappa};
+use super::law::{ClosedForm, ForceLaw, LawParams, LinearLaw, ParamError, check_kappa};
 
 /// Hookean shear spring: `f^x = kappa x`, `f = kappa |x|`. The only law whose bond force is
 /// linear in the plate position, so the exact engine moves the plate in closed form.
@@ -52,13 +52,14 @@ impl LinearLaw for Linear {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::physics::force::law::check_law;
 
     #[test]
     fn linear_law() {
         let law = Linear { kappa: 0.5 };
         assert_eq!(law.force_x(-2.0), -1.0);
         assert_eq!(law.tension(-2.0), 1.0);
-        super::super::check_law(&law, &[-3.0, -0.5, 0.0, 1e-9, 0.7, 40.0]).unwrap();
+        check_law(&law, &[-3.0, -0.5, 0.0, 1e-9, 0.7, 40.0]).unwrap();
         assert_eq!(Linear::new(&LawParams { kappa: 0.5, l0: 1.0 }), Ok(law));
         assert_eq!(Linear::new(&LawParams { kappa: -1.0, l0: 1.0 }).unwrap_err().field, "kappa");
     }

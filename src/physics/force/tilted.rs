@@ -2,7 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{ForceLaw, LawParams, ParamError, Series, SeriesLaw, check_kappa, hypot};
+use super::hypot;
+use super::law::{ForceLaw, LawParams, ParamError, Series, SeriesLaw, check_kappa};
 
 /// The letter's eq. 3: a spring of rest length `l0` across a gap `l0`, tilted by `x`:
 /// `l = sqrt(x^2 + l0^2)`, `f = kappa (l - l0)`, `f^x = f x / l`.
@@ -96,14 +97,15 @@ impl ForceLaw for Tilted {
 
 impl SeriesLaw for Tilted {
     #[inline]
-    fn tilted_form(&self) -> Tilted {
-        *self
+    fn tilted_form(&self) -> LawParams {
+        LawParams { kappa: self.kappa, l0: self.l0 }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::physics::force::law::check_law;
 
     #[test]
     fn tilted_law_matches_geometry() {
@@ -119,7 +121,7 @@ mod tests {
         }
         // Small extensions: f = kappa x^2 / (2 l0) to leading order, with no cancellation.
         assert!((law.tension(1e-9) / (0.1 * 1e-18 / 2.0) - 1.0).abs() < 1e-12);
-        super::super::check_law(&law, &[-3.0, -0.5, 0.0, 1e-9, 0.7, 40.0, 1e6]).unwrap();
+        check_law(&law, &[-3.0, -0.5, 0.0, 1e-9, 0.7, 40.0, 1e6]).unwrap();
         assert_eq!(Tilted::new(&LawParams { kappa: 0.1, l0: 0.0 }).unwrap_err().field, "l0");
     }
 }

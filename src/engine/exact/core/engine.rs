@@ -4,8 +4,9 @@
 use serde::{Deserialize, Serialize};
 
 use super::junctions::{after_event, form, horizon, maybe_rebase, rebase, refresh_clocks, rupture};
-use super::{Core, FORMATION, HORIZON, Moved, RUPTURE, Stepper, Target};
+use super::state::{Core, FORMATION, HORIZON, RUPTURE};
 use crate::engine::exact::rupture::{RuptureModel, thin};
+use crate::engine::exact::stepper::contract::{Moved, Stepper, Target, WeakRuptures};
 use crate::engine::{Counters, Engine, EngineError};
 use crate::observe::{Observer, Sample};
 use crate::scene::EngineKind;
@@ -159,7 +160,7 @@ impl<S: Stepper, R: RuptureModel> Engine for Exact<S, R> {
 #[inline]
 fn restart<S: Stepper, R: RuptureModel>(core: &mut Core<S::Queue>, s: &mut S, r: &mut R) {
     s.open_piece(core);
-    if matches!(S::WEAK, super::WeakRuptures::Horizon) {
+    if matches!(S::WEAK, WeakRuptures::Horizon) {
         refresh_clocks(core, s, r, None);
     }
 }

@@ -3,9 +3,11 @@
 //! frame's re-base, and what follows an event (counters, re-base, a new piece, the clocks
 //! renewed).
 
-use super::{Core, HORIZON, REBASE, Stepper, WeakRuptures, emit, reattached_extension};
+use super::policy::{REBASE, emit, reattached_extension};
+use super::state::{Core, HORIZON};
 use crate::engine::exact::core::bags::{Detached, count};
 use crate::engine::exact::rupture::{Plan, RuptureModel};
+use crate::engine::exact::stepper::contract::{Stepper, WeakRuptures};
 use crate::observe::{EventKind, Observer};
 
 /// Ruptures the attached junction in `slot` now.

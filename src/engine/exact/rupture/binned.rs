@@ -31,8 +31,10 @@
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
+use super::accept::{EXPONENT_CAP, anchor_overflows, overflows};
+use super::contract::{Plan, RuptureModel};
 use super::horizon::Horizon;
-use super::{EXPONENT_CAP, Plan, RuptureModel, RuptureRate, anchor_overflows, overflows};
+use super::rate::RuptureRate;
 use crate::engine::alloc::{self, AllocError};
 use crate::engine::exact::core::bags::{Attached, count};
 use crate::engine::exact::core::pick::{index, prefetch_ptr};
@@ -510,7 +512,7 @@ impl BinnedRupture {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::exact::rupture::LinearRate;
+    use crate::engine::exact::rupture::rate::LinearRate;
     use crate::engine::exact::stepper::linear::Drive;
     use crate::rng::pcg;
 

@@ -8,7 +8,8 @@ use serde::{Deserialize, Serialize};
 
 use rand::RngExt;
 
-use super::{Plan, RuptureModel, RuptureRate};
+use super::contract::{Plan, RuptureModel};
+use super::rate::RuptureRate;
 use crate::engine::exact::core::bags::Attached;
 use crate::engine::exact::core::bags::count;
 use crate::physics::{Bond, ForceLaw};

@@ -13,7 +13,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{FRAME_EXPONENT_LIMIT, Plan};
+use super::accept::FRAME_EXPONENT_LIMIT;
+use super::contract::Plan;
 
 /// Target spread of a thinning bound: the largest `a (y_hi - y_lo)` (dimensionless) over the
 /// plate's proven bounds `[y_lo, y_hi]` within a horizon [`Horizon::plan`] chooses, or within

@@ -11,7 +11,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{EXPONENT_CAP, accept, bracket, squeeze};
+use super::accept::{EXPONENT_CAP, accept, bracket, squeeze};
 use crate::physics::{ForceLaw, Tilted};
 
 /// The acceptance of a weak-bond rupture candidate (units of `k0`).

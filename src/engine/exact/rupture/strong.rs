@@ -4,7 +4,8 @@
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
-use super::{Plan, RuptureModel, RuptureRate};
+use super::contract::{Plan, RuptureModel};
+use super::rate::RuptureRate;
 use crate::engine::exact::core::bags::{Attached, count};
 use crate::engine::exact::core::pick::Pick;
 use crate::rng::Pcg64;

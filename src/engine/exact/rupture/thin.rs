@@ -7,7 +7,8 @@
 
 use rand_distr::{Distribution, Exp1};
 
-use super::{RuptureModel, RuptureRate};
+use super::contract::RuptureModel;
+use super::rate::RuptureRate;
 use crate::engine::EngineError;
 use crate::engine::exact::core::bags::Attached;
 use crate::rng::Pcg64;
@@ -85,7 +86,9 @@ pub fn thin<R: RuptureModel, L: RuptureRate>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::exact::rupture::{BinnedRupture, TiltedRate, TreeRupture};
+    use crate::engine::exact::rupture::binned::BinnedRupture;
+    use crate::engine::exact::rupture::rate::TiltedRate;
+    use crate::engine::exact::rupture::tree::TreeRupture;
     use crate::physics::{ForceLaw, Tilted};
     use crate::rng::pcg;
 

@@ -6,9 +6,11 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::accept::{anchor_overflows, overflows};
+use super::contract::{Plan, RuptureModel};
 use super::horizon::Horizon;
+use super::rate::RuptureRate;
 use super::sumtree::SumTree2;
-use super::{Plan, RuptureModel, RuptureRate, anchor_overflows, overflows};
 use crate::engine::alloc::AllocError;
 use crate::engine::exact::core::bags::Attached;
 use crate::rng::{Pcg64, UniformSource};

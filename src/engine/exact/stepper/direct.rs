@@ -22,10 +22,12 @@
 use rand_distr::{Distribution, Exp1};
 use serde::{Deserialize, Serialize};
 
+use super::contract::{Moved, Stepper, Target, WeakRuptures};
 use crate::engine::EngineError;
 use crate::engine::exact::core::clocks::ArrayQueue;
+use crate::engine::exact::core::engine::Exact;
 use crate::engine::exact::core::frame::Frame;
-use crate::engine::exact::core::{Core, Exact, Moved, Stepper, Target, WeakRuptures};
+use crate::engine::exact::core::state::Core;
 use crate::engine::exact::rupture::{Hazard, LinearRate};
 use crate::observe::{Observer, Segment};
 use crate::ode::{Dop853, Dop853Config, OdeError, OdeSystem};

@@ -26,13 +26,15 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Drive, Dynamic, PlateMotion};
+use super::motion::{Drive, Dynamic, PlateMotion};
 use crate::engine::EngineError;
 use crate::engine::alloc::AllocError;
 use crate::engine::exact::core::clocks::ChannelQueue;
+use crate::engine::exact::core::engine::Exact;
 use crate::engine::exact::core::pick::Pick;
-use crate::engine::exact::core::{Core, Exact, Stepper, WeakRuptures};
+use crate::engine::exact::core::state::Core;
 use crate::engine::exact::rupture::{LinearRate, RuptureModel};
+use crate::engine::exact::stepper::contract::{Stepper, WeakRuptures};
 use crate::engine::exact::stepper::linear::propagator::{Integrals, LinearPlate, Trajectory};
 use crate::engine::exact::stepper::linear::report;
 use crate::observe::{Observer, Segment};

@@ -5,17 +5,18 @@
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
-use super::SeriesSum;
 use super::plate::{Motion, StepCtx};
+use super::sum::SeriesSum;
 use crate::engine::EngineError;
 use crate::engine::alloc::{self, AllocError};
 use crate::engine::exact::core::bags::Attached;
 use crate::engine::exact::core::clocks::ArrayQueue;
+use crate::engine::exact::core::engine::Exact;
 use crate::engine::exact::core::pick::prefetch;
-use crate::engine::exact::core::{Core, Exact, FORMATION, Moved, Stepper, Target, WeakRuptures};
+use crate::engine::exact::core::state::{Core, FORMATION};
 use crate::engine::exact::rupture::horizon::SPREAD;
 use crate::engine::exact::rupture::{RuptureModel, TiltedRate};
-use crate::engine::exact::stepper::Step;
+use crate::engine::exact::stepper::contract::{Moved, Step, Stepper, Target, WeakRuptures};
 use crate::observe::Observer;
 use crate::physics::{ForceLaw, Tilted};
 use crate::rng::UniformSource;
@@ -349,9 +350,11 @@ impl<P: Motion> Stepper for SeriesStepper<P> {
 
 #[cfg(test)]
 mod tests {
+    use super::ExactSeries;
     use crate::engine::exact::core::junctions::rupture;
     use crate::engine::exact::rupture::StrongRupture;
-    use crate::engine::exact::stepper::series::{DIRECT_MAX, DrivenPlate, ExactSeries, SeriesSum};
+    use crate::engine::exact::stepper::series::plate::DrivenPlate;
+    use crate::engine::exact::stepper::series::sum::{DIRECT_MAX, SeriesSum};
     use crate::observe::Nothing;
     use crate::physics::{ForceLaw, Tilted};
     use crate::test_scenes::fig1_with;

@@ -21,7 +21,6 @@ pub mod plate;
 pub mod sum;
 pub mod taylor;
 
-pub(crate) use crate::ode::{RosenbrockConfig, RosenbrockN, StiffSystem};
 pub use engine::{ExactSeries, SeriesStepper};
 pub use plate::{DrivenPlate, Motion, RosenbrockPlate};
 pub use sum::{DIRECT_MAX, LocalCubic, SeriesSum, tilted_taylor};
@@ -36,7 +35,7 @@ use crate::scene::laws::BondVisitor;
 /// Builds the series engine for the law `law` (a law's [`SeriesLaw::tilted_form`](crate::physics::SeriesLaw::tilted_form)) on
 /// `scene`, specialised to the bond kind it visits and to the plate motion (kinematic or
 /// dynamic), and hands it to `visitor`.
-pub(in crate::engine::exact) struct Build<'a, V> {
+pub(crate) struct Build<'a, V> {
     pub scene: &'a Scene,
     pub law: Tilted,
     pub visitor: V,

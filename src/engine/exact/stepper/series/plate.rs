@@ -18,14 +18,14 @@
 
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
-use super::LocalCubic;
+use super::sum::{LocalCubic, SeriesSum};
 use super::taylor::{ORDER, Plant, TimeSeries, Tol};
-use super::{RosenbrockConfig, RosenbrockN, SeriesSum, StiffSystem};
 use crate::engine::exact::core::frame::Frame;
-use crate::engine::exact::stepper::Step;
+use crate::engine::exact::stepper::contract::Step;
 use crate::engine::exact::stepper::direct::ode_error;
 use crate::engine::{Counters, EngineError};
 use crate::observe::Segment;
+use crate::ode::{RosenbrockConfig, RosenbrockN, StiffSystem};
 use crate::physics::Plate;
 
 /// What a step may change besides the motion: the series (re-basings) and the counters.
