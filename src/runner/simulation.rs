@@ -247,9 +247,9 @@ mod tests {
 
     /// Advances an engine built by `with_engine` directly (no handle) through `stops`,
     /// recording, and returns what it saw with its final sample, counters and type.
-    struct Direct<'a>(&'a [f64]);
+    struct Unwrapped<'a>(&'a [f64]);
 
-    impl EngineVisitor for Direct<'_> {
+    impl EngineVisitor for Unwrapped<'_> {
         type Output = (String, Sample, Counters, &'static str, Option<f64>);
         fn visit<E: Engine>(self, mut e: E) -> Self::Output {
             let mut rec = Recorder::default();
@@ -273,7 +273,7 @@ mod tests {
         let stops = [0.5, 3.0, 7.25, 20.0, 40.0];
         for overrides in SCENES {
             let scene = fig1_with(overrides);
-            let (direct, sample, counters, ty, dt) = with_engine(&scene, Direct(&stops)).unwrap();
+            let (direct, sample, counters, ty, dt) = with_engine(&scene, Unwrapped(&stops)).unwrap();
             let mut sim = Simulation::new(&scene).unwrap();
             assert_eq!((sim.engine_type(), sim.kind(), sim.time_step()), (ty, scene.run.engine, dt));
             assert_eq!(*sim.grid(), OutputGrid::new(&scene, dt));

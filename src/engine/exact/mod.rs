@@ -122,7 +122,7 @@ impl<L: ForceLaw, V: EngineVisitor> MethodVisitor<L> for WithLaw<'_, V> {
         L: LinearLaw,
     {
         let Self { scene, visitor } = self;
-        with_bond(&scene.junctions, ClosedForm { scene, law, visitor })?
+        with_bond(&scene.junctions, ClosedFormBuild { scene, law, visitor })?
     }
 
     fn series(self, law: L) -> Self::Output
@@ -148,17 +148,17 @@ impl<L: ForceLaw, V: EngineVisitor> MethodVisitor<L> for WithLaw<'_, V> {
                 reason: "the direct method integrates the plate equation, so it cannot run plate.kinematic = true",
             });
         }
-        with_bond(&scene.junctions, Direct { scene, law, visitor })?
+        with_bond(&scene.junctions, DirectBuild { scene, law, visitor })?
     }
 }
 
-struct ClosedForm<'a, L, V> {
+struct ClosedFormBuild<'a, L, V> {
     scene: &'a Scene,
     law: L,
     visitor: V,
 }
 
-impl<L: LinearLaw, V: EngineVisitor> BondVisitor for ClosedForm<'_, L, V> {
+impl<L: LinearLaw, V: EngineVisitor> BondVisitor for ClosedFormBuild<'_, L, V> {
     type Output = Result<V::Output, EngineError>;
     /// Weak bonds: the rupture envelope `k0 exp(a |x|)`, `a = s c` from the bond's force
     /// sensitivity `s = beta dx` and the law's thinning slope `c = kappa`; its candidates
@@ -186,13 +186,13 @@ impl<L: LinearLaw, V: EngineVisitor> BondVisitor for ClosedForm<'_, L, V> {
     }
 }
 
-struct Direct<'a, L, V> {
+struct DirectBuild<'a, L, V> {
     scene: &'a Scene,
     law: L,
     visitor: V,
 }
 
-impl<L: ForceLaw, V: EngineVisitor> BondVisitor for Direct<'_, L, V> {
+impl<L: ForceLaw, V: EngineVisitor> BondVisitor for DirectBuild<'_, L, V> {
     type Output = Result<V::Output, EngineError>;
     fn visit<B: Bond>(self, bond: B) -> Self::Output {
         Ok(self.visitor.visit(ExactDirect::new(self.scene, self.law, bond)?))

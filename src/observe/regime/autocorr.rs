@@ -38,7 +38,7 @@ pub fn autocorrelation(x: &[f64], max_lag: usize) -> Vec<f64> {
     a.iter_mut().zip(x).for_each(|(a, &v)| *a = v - mean);
     let mut spectrum = forward.make_output_vec();
     forward.process(&mut a, &mut spectrum).expect("buffers of the planned lengths");
-    // |X_k|^2 is real: the inverse's first and last bins have no imaginary part.
+    // |X_k|^2 is real: the inverse's first and last entries have no imaginary part.
     spectrum.iter_mut().for_each(|z| *z = Complex::new(z.norm_sqr(), 0.0));
     inverse.process(&mut spectrum, &mut a).expect("buffers of the planned lengths");
     // a[j] / size = sum_i x_i x_{i+j} (the inverse does not scale).
@@ -70,11 +70,11 @@ pub fn period(rho: &[f64]) -> Option<(f64, f64)> {
     Some((j as f64 + offset, peak))
 }
 
-/// Half the mean peak-to-trough range over consecutive whole periods of `period` bins
-/// (fractional): periods `[round(k P), round((k+1) P))`, each range the largest bin maximum
-/// less the smallest bin minimum. With the range of each period also returned. `None` if
+/// Half the mean peak-to-trough range over consecutive whole periods of `period` buckets
+/// (fractional): periods `[round(k P), round((k+1) P))`, each range the largest bucket maximum
+/// less the smallest bucket minimum. With the range of each period also returned. `None` if
 /// no whole period fits.
-pub fn half_range(bins: &[(f64, f64, f64)], period: f64) -> Option<(f64, Vec<f64>)> {
+pub fn half_range(buckets: &[(f64, f64, f64)], period: f64) -> Option<(f64, Vec<f64>)> {
     // Also refuses NaN.
     if period.is_nan() || period < 1.0 {
         return None;
@@ -83,11 +83,11 @@ pub fn half_range(bins: &[(f64, f64, f64)], period: f64) -> Option<(f64, Vec<f64
     let mut k = 0usize;
     loop {
         let (a, b) = ((k as f64 * period).round() as usize, ((k + 1) as f64 * period).round() as usize);
-        if b > bins.len() || b <= a {
+        if b > buckets.len() || b <= a {
             break;
         }
-        let lo = bins[a..b].iter().map(|x| x.1).fold(f64::INFINITY, f64::min);
-        let hi = bins[a..b].iter().map(|x| x.2).fold(f64::NEG_INFINITY, f64::max);
+        let lo = buckets[a..b].iter().map(|x| x.1).fold(f64::INFINITY, f64::min);
+        let hi = buckets[a..b].iter().map(|x| x.2).fold(f64::NEG_INFINITY, f64::max);
         ranges.push(hi - lo);
         k += 1;
     }
@@ -168,8 +168,8 @@ mod tests {
         let (period, coherence) = period(&rho).unwrap();
         assert!((period - p).abs() < 0.05, "{period}");
         assert!(coherence > 0.99, "{coherence}");
-        let bins: Vec<(f64, f64, f64)> = x.iter().map(|&v| (v, v, v)).collect();
-        let (half, ranges) = half_range(&bins, period).unwrap();
+        let buckets: Vec<(f64, f64, f64)> = x.iter().map(|&v| (v, v, v)).collect();
+        let (half, ranges) = half_range(&buckets, period).unwrap();
         assert_eq!(ranges.len(), 40);
         assert!((half - 2.0).abs() < 0.01, "{half}");
     }
@@ -181,8 +181,8 @@ mod tests {
         let (period, coherence) = period(&autocorrelation(&x, 500)).unwrap();
         // The peak is a cusp: the parabola places it within a hundredth of a lag.
         assert!((period - 20.0).abs() < 0.01 && coherence > 0.99, "{period} {coherence}");
-        let bins: Vec<(f64, f64, f64)> = x.iter().map(|&v| (v, v, v)).collect();
-        assert_eq!(half_range(&bins, period).unwrap().0, 9.5);
+        let buckets: Vec<(f64, f64, f64)> = x.iter().map(|&v| (v, v, v)).collect();
+        assert_eq!(half_range(&buckets, period).unwrap().0, 9.5);
     }
 
     #[test]

@@ -1,26 +1,27 @@
-//! A bounded, decimating record of a sampled signal: at most [`CAPACITY`] bins of equal
+//! A bounded, decimating record of a sampled signal: at most [`CAPACITY`] buckets of equal
 //! width, each holding the mean, minimum and maximum of the samples it covers. When the
-//! record is full, neighbouring bins are merged pairwise and the bin width doubles, so the
+//! record is full, neighbouring buckets are merged pairwise and the bucket width doubles, so the
 //! memory does not grow with the run's length while the record always spans the whole
-//! signal with between `CAPACITY / 2` and `CAPACITY` bins.
+//! signal with between `CAPACITY / 2` and `CAPACITY` buckets.
 //!
-//! Bin means are box-filtered samples: an oscillation of period `P` keeps a fraction
-//! `sin(pi w / P) / (pi w / P)` of its amplitude in bins of width `w` (0.97 at `P = 8 w`),
-//! while bin minima and maxima keep the signal's envelope exactly.
+//! Bucket means are box-filtered samples: an oscillation of period `P` keeps a fraction
+//! `sin(pi w / P) / (pi w / P)` of its amplitude in buckets of width `w` (0.97 at `P = 8 w`),
+//! while bucket minima and maxima keep the signal's envelope exactly.
 
 use serde::{Deserialize, Serialize};
 
-/// Most bins kept (a power of two).
+/// Most buckets kept (a power of two).
 pub const CAPACITY: usize = 1 << 14;
 
 /// The record.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Decimator {
-    /// Samples per complete bin (a power of two).
+    /// Samples per complete bucket (a power of two).
     stride: u64,
-    /// Complete bins: `(mean, min, max)`.
-    bins: Vec<(f64, f64, f64)>,
-    /// The bin being filled: sum, count, min, max (min and max meaningful when
+    /// Complete buckets: `(mean, min, max)`.
+    #[serde(rename = "bins")]
+    buckets: Vec<(f64, f64, f64)>,
+    /// The bucket being filled: sum, count, min, max (min and max meaningful when
     /// `count > 0`; kept finite so that the record serialises to JSON too).
     sum: f64,
     count: u64,
@@ -36,7 +37,7 @@ impl Default for Decimator {
 
 impl Decimator {
     pub fn new() -> Self {
-        Decimator { stride: 1, bins: Vec::new(), sum: 0.0, count: 0, min: 0.0, max: 0.0 }
+        Decimator { stride: 1, buckets: Vec::new(), sum: 0.0, count: 0, min: 0.0, max: 0.0 }
     }
 
     /// Appends one sample.
@@ -49,40 +50,40 @@ impl Decimator {
         self.sum += x;
         self.count += 1;
         if self.count == self.stride {
-            self.bins.push((self.sum / self.count as f64, self.min, self.max));
+            self.buckets.push((self.sum / self.count as f64, self.min, self.max));
             (self.sum, self.count) = (0.0, 0);
-            if self.bins.len() == CAPACITY {
+            if self.buckets.len() == CAPACITY {
                 self.halve();
             }
         }
     }
 
-    /// Merges neighbouring bins pairwise; the bin being filled keeps collecting samples
-    /// (it is empty here: this is called only when a bin has just been completed).
+    /// Merges neighbouring buckets pairwise; the bucket being filled keeps collecting samples
+    /// (it is empty here: this is called only when a bucket has just been completed).
     fn halve(&mut self) {
         let merged: Vec<(f64, f64, f64)> = self
-            .bins
+            .buckets
             .chunks_exact(2)
             .map(|p| (0.5 * (p[0].0 + p[1].0), p[0].1.min(p[1].1), p[0].2.max(p[1].2)))
             .collect();
-        self.bins = merged;
+        self.buckets = merged;
         self.stride *= 2;
     }
 
-    /// Samples per complete bin.
+    /// Samples per complete bucket.
     pub fn stride(&self) -> u64 {
         self.stride
     }
 
-    /// Complete bins `(mean, min, max)`, in time order. The samples of an incomplete last
-    /// bin (fewer than [`Self::stride`]) are not included.
-    pub fn bins(&self) -> &[(f64, f64, f64)] {
-        &self.bins
+    /// Complete buckets `(mean, min, max)`, in time order. The samples of an incomplete last
+    /// bucket (fewer than [`Self::stride`]) are not included.
+    pub fn buckets(&self) -> &[(f64, f64, f64)] {
+        &self.buckets
     }
 
-    /// Samples in the complete bins.
-    pub fn binned_samples(&self) -> u64 {
-        self.bins.len() as u64 * self.stride
+    /// Samples in the complete buckets.
+    pub fn bucketed_samples(&self) -> u64 {
+        self.buckets.len() as u64 * self.stride
     }
 }
 
@@ -95,8 +96,8 @@ mod tests {
         let mut d = Decimator::new();
         (0..100).for_each(|i| d.push(i as f64));
         assert_eq!(d.stride(), 1);
-        assert_eq!(d.bins().len(), 100);
-        assert!(d.bins().iter().enumerate().all(|(i, b)| *b == (i as f64, i as f64, i as f64)));
+        assert_eq!(d.buckets().len(), 100);
+        assert!(d.buckets().iter().enumerate().all(|(i, b)| *b == (i as f64, i as f64, i as f64)));
     }
 
     #[test]
@@ -107,11 +108,11 @@ mod tests {
             // A spike at one sample, otherwise x = i.
             d.push(if i == 12_345 { 1e6 } else { i as f64 });
         }
-        // 5 C samples: the stride is 8 (C/2 <= bins < C), the last 3 samples pending.
+        // 5 C samples: the stride is 8 (C/2 <= buckets < C), the last 3 samples pending.
         assert_eq!(d.stride(), 8);
-        assert!(d.bins().len() >= CAPACITY / 2 && d.bins().len() < CAPACITY);
-        assert_eq!(d.binned_samples(), (total / 8) * 8);
-        for (k, &(mean, min, max)) in d.bins().iter().enumerate() {
+        assert!(d.buckets().len() >= CAPACITY / 2 && d.buckets().len() < CAPACITY);
+        assert_eq!(d.bucketed_samples(), (total / 8) * 8);
+        for (k, &(mean, min, max)) in d.buckets().iter().enumerate() {
             let (lo, hi) = (8 * k as u64, 8 * k as u64 + 7);
             if (lo..=hi).contains(&12_345) {
                 assert_eq!(max, 1e6);

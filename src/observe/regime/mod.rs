@@ -35,7 +35,7 @@
 //! regime is given to it.
 //!
 //! Memory: the detector keeps a bounded, decimating record of `F` ([`buffer`], at most
-//! [`buffer::CAPACITY`] bins) and a few counters, whatever `t_end`; its state serialises
+//! [`buffer::CAPACITY`] buckets) and a few counters, whatever `t_end`; its state serialises
 //! (it is part of a checkpoint). The analysis runs once, at the end ([`RegimeDetector::verdict`]).
 
 pub mod autocorr;
@@ -227,15 +227,15 @@ impl RegimeDetector {
             ..Oscillation::default()
         };
         let smooth = |o: Oscillation| Verdict { regime: Regime::Smooth, cycles: 0, oscillation: o, numerics: None };
-        let bins = self.friction.bins();
+        let buckets = self.friction.buckets();
         let spacing = self.t_second - self.t_first;
-        if bins.len() < 2 * MIN_PERIODS || spacing.is_nan() || spacing <= 0.0 {
+        if buckets.len() < 2 * MIN_PERIODS || spacing.is_nan() || spacing <= 0.0 {
             return smooth(o);
         }
-        let means: Vec<f64> = bins.iter().map(|b| b.0).collect();
-        let rho = autocorr::autocorrelation(&means, bins.len() / MIN_PERIODS);
+        let means: Vec<f64> = buckets.iter().map(|b| b.0).collect();
+        let rho = autocorr::autocorrelation(&means, buckets.len() / MIN_PERIODS);
         let Some((lag, coherence)) = autocorr::period(&rho) else { return smooth(o) };
-        let Some((amplitude, ranges)) = autocorr::half_range(bins, lag) else { return smooth(o) };
+        let Some((amplitude, ranges)) = autocorr::half_range(buckets, lag) else { return smooth(o) };
         o.oscillation_period = Some(lag * spacing * self.friction.stride() as f64);
         o.oscillation_amplitude = amplitude;
         o.oscillation_coherence = coherence;
@@ -261,8 +261,8 @@ impl RegimeDetector {
     }
 }
 
-/// The relative resolution of a per-period range measured on bins, for a period of `p`
-/// bins: a sampled extreme of a sine of amplitude `A` misses the true one by at most
+/// The relative resolution of a per-period range measured on buckets, for a period of `p`
+/// buckets: a sampled extreme of a sine of amplitude `A` misses the true one by at most
 /// `A (1 - cos(pi / p)) <= A (pi/p)^2 / 2`, so a range `2 A` is known to `(pi/p)^2 / 2` of
 /// itself. Ranges whose spread is below this are equal as far as the record can tell (a
 /// deterministic cycle sampled on a grid that beats with it).

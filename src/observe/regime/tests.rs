@@ -108,8 +108,8 @@ fn null_cv_of_gaussian_damped_oscillations() {
     // measured here over 12 000 periods, 30 samples per period. Its standard error is
     // NULL_CV sqrt(NULL_CV^2 + 1/2) / sqrt(K_eff) with K_eff = K (1 - r1)/(1 + r1).
     let x = damped_noise(0.5, 30, 12_000, &mut pcg(1));
-    let bins: Vec<(f64, f64, f64)> = x.iter().map(|&v| (v, v, v)).collect();
-    let (_, ranges) = autocorr::half_range(&bins, 30.0).unwrap();
+    let buckets: Vec<(f64, f64, f64)> = x.iter().map(|&v| (v, v, v)).collect();
+    let (_, ranges) = autocorr::half_range(&buckets, 30.0).unwrap();
     let (cv, _) = regularity(&ranges);
     let cv = cv.unwrap();
     let k = ranges.len() as f64;
@@ -124,8 +124,8 @@ fn null_cv_of_gaussian_damped_oscillations() {
     // Gaussian oscillation the test must reject).
     let at = |rho: f64| {
         let x = damped_noise(rho, 30, 4000, &mut pcg(2));
-        let bins: Vec<(f64, f64, f64)> = x.iter().map(|&v| (v, v, v)).collect();
-        regularity(&autocorr::half_range(&bins, 30.0).unwrap().1).0.unwrap()
+        let buckets: Vec<(f64, f64, f64)> = x.iter().map(|&v| (v, v, v)).collect();
+        regularity(&autocorr::half_range(&buckets, 30.0).unwrap().1).0.unwrap()
     };
     let (a, b) = (at(0.65), at(0.8));
     println!("null cv at rho(P) = 0.65: {a:.4}, at 0.8: {b:.4}");

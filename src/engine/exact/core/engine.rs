@@ -160,7 +160,7 @@ impl<S: Stepper, R: RuptureModel> Engine for Exact<S, R> {
 #[inline]
 fn restart<S: Stepper, R: RuptureModel>(core: &mut Core<S::Queue>, s: &mut S, r: &mut R) {
     s.open_piece(core);
-    if matches!(S::WEAK, WeakRuptures::Horizon) {
+    if matches!(S::WEAK_RUPTURES, WeakRuptures::Horizon) {
         refresh_clocks(core, s, r, None);
     }
 }

@@ -109,7 +109,7 @@ pub fn after_event<S: Stepper, R: RuptureModel, O: Observer>(
 /// closed-form plate).
 #[inline(always)]
 pub const fn horizon<S: Stepper, R: RuptureModel>() -> bool {
-    R::IS_WEAK && matches!(S::WEAK, WeakRuptures::Horizon)
+    R::IS_WEAK && matches!(S::WEAK_RUPTURES, WeakRuptures::Horizon)
 }
 
 /// Sets every channel's rate after a change of state (formation `kon0 N_det`, times the

@@ -14,7 +14,7 @@
 //!
 //! Everything is generic and `#[inline]`: an engine compiles, monomorphised for its stepper
 //! and model, to what it would be with the code written into it (no `dyn`, no run-time branch
-//! on the kind of engine; their constants, such as [`Stepper::WEAK`](super::stepper::Stepper::WEAK), fold away).
+//! on the kind of engine; their constants, such as [`Stepper::WEAK_RUPTURES`](super::stepper::Stepper::WEAK_RUPTURES), fold away).
 
 pub mod bags;
 pub mod clocks;

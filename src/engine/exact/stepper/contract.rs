@@ -76,7 +76,7 @@ pub trait Stepper: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send
     /// `true` for a kinematic plate (the friction reported is the bond force).
     const KINEMATIC: bool;
     /// How weak bonds' ruptures are found.
-    const WEAK: WeakRuptures;
+    const WEAK_RUPTURES: WeakRuptures;
 
     /// Opens the first piece at `t = 0`, once the initial junctions are drawn and registered.
     fn start(&mut self, core: &mut Core<Self::Queue>);

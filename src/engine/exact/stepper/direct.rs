@@ -268,7 +268,7 @@ impl<L: ForceLaw, B: Bond> Stepper for DirectStepper<L, B> {
     type Queue = ArrayQueue;
     type Rate = LinearRate;
     const KINEMATIC: bool = false;
-    const WEAK: WeakRuptures = WeakRuptures::Own;
+    const WEAK_RUPTURES: WeakRuptures = WeakRuptures::Own;
 
     #[inline]
     fn rate(&self) -> LinearRate {

@@ -277,7 +277,7 @@ impl<Q: ChannelQueue, M: PlateMotion> Stepper for LinearStepper<Q, M> {
     type Queue = Q;
     type Rate = LinearRate;
     const KINEMATIC: bool = M::KINEMATIC;
-    const WEAK: WeakRuptures = WeakRuptures::Horizon;
+    const WEAK_RUPTURES: WeakRuptures = WeakRuptures::Horizon;
 
     fn start(&mut self, core: &mut Core<Q>) {
         self.open_piece(core);

@@ -197,7 +197,7 @@ impl<P: Motion> Stepper for SeriesStepper<P> {
     type Queue = ArrayQueue;
     type Rate = TiltedRate;
     const KINEMATIC: bool = P::KINEMATIC;
-    const WEAK: WeakRuptures = WeakRuptures::Steps;
+    const WEAK_RUPTURES: WeakRuptures = WeakRuptures::Steps;
 
     fn start(&mut self, core: &mut Core<ArrayQueue>) {
         self.track_error(core);
