@@ -80,11 +80,6 @@ impl Decimator {
     pub fn buckets(&self) -> &[(f64, f64, f64)] {
         &self.buckets
     }
-
-    /// Samples in the complete buckets.
-    pub fn bucketed_samples(&self) -> u64 {
-        self.buckets.len() as u64 * self.stride
-    }
 }
 
 #[cfg(test)]
@@ -111,7 +106,7 @@ mod tests {
         // 5 C samples: the stride is 8 (C/2 <= buckets < C), the last 3 samples pending.
         assert_eq!(d.stride(), 8);
         assert!(d.buckets().len() >= CAPACITY / 2 && d.buckets().len() < CAPACITY);
-        assert_eq!(d.bucketed_samples(), (total / 8) * 8);
+        assert_eq!(d.buckets().len() as u64 * d.stride(), (total / 8) * 8);
         for (k, &(mean, min, max)) in d.buckets().iter().enumerate() {
             let (lo, hi) = (8 * k as u64, 8 * k as u64 + 7);
             if (lo..=hi).contains(&12_345) {
