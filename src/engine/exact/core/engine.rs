@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::junctions::{after_event, form, horizon, maybe_rebase, rebase, refresh_clocks, rupture};
 use super::state::{Core, FORMATION, HORIZON, RUPTURE};
 use crate::engine::exact::rupture::{RuptureModel, thin};
-use crate::engine::exact::stepper::contract::{Close, Moved, Stepper, Target, WeakRuptures};
+use crate::engine::exact::stepper::contract::{Moved, Stepper, Target, WeakRuptures};
 use crate::engine::{Counters, Engine, EngineError};
 use crate::observe::{Observer, Sample};
 use crate::scene::EngineKind;
@@ -81,21 +81,22 @@ impl<S: Stepper, R: RuptureModel> Engine for Exact<S, R> {
                 Moved::Short => continue,
                 Moved::Rebase => {
                     let now = core.tau;
-                    s.close(core, now, Close::Event, obs)?;
+                    s.close(core, now, obs)?;
                     rebase(core, s, r, obs);
                     s.open_piece(core);
                     continue;
                 }
                 Moved::Ruptured(slot) => {
                     let now = core.tau;
-                    s.close(core, now, Close::Event, obs)?;
+                    s.close(core, now, obs)?;
                     rupture(core, s, r, slot, obs);
                     after_event(core, s, r, None, obs);
                     continue;
                 }
             }
             if !due {
-                s.close(core, tau_stop, Close::Stop, obs)?;
+                s.close(core, tau_stop, obs)?;
+                s.stopped(core, obs);
                 maybe_rebase(core, s, r, obs);
                 restart(core, s, r);
                 return Ok(());
@@ -112,7 +113,7 @@ impl<S: Stepper, R: RuptureModel> Engine for Exact<S, R> {
                 }
                 HORIZON if horizon::<S, R>() => {
                     // End of a thinning horizon: restart the piece, renew the bound.
-                    s.close(core, t_next, Close::Event, obs)?;
+                    s.close(core, t_next, obs)?;
                     maybe_rebase(core, s, r, obs);
                     restart(core, s, r);
                 }
@@ -120,7 +121,7 @@ impl<S: Stepper, R: RuptureModel> Engine for Exact<S, R> {
                     let law = s.rate();
                     match r.pick(&mut core.rng, &core.bags.attached, &law, || s.position(t_next).unwrap_or(f64::NAN)) {
                         Some(slot) => {
-                            s.close(core, t_next, Close::Event, obs)?;
+                            s.close(core, t_next, obs)?;
                             rupture(core, s, r, slot, obs);
                             after_event(core, s, r, Some(RUPTURE), obs);
                         }

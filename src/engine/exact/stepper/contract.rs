@@ -21,14 +21,6 @@ pub struct Target {
     pub ch: usize,
 }
 
-/// Where [`Stepper::close`] closes a piece: at an event (or a re-base) inside the advance,
-/// or at the advance's stop. A constant at every call, so the choice compiles away.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Close {
-    Event,
-    Stop,
-}
-
 /// How far [`Stepper::step`] got towards its target.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Moved {
@@ -146,21 +138,17 @@ pub trait Stepper: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send
     ) -> Result<bool, EngineError> {
         let v = self.velocity(core);
         if core.accepts_formation(v) {
-            self.close(core, t, Close::Event, obs)?;
+            self.close(core, t, obs)?;
             return Ok(true);
         }
         Ok(false)
     }
-    /// Reports the current piece up to `t` as a segment and moves the plate there; at the
-    /// advance's stop ([`Close::Stop`]) a stepper that sums pieces for the observer
-    /// ([`Observer::stretch`]) reports them too.
-    fn close<O: Observer>(
-        &mut self,
-        core: &mut Core<Self::Queue>,
-        t: f64,
-        at: Close,
-        obs: &mut O,
-    ) -> Result<(), EngineError>;
+    /// Reports the current piece up to `t` as a segment and moves the plate there.
+    fn close<O: Observer>(&mut self, core: &mut Core<Self::Queue>, t: f64, obs: &mut O) -> Result<(), EngineError>;
+    /// The advance ends here (its last piece closed): a stepper that sums pieces for the
+    /// observer ([`Observer::stretch`]) reports them.
+    #[inline]
+    fn stopped<O: Observer>(&mut self, _core: &Core<Self::Queue>, _obs: &mut O) {}
     /// Starts a new piece at the current time and state, after an event.
     fn open_piece(&mut self, core: &mut Core<Self::Queue>);
     /// The core moved the local origin by `dtau`, `dy` (at a piece boundary): the same for

@@ -22,7 +22,7 @@
 use rand_distr::{Distribution, Exp1};
 use serde::{Deserialize, Serialize};
 
-use super::contract::{Close, Moved, Stepper, Target, WeakRuptures};
+use super::contract::{Moved, Stepper, Target, WeakRuptures};
 use crate::engine::EngineError;
 use crate::engine::exact::core::clocks::ArrayQueue;
 use crate::engine::exact::core::engine::Exact;
@@ -359,13 +359,7 @@ impl<L: ForceLaw, B: Bond> Stepper for DirectStepper<L, B> {
     }
 
     /// Reports the piece up to the current time as a segment.
-    fn close<O: Observer>(
-        &mut self,
-        core: &mut Core<ArrayQueue>,
-        _t: f64,
-        _at: Close,
-        obs: &mut O,
-    ) -> Result<(), EngineError> {
+    fn close<O: Observer>(&mut self, core: &mut Core<ArrayQueue>, _t: f64, obs: &mut O) -> Result<(), EngineError> {
         let h = core.tau - self.tau0;
         if h <= 0.0 {
             return Ok(());

@@ -34,7 +34,7 @@ use crate::engine::exact::core::engine::Exact;
 use crate::engine::exact::core::pick::Pick;
 use crate::engine::exact::core::state::Core;
 use crate::engine::exact::rupture::{LinearRate, RuptureModel};
-use crate::engine::exact::stepper::contract::{Close, Stepper, WeakRuptures};
+use crate::engine::exact::stepper::contract::{Stepper, WeakRuptures};
 use crate::engine::exact::stepper::linear::propagator::{Integrals, LinearPlate, Trajectory};
 use crate::engine::exact::stepper::linear::report;
 use crate::observe::{Observer, Segment};
@@ -337,11 +337,10 @@ impl<Q: ChannelQueue, M: PlateMotion> Stepper for LinearStepper<Q, M> {
         Ok(false)
     }
 
-    /// Moves along the piece to `t` and reports `[piece.tau0, t]` as a segment; at the stop,
-    /// the pieces summed in this advance as one stretch. Always inlined: a rupture closes its
-    /// piece here, and the call cost a tenth of the closing.
+    /// Moves along the piece to `t` and reports `[piece.tau0, t]` as a segment. Always
+    /// inlined: a rupture closes its piece here, and the call cost a tenth of the closing.
     #[inline(always)]
-    fn close<O: Observer>(&mut self, core: &mut Core<Q>, t: f64, at: Close, obs: &mut O) -> Result<(), EngineError> {
+    fn close<O: Observer>(&mut self, core: &mut Core<Q>, t: f64, obs: &mut O) -> Result<(), EngineError> {
         if M::KINEMATIC {
             self.close_kinematic(core, t, obs);
         } else {
@@ -350,11 +349,15 @@ impl<Q: ChannelQueue, M: PlateMotion> Stepper for LinearStepper<Q, M> {
                 self.piece.traj.current().at_maybe_integrals(h, core.plate.v, Self::integrals(core, t, obs));
             self.report_piece(core, t, y1, v1, ints, obs);
         }
-        self.check(core)?;
-        if at == Close::Stop && O::STRETCHES && O::SEGMENTS {
+        self.check(core)
+    }
+
+    /// Reports the pieces summed in this advance as one stretch.
+    #[inline]
+    fn stopped<O: Observer>(&mut self, core: &Core<Q>, obs: &mut O) {
+        if O::STRETCHES && O::SEGMENTS {
             obs.stretch(&self.sums.take(&core.plate, core.frame.time(core.tau)));
         }
-        Ok(())
     }
 
     /// Starts a new closed-form piece at the current time and state.

@@ -16,7 +16,7 @@ use crate::engine::exact::core::pick::prefetch;
 use crate::engine::exact::core::state::{Core, FORMATION};
 use crate::engine::exact::rupture::horizon::SPREAD;
 use crate::engine::exact::rupture::{RuptureModel, TiltedRate};
-use crate::engine::exact::stepper::contract::{Close, Moved, Step, Stepper, Target, WeakRuptures};
+use crate::engine::exact::stepper::contract::{Moved, Step, Stepper, Target, WeakRuptures};
 use crate::observe::Observer;
 use crate::physics::{ForceLaw, Tilted};
 use crate::rng::UniformSource;
@@ -304,13 +304,7 @@ impl<P: Motion> Stepper for SeriesStepper<P> {
 
     /// Reports the piece up to now (the plate is there already).
     #[inline]
-    fn close<O: Observer>(
-        &mut self,
-        core: &mut Core<ArrayQueue>,
-        _t: f64,
-        _at: Close,
-        obs: &mut O,
-    ) -> Result<(), EngineError> {
+    fn close<O: Observer>(&mut self, core: &mut Core<ArrayQueue>, _t: f64, obs: &mut O) -> Result<(), EngineError> {
         if let Some(mut s) = self.motion.segment(core.tau, &core.frame, &core.plate, &self.series) {
             s.attached = core.bags.n_attached() as u64;
             obs.segment(&s);
