@@ -262,8 +262,11 @@ pub(super) fn direct_sums_in(e: &[f64], base_off: f64, g: &Grades, law: &Tilted)
         let (xa, na, oka) = batch(&e[..LANES]);
         let (xb, nb, okb) = batch(&e[LANES..]);
         if oka && okb {
-            let x: [f64; 2 * LANES] = std::array::from_fn(|l| if l < LANES { xa[l] } else { xb[l - LANES] });
-            let n: [usize; 2 * LANES] = std::array::from_fn(|l| if l < LANES { na[l] } else { nb[l - LANES] });
+            let (mut x, mut n) = ([0.0; 2 * LANES], [0; 2 * LANES]);
+            for l in 0..LANES {
+                (x[l], x[l + LANES]) = (xa[l], xb[l]);
+                (n[l], n[l + LANES]) = (na[l], nb[l]);
+            }
             phi_taylor_lanes(&law, x, n, &mut acc);
         } else {
             one(&mut acc, xa, na, oka);
