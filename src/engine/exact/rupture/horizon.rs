@@ -54,7 +54,9 @@ impl PartialEq for ExpGrid {
 impl ExpGrid {
     /// `exp(x)` rounded up to the grid: `exp(g / GRID)` with the smallest integer `g >= GRID x`
     /// (at least `exp(x)`, up to the exponential's own round-off, as `exp(x)` itself).
-    #[inline]
+    /// Always inlined, its table built out of line ([`ExpGrid::build`]): in the `release`
+    /// build it was a call per bound.
+    #[inline(always)]
     fn exp_up(&mut self, x: f64) -> f64 {
         let t = x * GRID;
         if t.is_nan() || t.abs() >= GRID_MAX as f64 {
@@ -66,9 +68,15 @@ impl ExpGrid {
             g += 1;
         }
         if self.0.is_empty() {
-            self.0 = (0..=2 * GRID_MAX).map(|i| ((i as f64 - GRID_MAX as f64) / GRID).exp()).collect();
+            self.build();
         }
         self.0[(g + GRID_MAX as i64) as usize]
+    }
+    /// The table, once.
+    #[cold]
+    #[inline(never)]
+    fn build(&mut self) {
+        self.0 = (0..=2 * GRID_MAX).map(|i| ((i as f64 - GRID_MAX as f64) / GRID).exp()).collect();
     }
 }
 

@@ -109,10 +109,18 @@ pub(super) fn phi_taylor_lanes<const W: usize>(
     n: [usize; W],
     acc: &mut [[f64; LANES]; PMAX],
 ) {
-    let top = n.iter().copied().max().unwrap_or(0);
+    // Index loops (iterator adaptors and `array::from_fn` are calls here in the `release`
+    // build, which has no link-time optimisation).
+    let mut top = 0;
+    for &v in &n {
+        top = top.max(v);
+    }
     debug_assert!(n.iter().all(|v| (1..=PMAX).contains(v)));
     // Whether coefficient `k` is kept, per lane, as a comparison of floats (one vector compare).
-    let last: [f64; W] = std::array::from_fn(|l| n[l] as f64);
+    let mut last = [0.0; W];
+    for l in 0..W {
+        last[l] = n[l] as f64;
+    }
     let l0 = law.l0;
     let (mut inv_u, mut inv_r, mut s, mut t) = ([0.0; W], [0.0; W], [0.0; W], [0.0; W]);
     for l in 0..W {

@@ -18,23 +18,29 @@ pub(super) fn dd_add(acc: &mut [f64; 2], x: f64) {
     *acc = [hi, lo];
 }
 
-/// `(hi, lo) += x` elementwise, double-double.
-#[inline]
+/// `(hi, lo) += x` elementwise, double-double. Index loops over `x.len()` (not iterator adaptors: in the README's `release` build,
+/// without link-time optimisation, `Zip` is not inlined into the AVX2 callers).
+#[inline(always)]
 pub(super) fn dd_add_all(hi: &mut [f64], lo: &mut [f64], x: &[f64]) {
-    for ((h, l), &v) in hi.iter_mut().zip(lo.iter_mut()).zip(x) {
-        let (s, e) = two_sum(*h, v);
-        *h = s;
-        *l += e;
+    let n = x.len();
+    let (hi, lo) = (&mut hi[..n], &mut lo[..n]);
+    for i in 0..n {
+        let (s, e) = two_sum(hi[i], x[i]);
+        hi[i] = s;
+        lo[i] += e;
     }
 }
 
-/// `(hi, lo) += sign x` elementwise, double-double (`sign = +-1`, exact).
-#[inline]
+/// `(hi, lo) += sign x` elementwise, double-double (`sign = +-1`, exact); index loops, as
+/// [`dd_add_all`].
+#[inline(always)]
 pub(super) fn dd_add_all_signed(hi: &mut [f64], lo: &mut [f64], x: &[f64], sign: f64) {
-    for ((h, l), &v) in hi.iter_mut().zip(lo.iter_mut()).zip(x) {
-        let (s, e) = two_sum(*h, sign * v);
-        *h = s;
-        *l += e;
+    let n = x.len();
+    let (hi, lo) = (&mut hi[..n], &mut lo[..n]);
+    for i in 0..n {
+        let (s, e) = two_sum(hi[i], sign * x[i]);
+        hi[i] = s;
+        lo[i] += e;
     }
 }
 

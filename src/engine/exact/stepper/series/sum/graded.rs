@@ -202,8 +202,9 @@ pub(super) fn direct_sums_in(e: &[f64], base_off: f64, g: &Grades, law: &Tilted)
     // double-double addition per coefficient) and clears them.
     let fold = |acc: &mut [[f64; LANES]; PMAX], a: &mut [f64; PMAX], al: &mut [f64; PMAX]| {
         let mut t = [0.0; PMAX];
-        for (tk, ak) in t.iter_mut().zip(acc.iter_mut()).take(p + 1) {
-            *tk = (ak[0] + ak[1]) + (ak[2] + ak[3]);
+        for k in 0..(p + 1).min(PMAX) {
+            let ak = &mut acc[k];
+            t[k] = (ak[0] + ak[1]) + (ak[2] + ak[3]);
             *ak = [0.0; LANES];
         }
         dd_add_all(&mut a[..=p], &mut al[..=p], &t[..=p]);
@@ -219,8 +220,12 @@ pub(super) fn direct_sums_in(e: &[f64], base_off: f64, g: &Grades, law: &Tilted)
             x[l] = base_off - e[l];
             n[l] = g.order_at(x[l]) + 1;
         }
-        // Every lane tested (no early exit), so the test is a few vector operations.
-        let ok = x.iter().fold(true, |ok, &v| ok & in_range(v, law.l0));
+        // Every lane tested (no early exit), so the test is a few vector operations (an
+        // index loop: iterator adaptors are not inlined here in the `release` build).
+        let mut ok = true;
+        for &v in &x {
+            ok &= in_range(v, law.l0);
+        }
         (x, n, ok)
     };
     // One batch's terms, into the block sums.
@@ -229,10 +234,11 @@ pub(super) fn direct_sums_in(e: &[f64], base_off: f64, g: &Grades, law: &Tilted)
             phi_taylor_lanes(&law, x, n, acc);
         } else {
             let mut c = [0.0; PMAX];
-            for (l, (&xv, &nl)) in x.iter().zip(&n).enumerate() {
-                phi_taylor(&law, xv, &mut c[..nl]);
-                for (ak, ck) in acc.iter_mut().zip(&c).take(nl) {
-                    ak[l] += ck;
+            for l in 0..LANES {
+                let nl = n[l];
+                phi_taylor(&law, x[l], &mut c[..nl]);
+                for k in 0..nl {
+                    acc[k][l] += c[k];
                 }
             }
         }
@@ -256,8 +262,11 @@ pub(super) fn direct_sums_in(e: &[f64], base_off: f64, g: &Grades, law: &Tilted)
         let (xa, na, oka) = batch(&e[..LANES]);
         let (xb, nb, okb) = batch(&e[LANES..]);
         if oka && okb {
-            let x: [f64; 2 * LANES] = std::array::from_fn(|l| if l < LANES { xa[l] } else { xb[l - LANES] });
-            let n: [usize; 2 * LANES] = std::array::from_fn(|l| if l < LANES { na[l] } else { nb[l - LANES] });
+            let (mut x, mut n) = ([0.0; 2 * LANES], [0; 2 * LANES]);
+            for l in 0..LANES {
+                (x[l], x[l + LANES]) = (xa[l], xb[l]);
+                (n[l], n[l + LANES]) = (na[l], nb[l]);
+            }
             phi_taylor_lanes(&law, x, n, &mut acc);
         } else {
             one(&mut acc, xa, na, oka);

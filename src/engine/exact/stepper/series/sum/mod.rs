@@ -412,14 +412,17 @@ impl SeriesSum {
         let mut c = [0.0; PMAX];
         phi_taylor(&self.law, x, &mut c[..=p]);
         // Powers `sign e^m` by four chains in registers (a chain through the array would
-        // add a store-to-load delay to every step).
+        // add a store-to-load delay to every step); written out, as the loops of `dd` are.
         let mut pw = [0.0; PMAX + 4];
         let e2 = e * e;
         let e4 = e2 * e2;
-        let mut quad = [sign, sign * e, sign * e2, sign * (e * e2)];
-        for chunk in pw.chunks_exact_mut(4).take(p / 4 + 1) {
-            chunk.copy_from_slice(&quad);
-            quad = quad.map(|v| v * e4);
+        let (mut q0, mut q1, mut q2, mut q3) = (sign, sign * e, sign * e2, sign * (e * e2));
+        for i in 0..(p / 4 + 1).min(pw.len() / 4) {
+            pw[4 * i] = q0;
+            pw[4 * i + 1] = q1;
+            pw[4 * i + 2] = q2;
+            pw[4 * i + 3] = q3;
+            (q0, q1, q2, q3) = (q0 * e4, q1 * e4, q2 * e4, q3 * e4);
         }
         let bin = &mut self.bins[slot];
         dd_add_all(&mut bin.m[..=p], &mut bin.ml[..=p], &pw[..=p]);
