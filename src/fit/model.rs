@@ -185,6 +185,8 @@ struct Cache {
     index: HashMap<Vec<u64>, usize>,
     /// How many of `list` were made by this process.
     new: usize,
+    /// Which of `list` this process has asked for (made, or taken from the journal).
+    asked: Vec<bool>,
     best: f64,
     error: Option<FitError>,
 }
@@ -208,6 +210,7 @@ impl<'a> Objective<'a> {
             cache.best = cache.best.min(problem.score(&e));
             cache.index.insert(key(&e.values), cache.list.len());
             cache.list.push(e);
+            cache.asked.push(false);
         }
         Objective { problem, sim, state: Mutex::new(cache), journal, stop, max, on_new: None }
     }
@@ -216,8 +219,9 @@ impl<'a> Objective<'a> {
     pub fn evaluate(&self, values: &[f64]) -> Result<Evaluation, FitError> {
         let k = key(values);
         {
-            let c = self.state.lock().unwrap_or_else(|p| p.into_inner());
+            let mut c = self.state.lock().unwrap_or_else(|p| p.into_inner());
             if let Some(&i) = c.index.get(&k) {
+                c.asked[i] = true;
                 return Ok(c.list[i].clone());
             }
             // Another search (a profile's side) has failed: stop this one too.
@@ -254,6 +258,7 @@ impl<'a> Objective<'a> {
         // Made meanwhile by another search (the same values give the same evaluation):
         // kept once.
         if let Some(&i) = c.index.get(&k) {
+            c.asked[i] = true;
             return Ok(c.list[i].clone());
         }
         let n = c.list.len();
@@ -263,6 +268,7 @@ impl<'a> Objective<'a> {
         c.best = c.best.min(p.score(&e));
         c.index.insert(k, n);
         c.list.push(e.clone());
+        c.asked.push(true);
         c.new += 1;
         let best = c.best;
         drop(c);
@@ -292,6 +298,12 @@ impl<'a> Objective<'a> {
     /// Evaluations made (in this process or read from a journal).
     pub fn evaluations(&self) -> usize {
         self.state.lock().unwrap_or_else(|p| p.into_inner()).list.len()
+    }
+
+    /// Distinct evaluations asked for by this process (made, or taken from the journal): on
+    /// a resumed fit, as many as an uninterrupted one had made at the same stage.
+    pub fn asked(&self) -> usize {
+        self.state.lock().unwrap_or_else(|p| p.into_inner()).asked.iter().filter(|&&a| a).count()
     }
 
     /// Evaluations made by this process.
