@@ -98,10 +98,14 @@ pub fn side(
     let others = |y: &[f64]| -> Vec<f64> { y.iter().enumerate().filter(|&(k, _)| k != j).map(|(_, &v)| v).collect() };
     let tolerance = (0.02 * unit).max(noise);
     let settings =
-        Settings { step: 0.03, tolerance, max_iters: INNER_ITERS_PER_PARAMETER * (p as u64 - 1).max(1) + 4, unit };
+        Settings { step: INNER_STEP.0, tolerance, max_iters: INNER_ITERS_PER_PARAMETER * (p as u64 - 1).max(1) + 5, unit };
     let mut points = Vec::new();
-    // The rise at y_j = y, re-optimising the others from `warm`; returns (rise, others).
-    let mut at = |y: f64, warm: &[f64]| -> Option<(f64, Vec<f64>)> {
+    // The rise at y_j = y, re-optimising the others from `warm`, predicted from the profile
+    // point at `from`; returns (rise, others). The simplex is scaled to the step along the
+    // profile, so that it can follow a valley that the prediction misses.
+    let mut at = |y: f64, from: f64, warm: &[f64]| -> Option<(f64, Vec<f64>)> {
+        let step = (INNER_STEP_SCALE * (y - from).abs()).clamp(INNER_STEP.0, INNER_STEP.1);
+        let settings = Settings { step, ..settings };
         let held = |z: &[f64]| -> Option<f64> {
             let mut full = Vec::with_capacity(p);
             full.extend_from_slice(&z[..j]);
@@ -127,7 +131,7 @@ pub fn side(
             return Some(Side { end: None, points });
         }
         let warm = predict(&prev, to_y(off_in), &z_in, to_y(off));
-        let (d, z) = at(to_y(off), &warm)?;
+        let (d, z) = at(to_y(off), to_y(off_in), &warm)?;
         if d >= threshold {
             break (off, d);
         }
@@ -146,7 +150,7 @@ pub fn side(
         let w = off_out - off_in;
         let mid = crossing((off_in, d_in), (off_out, d_out), threshold).clamp(off_in + 0.1 * w, off_out - 0.1 * w);
         let warm = predict(&prev, to_y(off_in), &z_in, to_y(mid));
-        let (dm, zm) = at(to_y(mid), &warm)?;
+        let (dm, zm) = at(to_y(mid), to_y(off_in), &warm)?;
         if dm >= threshold {
             (off_out, d_out) = (mid, dm);
         } else {
@@ -168,8 +172,13 @@ pub const OVERSHOOT: f64 = 1.15;
 pub const REFINEMENTS: usize = 2;
 /// A bracket narrower than this fraction of its outer offset is not narrowed further.
 pub const BRACKET_WIDTH: f64 = 0.2;
-/// Iterations of a profile point's re-optimisation per other free parameter (plus four).
-pub const INNER_ITERS_PER_PARAMETER: u64 = 6;
+/// Iterations of a profile point's re-optimisation per other free parameter (plus five).
+pub const INNER_ITERS_PER_PARAMETER: u64 = 10;
+/// The initial simplex of a profile point's re-optimisation: this fraction of the step
+/// along the profile from the point its start was predicted from ...
+pub const INNER_STEP_SCALE: f64 = 0.5;
+/// ... kept within these sizes (unit coordinates).
+pub const INNER_STEP: (f64, f64) = (0.03, 0.1);
 
 /// The next offset outwards after a point at offset `off` with rise `d` below the
 /// threshold: where a profile rising as the square of the offset from the optimum would

@@ -174,8 +174,28 @@ pub struct Objective<'a> {
     journal: Option<&'a Journal>,
     stop: Option<&'a StopFlag>,
     max: usize,
-    /// Called after each new evaluation with (evaluations so far, best score so far).
-    pub on_new: Option<Box<dyn Fn(usize, f64) + Sync + 'a>>,
+    /// Called after each new evaluation with (evaluations so far, best score so far, the
+    /// fit's stage).
+    pub on_new: Option<Box<dyn Fn(usize, f64, Stage) + Sync + 'a>>,
+    stage: std::sync::atomic::AtomicU8,
+}
+
+/// The stage of a fit, for its progress.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// The search for the optimum.
+    Search,
+    /// The profiles of the intervals.
+    Profiles,
+}
+
+impl Stage {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Stage::Search => "search for the optimum",
+            Stage::Profiles => "profiles",
+        }
+    }
 }
 
 #[derive(Default)]
@@ -212,7 +232,7 @@ impl<'a> Objective<'a> {
             cache.list.push(e);
             cache.asked.push(false);
         }
-        Objective { problem, sim, state: Mutex::new(cache), journal, stop, max, on_new: None }
+        Objective { problem, sim, state: Mutex::new(cache), journal, stop, max, on_new: None, stage: 0.into() }
     }
 
     /// The evaluation at `values` (field values), made or taken from the cache.
@@ -273,7 +293,7 @@ impl<'a> Objective<'a> {
         let best = c.best;
         drop(c);
         if let Some(f) = &self.on_new {
-            f(n + 1, best);
+            f(n + 1, best, self.stage());
         }
         Ok(e)
     }
@@ -288,6 +308,16 @@ impl<'a> Objective<'a> {
                 None
             }
         }
+    }
+
+    /// The fit's stage, as [`Objective::set_stage`] last set it.
+    pub fn stage(&self) -> Stage {
+        if self.stage.load(std::sync::atomic::Ordering::Relaxed) == 0 { Stage::Search } else { Stage::Profiles }
+    }
+
+    /// Sets the fit's stage (for its progress).
+    pub fn set_stage(&self, stage: Stage) {
+        self.stage.store(u8::from(stage == Stage::Profiles), std::sync::atomic::Ordering::Relaxed);
     }
 
     /// The first error met, if any.

@@ -5,7 +5,7 @@
 use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor};
 
 use super::intervals::{Interval, Side, interval, side};
-use super::model::{Evaluation, FitError, Objective};
+use super::model::{Evaluation, FitError, Objective, Stage};
 use super::optimise::{Settings, minimise};
 
 /// Nelder–Mead iterations per free parameter, for each of the two searches of the optimum.
@@ -91,6 +91,7 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
     }
     let unit = if has_sigma { 1.0 } else { (score / dof as f64).max(f64::MIN_POSITIVE) };
     let search_evaluations = obj.asked();
+    obj.set_stage(Stage::Profiles);
     let (threshold, band_threshold) = if has_sigma {
         (quantile95(ChiSquared::new(1.0).expect("1 > 0")), quantile95(ChiSquared::new(p as f64).expect("p > 0")))
     } else {
