@@ -130,7 +130,13 @@ impl Fit {
     /// the fit after the evaluations in progress (the journal kept) and raises
     /// `KeyboardInterrupt`.
     #[pyo3(signature = (out, simulate, progress = None))]
-    fn run(&self, py: Python<'_>, out: PathBuf, simulate: Py<PyAny>, progress: Option<Py<PyAny>>) -> PyResult<(usize, usize)> {
+    fn run(
+        &self,
+        py: Python<'_>,
+        out: PathBuf,
+        simulate: Py<PyAny>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<(usize, usize)> {
         let held = lock::hold(&out).map_err(bad_input)?;
         let existed = journal::read_header(&out).map_err(bad_input)?.is_some();
         let input = out.join(prepare::INPUT_DIR);

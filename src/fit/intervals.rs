@@ -97,8 +97,12 @@ pub fn side(
     let p = best.len();
     let others = |y: &[f64]| -> Vec<f64> { y.iter().enumerate().filter(|&(k, _)| k != j).map(|(_, &v)| v).collect() };
     let tolerance = (0.02 * unit).max(noise);
-    let settings =
-        Settings { step: INNER_STEP.0, tolerance, max_iters: INNER_ITERS_PER_PARAMETER * (p as u64 - 1).max(1) + 5, unit };
+    let settings = Settings {
+        step: INNER_STEP.0,
+        tolerance,
+        max_iters: INNER_ITERS_PER_PARAMETER * (p as u64 - 1).max(1) + 5,
+        unit,
+    };
     let mut points = Vec::new();
     // The rise at y_j = y, re-optimising the others from `warm`, predicted from the profile
     // point at `from`; returns (rise, others). The simplex is scaled to the step along the
@@ -304,10 +308,18 @@ mod tests {
     }
 
     /// Counts the evaluations of `f`.
-    fn counted(f: impl Fn(&[f64]) -> f64 + Sync) -> (impl Fn(&[f64]) -> Option<f64> + Sync, std::sync::Arc<std::sync::atomic::AtomicUsize>) {
+    fn counted(
+        f: impl Fn(&[f64]) -> f64 + Sync,
+    ) -> (impl Fn(&[f64]) -> Option<f64> + Sync, std::sync::Arc<std::sync::atomic::AtomicUsize>) {
         let n = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
         let m = n.clone();
-        (move |y: &[f64]| { m.fetch_add(1, std::sync::atomic::Ordering::Relaxed); Some(f(y)) }, n)
+        (
+            move |y: &[f64]| {
+                m.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                Some(f(y))
+            },
+            n,
+        )
     }
 
     #[test]
@@ -344,9 +356,16 @@ mod tests {
         let half = s0 * t.sqrt();
         // The inner optimum is found to the inner tolerance (0.02 in chi2): the ends within
         // a rise of 0.02, i.e. 0.02 / (2 t) of the half width, plus the NM's resolution.
-        assert!((iv.low.y - (m0 - half)).abs() < 0.01 * half && (iv.high.y - (m0 + half)).abs() < 0.01 * half, "{iv:?}");
+        assert!(
+            (iv.low.y - (m0 - half)).abs() < 0.01 * half && (iv.high.y - (m0 + half)).abs() < 0.01 * half,
+            "{iv:?}"
+        );
         assert!(iv.profile.len() <= 8, "{} profile points", iv.profile.len());
-        println!("{} evaluations for {} profile points", n.load(std::sync::atomic::Ordering::Relaxed), iv.profile.len());
+        println!(
+            "{} evaluations for {} profile points",
+            n.load(std::sync::atomic::Ordering::Relaxed),
+            iv.profile.len()
+        );
         // A profile rising as the cube of the offset: not quadratic, so the bracket is
         // narrowed by the root-find; the raw crossings (before the smoothing parabola) are
         // at +- (t / k)^(1/3).
