@@ -118,13 +118,21 @@ def kill_after(cmd: list, out: Path, lines: int) -> None:
     assert not (out / "fit.json").exists(), "killed before it finished"
 
 
-def test_a_killed_python_fit_continues_to_the_same_files(cli_fit_one, inputs, client, tmp_path):
+def killed_python_fit(inputs, tmp_path: Path, lines: int) -> Path:
+    """A Python fit of ONE into `tmp_path / "cut"`, SIGKILLed once its journal holds `lines`
+    lines."""
     scene, data = inputs
-    total = journal_lines(cli_fit_one)
     script = tmp_path / "killed.py"
     script.write_text(textwrap.dedent(KILLED))
     out = tmp_path / "cut"
-    kill_after([sys.executable, str(script), str(scene), str(data), ONE, str(out)], out, total // 3)
+    kill_after([sys.executable, str(script), str(scene), str(data), ONE, str(out)], out, lines)
+    return out
+
+
+def test_a_killed_python_fit_continues_to_the_same_files(cli_fit_one, inputs, client, tmp_path):
+    scene, data = inputs
+    total = journal_lines(cli_fit_one)
+    out = killed_python_fit(inputs, tmp_path, total // 3)
     kept = journal_lines(out) - 1
     r = stickslip.fit(scene, data, ONE, replicas=2, client=client, out=out)
     same_files(cli_fit_one, out)
@@ -145,12 +153,8 @@ def test_python_continues_a_killed_commands_journal(cli, cli_fit_one, inputs, cl
 
 
 def test_stickslip_resume_continues_a_killed_python_fit(cli, cli_fit_one, inputs, tmp_path):
-    scene, data = inputs
     total = journal_lines(cli_fit_one)
-    script = tmp_path / "killed.py"
-    script.write_text(textwrap.dedent(KILLED))
-    out = tmp_path / "cut"
-    kill_after([sys.executable, str(script), str(scene), str(data), ONE, str(out)], out, total // 3)
+    out = killed_python_fit(inputs, tmp_path, total // 3)
     # The journal records the command of the same fit, on the scene written into out/input.
     assert (out / "input" / "tiny.toml").is_file()
     p = cli("resume", out)

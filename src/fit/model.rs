@@ -176,9 +176,12 @@ pub struct Objective<'a> {
     max: usize,
     /// Called after each new evaluation with (evaluations so far, best score so far, the
     /// fit's stage).
-    pub on_new: Option<Box<dyn Fn(usize, f64, Stage) + Sync + 'a>>,
+    pub on_new: Option<OnNew<'a>>,
     stage: std::sync::atomic::AtomicU8,
 }
+
+/// A fit's progress report: (evaluations so far, best score so far, stage).
+pub type OnNew<'a> = Box<dyn Fn(usize, f64, Stage) + Sync + 'a>;
 
 /// The stage of a fit, for its progress.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
