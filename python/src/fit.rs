@@ -39,6 +39,10 @@ pub struct Fit {
     problem: Problem,
     max: usize,
     data_name: String,
+    /// The command's arguments, for the journal's command line (`stickslip resume`).
+    data: PathBuf,
+    free: Vec<String>,
+    friction_scale: f64,
 }
 
 /// Runs an evaluation's scenes through the Python callable `simulate(tomls, names) ->
@@ -100,7 +104,7 @@ impl Fit {
             return Err(bad_input(format!("--max-evaluations {max_evaluations}: must be from 1 to 1000000")));
         }
         let problem = prepare::problem(base.0.clone(), &data, &free, replicas, friction_scale).map_err(bad_input)?;
-        Ok(Fit { problem, max: max_evaluations, data_name: prepare::data_name(&data) })
+        Ok(Fit { problem, max: max_evaluations, data_name: prepare::data_name(&data), data, free, friction_scale })
     }
 
     /// Data points times replicas: the runs of one evaluation.
@@ -109,28 +113,69 @@ impl Fit {
     }
 
     /// The free fields.
-    #[getter]
-    fn free(&self) -> Vec<String> {
+    #[getter(free)]
+    fn free_fields(&self) -> Vec<String> {
         self.problem.free.iter().map(|f| f.field.clone()).collect()
     }
 
     /// Runs the fit into the existing directory `out` (held while it runs, as `stickslip
     /// fit` holds it), journaling every evaluation in `out/journal.jsonl` (a journal there
     /// of the same fit is continued: its evaluations are not made again), and writes
-    /// `fit.json`, `fit.csv`, `fit.toml` and `fit.svg`. Each evaluation's runs go to
-    /// `simulate(tomls, names) -> list[float]`, called from several threads at once (the
-    /// profiles' sides). Returns `(evaluations, made now)`. Ctrl-C stops the fit after the
-    /// evaluations in progress (the journal kept) and raises `KeyboardInterrupt`.
-    fn run(&self, py: Python<'_>, out: PathBuf, simulate: Py<PyAny>) -> PyResult<(usize, usize)> {
+    /// `fit.json`, `fit.csv`, `fit.toml` and `fit.svg`. A new journal records the command
+    /// line of the same fit (its scene written to `out/input/`), so that `stickslip resume
+    /// out` continues it. Each evaluation's runs go to `simulate(tomls, names) ->
+    /// list[float]`, called from several threads at once (the profiles' sides);
+    /// `progress(evaluations, best_misfit, stage)`, if given, is called after each new
+    /// evaluation (from those threads too). Returns `(evaluations, made now)`. Ctrl-C stops
+    /// the fit after the evaluations in progress (the journal kept) and raises
+    /// `KeyboardInterrupt`.
+    #[pyo3(signature = (out, simulate, progress = None))]
+    fn run(
+        &self,
+        py: Python<'_>,
+        out: PathBuf,
+        simulate: Py<PyAny>,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<(usize, usize)> {
         let held = lock::hold(&out).map_err(bad_input)?;
         let existed = journal::read_header(&out).map_err(bad_input)?.is_some();
-        let header = prepare::header(&self.problem, self.max, None);
+        let input = out.join(prepare::INPUT_DIR);
+        let had_input = input.exists();
+        let command = if existed {
+            None
+        } else {
+            let p = &self.problem;
+            let c = prepare::python_invocation(p, &self.data, &self.free, self.friction_scale, self.max, &out);
+            Some(c.map_err(|e| failed(format!("cannot write the fit's scene into {}: {e}", input.display())))?)
+        };
+        let forget_input = || {
+            if !had_input {
+                let _ = std::fs::remove_dir_all(&input);
+            }
+        };
+        let header = prepare::header(&self.problem, self.max, command);
         let seeds = vec![self.problem.base.run.seed; self.max];
-        let mut opened = py.detach(|| Journal::open::<Evaluation>(&out, &header, &seeds)).map_err(bad_input)?;
+        let mut opened = match py.detach(|| Journal::open::<Evaluation>(&out, &header, &seeds)) {
+            Ok(o) => o,
+            Err(e) => {
+                forget_input();
+                return Err(bad_input(e));
+            }
+        };
         let done: Vec<Evaluation> = std::mem::take(&mut opened.done).into_iter().map_while(|d| d).collect();
         let stop = StopFlag::new();
         let sim = PySimulator { simulate, stop: stop.clone(), error: Mutex::new(None) };
-        let obj = Objective::new(&self.problem, &sim, done, Some(&opened.journal), Some(&stop), self.max);
+        let mut obj = Objective::new(&self.problem, &sim, done, Some(&opened.journal), Some(&stop), self.max);
+        if let Some(f) = progress {
+            // Progress is best effort: an exception in it is printed, not raised.
+            obj.on_new = Some(Box::new(move |n, best, stage| {
+                Python::attach(|py| {
+                    if let Err(e) = f.call1(py, (n, best, stage.as_str())) {
+                        e.print(py);
+                    }
+                })
+            }));
+        }
         // The fit runs on its own thread; this one answers Ctrl-C (Python sees signals on
         // the main thread only).
         let mut interrupt = None;
@@ -169,6 +214,7 @@ impl Fit {
                     let path = opened.journal.path().to_path_buf();
                     drop(opened);
                     let _ = std::fs::remove_file(path);
+                    forget_input();
                 }
                 let err = failed(e);
                 err.set_cause(py, python_error);

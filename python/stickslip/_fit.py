@@ -15,7 +15,9 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 import tempfile
+import threading
 from dataclasses import dataclass
 from typing import Any, Callable, Optional, Sequence, Union
 
@@ -69,6 +71,39 @@ def simulator(client: Any, task: Callable[[str, str], float] = run_one) -> Calla
     return simulate
 
 
+class Progress:
+    """The default ``progress=`` of :func:`fit`: one line on stderr when the fit enters a
+    stage (the search for the optimum, the profiles) and when it ends, each with the
+    evaluations made and the best misfit so far; on a terminal the count is also updated
+    in place after every evaluation. Thread safe (the profiles' sides report at once)."""
+
+    def __init__(self, stream: Any = None, live: Optional[bool] = None) -> None:
+        self.stream = sys.stderr if stream is None else stream
+        self.live = self.stream.isatty() if live is None else live
+        self.stage: Optional[str] = None
+        self.last = (0, float("inf"))
+        self.lock = threading.Lock()
+
+    def _line(self, text: str) -> None:
+        self.stream.write(("\r\x1b[K" if self.live else "") + text + "\n")
+        self.stream.flush()
+
+    def __call__(self, evaluations: int, best: float, stage: str) -> None:
+        with self.lock:
+            if stage != self.stage:
+                self.stage = stage
+                n, b = self.last
+                self._line(f"stickslip.fit: {stage}" + (f" (after {n} evaluations, best misfit {b:.6e})" if n else ""))
+            self.last = (evaluations, best)
+            if self.live:
+                self.stream.write(f"\r\x1b[K  {stage}: {evaluations} evaluations, best misfit {best:.6e}")
+                self.stream.flush()
+
+    def done(self, evaluations: int) -> None:
+        with self.lock:
+            self._line(f"stickslip.fit: done, {evaluations} evaluations, best misfit {self.last[1]:.6e}")
+
+
 def fit(
     scene: SceneLike,
     data: Union[str, os.PathLike],
@@ -81,6 +116,7 @@ def fit(
     client: Any = None,
     n_workers: Optional[int] = None,
     run_task: Optional[Callable[[str, str], float]] = None,
+    progress: Union[None, bool, Callable[[int, float, str], None]] = None,
     **overrides: Any,
 ) -> FitResult:
     """Fits scene fields to a measured friction curve: ``stickslip fit`` from Python.
@@ -100,9 +136,13 @@ def fit(
     given), which is held while the fit runs as the command holds it. Every evaluation is
     appended to ``out/journal.jsonl``: calling the fit again with the same arguments
     after it was killed makes only the evaluations the journal lacks and gives the result
-    of an uninterrupted fit; it continues a journal of ``stickslip fit`` too (and
-    ``stickslip resume`` can not continue a Python fit's journal, which records no
-    command). Ctrl-C stops the fit after the evaluations in progress and raises
+    of an uninterrupted fit; it continues a journal of ``stickslip fit`` too, and
+    ``stickslip resume OUT`` continues a Python fit's journal (a new journal records the
+    ``stickslip fit`` command of the same fit, its scene written to ``out/input/``).
+    ``progress``: ``None`` (the default) shows progress on stderr when stderr is a
+    terminal, as the command does (:class:`Progress`: a line per stage, the count updated
+    in place); ``True`` always, ``False`` never; or a callable ``(evaluations,
+    best_misfit, stage)`` called after each new evaluation, from the fit's threads. Ctrl-C stops the fit after the evaluations in progress and raises
     ``KeyboardInterrupt``, the journal kept. A run that fails raises ``RuntimeError``
     with the command's message. ``run_task`` replaces the function a worker calls for a
     run (``(scene_toml, name) -> friction``); it must return what :func:`run_one` does.
@@ -128,7 +168,16 @@ def fit(
     directory = scratch.name if scratch is not None else os.fspath(out)
     try:
         os.makedirs(directory, exist_ok=True)
-        evaluations, made = plan.run(directory, simulator(client, run_task or run_one))
+        shown = None
+        if callable(progress):
+            report = progress
+        elif progress or (progress is None and sys.stderr.isatty()):
+            report = shown = Progress()
+        else:
+            report = None
+        evaluations, made = plan.run(directory, simulator(client, run_task or run_one), report)
+        if shown is not None:
+            shown.done(evaluations)
         with open(os.path.join(directory, "fit.json")) as f:
             record = json.load(f)
         with open(os.path.join(directory, "fit.toml")) as f:

@@ -111,6 +111,11 @@ class Fit:
     def runs_per_evaluation(self) -> int: ...
     @property
     def free(self) -> list[str]: ...
-    def run(self, out: str, simulate: Callable[[list[str], list[str]], list[float]]) -> tuple[int, int]:
+    def run(
+        self,
+        out: str,
+        simulate: Callable[[list[str], list[str]], list[float]],
+        progress: Optional[Callable[[int, float, str], None]] = None,
+    ) -> tuple[int, int]:
         """Runs the fit into the existing directory ``out`` (journal, lock, the four files);
         returns (evaluations, made now)."""

@@ -4,7 +4,8 @@ command's four files byte for byte (the runs are the same library calls on the s
 files and seeds, their frictions come back as the very floats, and the optimiser and
 profiles are the library's: nothing differs, so nothing is compared "to rounding"); a
 Python fit killed (SIGKILL) and called again continues its journal to the same files, and
-so does a fit that continues a killed command's journal; bad input is the command's
+so does a fit that continues a killed command's journal, and `stickslip resume` continues a
+killed Python fit's journal; progress is a line per stage on stderr; bad input is the command's
 one-line message as a ValueError, with nothing written."""
 
 from __future__ import annotations
@@ -22,28 +23,9 @@ import pytest
 
 import stickslip
 
-# 30 junctions on a kinematic plate, strong bonds, linear law: well under a millisecond a run.
-TINY = """
-[junctions]
-n = 30
-bond = "strong"
-force_law = "linear"
-kappa = 0.1
-lambda = 0.1
-k0 = 0.3
-kon0 = 0.3
-initial = "stationary"
-[plate]
-kinematic = true
-v = 1.0
-[run]
-engine = "exact"
-t_end = 200.0
-t_warmup = 20.0
-seed = 5
-[output]
-trace = false
-"""
+# The tiny scene tests/suite/fit.rs shares: 30 junctions on a kinematic plate, strong bonds,
+# linear law; well under a millisecond a run.
+TINY = (Path(__file__).resolve().parents[2] / "tests" / "fixtures" / "fit-tiny.toml").read_text()
 VELOCITIES = "0.1,0.3,1,3"
 FREE = "junctions.k0,junctions.kon0"
 # The kill tests fit one parameter (a tenth of the evaluations, each a round trip to Dask).
@@ -136,13 +118,21 @@ def kill_after(cmd: list, out: Path, lines: int) -> None:
     assert not (out / "fit.json").exists(), "killed before it finished"
 
 
-def test_a_killed_python_fit_continues_to_the_same_files(cli_fit_one, inputs, client, tmp_path):
+def killed_python_fit(inputs, tmp_path: Path, lines: int) -> Path:
+    """A Python fit of ONE into `tmp_path / "cut"`, SIGKILLed once its journal holds `lines`
+    lines."""
     scene, data = inputs
-    total = journal_lines(cli_fit_one)
     script = tmp_path / "killed.py"
     script.write_text(textwrap.dedent(KILLED))
     out = tmp_path / "cut"
-    kill_after([sys.executable, str(script), str(scene), str(data), ONE, str(out)], out, total // 3)
+    kill_after([sys.executable, str(script), str(scene), str(data), ONE, str(out)], out, lines)
+    return out
+
+
+def test_a_killed_python_fit_continues_to_the_same_files(cli_fit_one, inputs, client, tmp_path):
+    scene, data = inputs
+    total = journal_lines(cli_fit_one)
+    out = killed_python_fit(inputs, tmp_path, total // 3)
     kept = journal_lines(out) - 1
     r = stickslip.fit(scene, data, ONE, replicas=2, client=client, out=out)
     same_files(cli_fit_one, out)
@@ -160,6 +150,38 @@ def test_python_continues_a_killed_commands_journal(cli, cli_fit_one, inputs, cl
     r = stickslip.fit(scene, data, ONE, replicas=2, client=client, out=out)
     same_files(cli_fit_one, out)
     assert 0 < r.made < r.evaluations
+
+
+def test_stickslip_resume_continues_a_killed_python_fit(cli, cli_fit_one, inputs, tmp_path):
+    total = journal_lines(cli_fit_one)
+    out = killed_python_fit(inputs, tmp_path, total // 3)
+    # The journal records the command of the same fit, on the scene written into out/input.
+    assert (out / "input" / "tiny.toml").is_file()
+    p = cli("resume", out)
+    assert p.returncode == 0, p.stderr
+    same_files(cli_fit_one, out)
+    assert journal_lines(out) == total
+
+
+def test_progress_is_a_line_per_stage(inputs, client, tmp_path, capsys):
+    scene, data = inputs
+    seen = []
+    r = stickslip.fit(scene, data, ONE, replicas=2, client=client, out=tmp_path / "a",
+                      progress=lambda n, best, stage: seen.append((n, best, stage)))
+    assert [n for n, _, _ in seen] == list(range(1, r.evaluations + 1))
+    stages = [s for _, _, s in seen]
+    assert stages[0] == "search for the optimum" and stages[-1] == "profiles"
+    assert stages.count("search for the optimum") == r.record["evaluations_search"]
+    assert min(b for _, b, _ in seen) == seen[-1][1]
+    capsys.readouterr()
+    stickslip.fit(scene, data, ONE, replicas=2, client=client, out=tmp_path / "b", progress=True)
+    err = capsys.readouterr().err.splitlines()
+    assert err[0] == "stickslip.fit: search for the optimum"
+    assert err[1].startswith("stickslip.fit: profiles (after ") and err[2].startswith(f"stickslip.fit: done, {r.evaluations} evaluations")
+    assert len(err) == 3
+    # Off when stderr is not a terminal (as under pytest), as the command's.
+    stickslip.fit(scene, data, ONE, replicas=2, client=client, out=tmp_path / "c")
+    assert capsys.readouterr().err == ""
 
 
 def test_bad_input_is_the_commands_message_and_nothing_is_written(cli, inputs, client, tmp_path):

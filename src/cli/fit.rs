@@ -101,8 +101,9 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
         p
     });
     if let Some(p) = progress.clone() {
-        objective.on_new =
-            Some(Box::new(move |n, best| p.set_message(format!("{n} evaluations, best misfit {best:.6e}"))));
+        objective.on_new = Some(Box::new(move |n, best, stage| {
+            p.set_message(format!("{}: {n} evaluations, best misfit {best:.6e}", stage.as_str()))
+        }));
     }
     let started = std::time::Instant::now();
     let result = crate::fit::solve::fit(&objective);

@@ -1,22 +1,21 @@
 //! 95 % intervals by profile likelihood.
 //!
 //! For free parameter `j`, the profile `D_j(y) = min over the others of chi2 - chi2_min`
-//! (re-optimising the other parameters with `y_j` held, warm-started from the previous
-//! profile point) is followed from the optimum towards each bound, at unit-coordinate
-//! offsets [`OFFSETS`], until it exceeds the threshold (`chi2_1(0.95) = 3.84` with sigma
-//! given; `F_{1, n-p}(0.95)` with sigma estimated from the residuals); the crossing is then
-//! bracketed by [`BISECTIONS`] bisections and placed by linear interpolation between the
-//! bracketing profile points. A side that reaches its bound below the threshold gives the
+//! (re-optimising the other parameters with `y_j` held, warm-started from a linear
+//! prediction along the profile) is followed from the optimum towards each bound until it
+//! exceeds the threshold (`chi2_1(0.95) = 3.84` with sigma given; `F_{1, n-p}(0.95)` with
+//! sigma estimated from the residuals): a first point at [`FIRST_OFFSET`], then steps to
+//! where a profile rising as the square of the offset would cross the threshold
+//! ([`next_offset`]); the bracketed crossing is narrowed by at most [`REFINEMENTS`]
+//! root-find steps on `sqrt(rise)` and placed by interpolation of `sqrt(rise)` between the
+//! bracketing points ([`crossing`]; exact for a quadratic profile). A side that reaches
+//! its bound below the threshold gives the
 //! bound as the interval's end, flagged. A parameter both of whose sides reach their bounds
 //! is undetermined; one whose profile never rises by [`FLAT`] is flagged as having no
 //! visible effect on the data (a flat profile).
 
 use super::optimise::{Settings, minimise};
 
-/// Offsets from the optimum, in unit coordinates, at which a profile is followed outwards.
-pub const OFFSETS: [f64; 7] = [0.03, 0.08, 0.16, 0.3, 0.5, 0.75, 1.0];
-/// Bisections of the bracket around a crossing.
-pub const BISECTIONS: usize = 3;
 /// A profile that stays below this rise (chi2 units) over both bounds is flat.
 pub const FLAT: f64 = 0.1;
 
@@ -77,10 +76,13 @@ pub fn profile(
 }
 
 /// One side of parameter `j`'s profile: followed from the optimum towards the lower bound
-/// (`dir = -1`) or the upper one (`dir = 1`). It depends only on the misfit, not on what
-/// else runs meanwhile. Each profile point re-optimises the others until their simplex's
+/// (`dir = -1`) or the upper one (`dir = 1`), the crossing of the threshold found by a
+/// bracketing root-find on `sqrt(rise)` ([`next_offset`], [`crossing`]). It depends only
+/// on the misfit, not on what else runs meanwhile. Each profile point re-optimises the
+/// others, warm-started from a linear prediction along the profile, until their simplex's
 /// misfits spread less than `0.02 * unit` or `noise` (the misfit's simulation noise, below
-/// which a search follows noise), whichever is larger. `None` if an evaluation stopped it.
+/// which a search follows noise), whichever is larger, or [`INNER_ITERS_PER_PARAMETER`]
+/// iterations per other parameter. `None` if an evaluation stopped it.
 #[allow(clippy::too_many_arguments)]
 pub fn side(
     score: &(dyn Fn(&[f64]) -> Option<f64> + Sync),
@@ -95,10 +97,19 @@ pub fn side(
     let p = best.len();
     let others = |y: &[f64]| -> Vec<f64> { y.iter().enumerate().filter(|&(k, _)| k != j).map(|(_, &v)| v).collect() };
     let tolerance = (0.02 * unit).max(noise);
-    let settings = Settings { step: 0.03, tolerance, max_iters: 10 * (p as u64 - 1).max(1) + 5, unit };
+    let settings = Settings {
+        step: INNER_STEP.0,
+        tolerance,
+        max_iters: INNER_ITERS_PER_PARAMETER * (p as u64 - 1).max(1) + 5,
+        unit,
+    };
     let mut points = Vec::new();
-    // The rise at y_j = y, re-optimising the others from `warm`; returns (rise, others).
-    let mut at = |y: f64, warm: &[f64]| -> Option<(f64, Vec<f64>)> {
+    // The rise at y_j = y, re-optimising the others from `warm`, predicted from the profile
+    // point at `from`; returns (rise, others). The simplex is scaled to the step along the
+    // profile, so that it can follow a valley that the prediction misses.
+    let mut at = |y: f64, from: f64, warm: &[f64]| -> Option<(f64, Vec<f64>)> {
+        let step = (INNER_STEP_SCALE * (y - from).abs()).clamp(INNER_STEP.0, INNER_STEP.1);
+        let settings = Settings { step, ..settings };
         let held = |z: &[f64]| -> Option<f64> {
             let mut full = Vec::with_capacity(p);
             full.extend_from_slice(&z[..j]);
@@ -111,41 +122,85 @@ pub fn side(
         points.push((y, rise));
         Some((rise, z))
     };
-    let (mut y_in, mut d_in, mut z_in) = (best[j], 0.0, others(best));
+    // Offsets from the optimum towards the bound, which lies `room` away.
+    let room = if dir < 0.0 { best[j] } else { 1.0 - best[j] };
+    let to_y = |off: f64| (best[j] + dir * off).clamp(0.0, 1.0);
+    let (mut off_in, mut d_in, mut z_in) = (0.0, 0.0, others(best));
     // The previous inner point, for a linear prediction of the others along the profile.
     let mut prev: Option<(f64, Vec<f64>)> = None;
-    let mut end = None;
-    for off in OFFSETS {
-        let y = (best[j] + dir * off).clamp(0.0, 1.0);
-        if y == y_in {
-            break;
+    let mut off = FIRST_OFFSET.min(room);
+    // Outwards until the rise reaches the threshold or the bound is reached below it.
+    let (mut off_out, mut d_out) = loop {
+        if off <= off_in {
+            return Some(Side { end: None, points });
         }
-        let warm = predict(&prev, y_in, &z_in, y);
-        let (d, z) = at(y, &warm)?;
+        let warm = predict(&prev, to_y(off_in), &z_in, to_y(off));
+        let (d, z) = at(to_y(off), to_y(off_in), &warm)?;
         if d >= threshold {
-            let (mut y_out, mut d_out) = (y, d);
-            for _ in 0..BISECTIONS {
-                let mid = 0.5 * (y_in + y_out);
-                let warm = predict(&prev, y_in, &z_in, mid);
-                let (dm, zm) = at(mid, &warm)?;
-                if dm >= threshold {
-                    (y_out, d_out) = (mid, dm);
-                } else {
-                    prev = Some((y_in, z_in));
-                    (y_in, d_in, z_in) = (mid, dm, zm);
-                }
-            }
-            let frac = ((threshold - d_in) / (d_out - d_in)).clamp(0.0, 1.0);
-            end = Some(End { y: y_in + frac * (y_out - y_in), at_bound: false });
+            break (off, d);
+        }
+        prev = Some((to_y(off_in), std::mem::replace(&mut z_in, z)));
+        (off_in, d_in) = (off, d);
+        if off >= room {
+            return Some(Side { end: None, points });
+        }
+        off = next_offset(off, d, threshold).min(room);
+    };
+    // The bracket [off_in, off_out] narrowed by root-find steps while it is wide.
+    for _ in 0..REFINEMENTS {
+        if off_out - off_in <= BRACKET_WIDTH * off_out {
             break;
         }
-        prev = Some((y_in, std::mem::replace(&mut z_in, z)));
-        (y_in, d_in) = (y, d);
-        if y == 0.0 || y == 1.0 {
-            break;
+        let w = off_out - off_in;
+        let mid = crossing((off_in, d_in), (off_out, d_out), threshold).clamp(off_in + 0.1 * w, off_out - 0.1 * w);
+        let warm = predict(&prev, to_y(off_in), &z_in, to_y(mid));
+        let (dm, zm) = at(to_y(mid), to_y(off_in), &warm)?;
+        if dm >= threshold {
+            (off_out, d_out) = (mid, dm);
+        } else {
+            prev = Some((to_y(off_in), std::mem::replace(&mut z_in, zm)));
+            (off_in, d_in) = (mid, dm);
         }
     }
-    Some(Side { end, points })
+    let off = crossing((off_in, d_in), (off_out, d_out), threshold);
+    Some(Side { end: Some(End { y: to_y(off), at_bound: false }), points })
+}
+
+/// The first profile point's offset from the optimum (unit coordinates).
+pub const FIRST_OFFSET: f64 = 0.1;
+/// Growth of the offset outwards, at least and at most, per step.
+pub const GROWTH: (f64, f64) = (1.5, 4.0);
+/// The predicted crossing is overshot by this factor, so that one step brackets it.
+pub const OVERSHOOT: f64 = 1.15;
+/// Root-find steps that narrow a bracket of the crossing, at most.
+pub const REFINEMENTS: usize = 2;
+/// A bracket narrower than this fraction of its outer offset is not narrowed further.
+pub const BRACKET_WIDTH: f64 = 0.2;
+/// Iterations of a profile point's re-optimisation per other free parameter (plus five).
+pub const INNER_ITERS_PER_PARAMETER: u64 = 10;
+/// The initial simplex of a profile point's re-optimisation: this fraction of the step
+/// along the profile from the point its start was predicted from ...
+pub const INNER_STEP_SCALE: f64 = 0.5;
+/// ... kept within these sizes (unit coordinates).
+pub const INNER_STEP: (f64, f64) = (0.03, 0.1);
+
+/// The next offset outwards after a point at offset `off` with rise `d` below the
+/// threshold: where a profile rising as the square of the offset from the optimum would
+/// cross it, `off sqrt(threshold / d)`, overshot by [`OVERSHOOT`] and kept within
+/// [`GROWTH`] times `off`.
+pub fn next_offset(off: f64, d: f64, threshold: f64) -> f64 {
+    let predicted = if d > 0.0 { OVERSHOOT * off * (threshold / d).sqrt() } else { f64::INFINITY };
+    predicted.clamp(GROWTH.0 * off, GROWTH.1 * off)
+}
+
+/// Where `sqrt(rise)` crosses `sqrt(threshold)` on the line through two profile points
+/// `(offset, rise)` that bracket it (the first below, the second at or above): exact for a
+/// profile that rises as the square of the distance from a vertex on the optimum's side
+/// of both points (a rise below 0, from noise, counts as 0).
+pub fn crossing(inner: (f64, f64), outer: (f64, f64), threshold: f64) -> f64 {
+    let (a, b) = (inner.1.max(0.0).sqrt(), outer.1.max(0.0).sqrt());
+    let frac = if b > a { ((threshold.sqrt() - a) / (b - a)).clamp(0.0, 1.0) } else { 1.0 };
+    inner.0 + frac * (outer.0 - inner.0)
 }
 
 /// The interval from the two sides of a profile whose optimum is at `y_best`: the raw
@@ -250,5 +305,77 @@ mod tests {
         let h = |y: &[f64]| Some(if y[0] < 0.5 { ((y[0] - 0.5) / 0.05).powi(2) } else { 0.0 });
         let iv = profile(&h, &[0.5], 0.0, 1.0, t, 0).unwrap();
         assert!(!iv.low.at_bound && iv.high.at_bound && iv.determined(), "{iv:?}");
+    }
+
+    /// Counts the evaluations of `f`.
+    fn counted(
+        f: impl Fn(&[f64]) -> f64 + Sync,
+    ) -> (impl Fn(&[f64]) -> Option<f64> + Sync, std::sync::Arc<std::sync::atomic::AtomicUsize>) {
+        let n = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+        let m = n.clone();
+        (
+            move |y: &[f64]| {
+                m.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                Some(f(y))
+            },
+            n,
+        )
+    }
+
+    #[test]
+    fn the_root_find_places_a_quadratic_profiles_crossing_exactly() {
+        // sqrt(rise) is linear in the offset for a quadratic profile: the interpolation
+        // between any bracket on one side of the vertex gives the crossing.
+        let t = 3.841458820694124;
+        let c: f64 = 250.0;
+        let (a, b) = (0.07, 0.23);
+        let x = crossing((a, c * a * a), (b, c * b * b), t);
+        assert!((x - (t / c).sqrt()).abs() < 1e-12, "{x}");
+        // Vertex offset from the optimum (a noisy optimum): still exact.
+        let x = crossing((a, c * (a - 0.02f64).powi(2)), (b, c * (b - 0.02f64).powi(2)), t);
+        assert!((x - (0.02 + (t / c).sqrt())).abs() < 1e-12, "{x}");
+        // The step outwards: the predicted crossing overshot, within the growth limits.
+        assert!((next_offset(0.1, 1.0, 4.0) - OVERSHOOT * 0.2).abs() < 1e-12);
+        assert_eq!(next_offset(0.1, 0.0, 4.0), GROWTH.1 * 0.1);
+        assert_eq!(next_offset(0.1, 3.9, 4.0), GROWTH.0 * 0.1);
+    }
+
+    #[test]
+    fn a_correlated_quadratic_misfit_gives_its_analytic_profile_interval_in_few_points() {
+        // chi2 = d' C^-1 d for d = y - m, with C = [[s0^2, r s0 s1], [r s0 s1, s1^2]]: the
+        // profile of y0 is (y0 - m0)^2 / s0^2, so its 95 % interval is m0 +- s0 sqrt(t),
+        // whatever the correlation (the profile follows the valley: y1 moves with y0).
+        let t = 3.841458820694124;
+        let (m0, m1, s0, s1, r) = (0.45, 0.55, 0.08, 0.05, 0.9);
+        let det = 1.0 - r * r;
+        let (f, n) = counted(move |y: &[f64]| {
+            let (u, v) = ((y[0] - m0) / s0, (y[1] - m1) / s1);
+            (u * u - 2.0 * r * u * v + v * v) / det
+        });
+        let iv = profile(&f, &[m0, m1], 0.0, 1.0, t, 0).unwrap();
+        let half = s0 * t.sqrt();
+        // The inner optimum is found to the inner tolerance (0.02 in chi2): the ends within
+        // a rise of 0.02, i.e. 0.02 / (2 t) of the half width, plus the NM's resolution.
+        assert!(
+            (iv.low.y - (m0 - half)).abs() < 0.01 * half && (iv.high.y - (m0 + half)).abs() < 0.01 * half,
+            "{iv:?}"
+        );
+        assert!(iv.profile.len() <= 8, "{} profile points", iv.profile.len());
+        println!(
+            "{} evaluations for {} profile points",
+            n.load(std::sync::atomic::Ordering::Relaxed),
+            iv.profile.len()
+        );
+        // A profile rising as the cube of the offset: not quadratic, so the bracket is
+        // narrowed by the root-find; the raw crossings (before the smoothing parabola) are
+        // at +- (t / k)^(1/3).
+        let k: f64 = 2000.0;
+        let g = move |y: &[f64]| Some(k * (y[0] - 0.5).abs().powi(3));
+        let half = (t / k).cbrt();
+        for dir in [-1.0, 1.0] {
+            let s = side(&g, &[0.5], 0.0, 1.0, t, 0, dir, 0.0).unwrap();
+            let end = s.end.clone().unwrap();
+            assert!(((end.y - 0.5).abs() - half).abs() < 0.005 * half && s.points.len() <= 5, "{s:?}");
+        }
     }
 }

@@ -174,8 +174,31 @@ pub struct Objective<'a> {
     journal: Option<&'a Journal>,
     stop: Option<&'a StopFlag>,
     max: usize,
-    /// Called after each new evaluation with (evaluations so far, best score so far).
-    pub on_new: Option<Box<dyn Fn(usize, f64) + Sync + 'a>>,
+    /// Called after each new evaluation with (evaluations so far, best score so far, the
+    /// fit's stage).
+    pub on_new: Option<OnNew<'a>>,
+    stage: std::sync::atomic::AtomicU8,
+}
+
+/// A fit's progress report: (evaluations so far, best score so far, stage).
+pub type OnNew<'a> = Box<dyn Fn(usize, f64, Stage) + Sync + 'a>;
+
+/// The stage of a fit, for its progress.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// The search for the optimum.
+    Search,
+    /// The profiles of the intervals.
+    Profiles,
+}
+
+impl Stage {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Stage::Search => "search for the optimum",
+            Stage::Profiles => "profiles",
+        }
+    }
 }
 
 #[derive(Default)]
@@ -185,6 +208,8 @@ struct Cache {
     index: HashMap<Vec<u64>, usize>,
     /// How many of `list` were made by this process.
     new: usize,
+    /// Which of `list` this process has asked for (made, or taken from the journal).
+    asked: Vec<bool>,
     best: f64,
     error: Option<FitError>,
 }
@@ -208,16 +233,18 @@ impl<'a> Objective<'a> {
             cache.best = cache.best.min(problem.score(&e));
             cache.index.insert(key(&e.values), cache.list.len());
             cache.list.push(e);
+            cache.asked.push(false);
         }
-        Objective { problem, sim, state: Mutex::new(cache), journal, stop, max, on_new: None }
+        Objective { problem, sim, state: Mutex::new(cache), journal, stop, max, on_new: None, stage: 0.into() }
     }
 
     /// The evaluation at `values` (field values), made or taken from the cache.
     pub fn evaluate(&self, values: &[f64]) -> Result<Evaluation, FitError> {
         let k = key(values);
         {
-            let c = self.state.lock().unwrap_or_else(|p| p.into_inner());
+            let mut c = self.state.lock().unwrap_or_else(|p| p.into_inner());
             if let Some(&i) = c.index.get(&k) {
+                c.asked[i] = true;
                 return Ok(c.list[i].clone());
             }
             // Another search (a profile's side) has failed: stop this one too.
@@ -254,6 +281,7 @@ impl<'a> Objective<'a> {
         // Made meanwhile by another search (the same values give the same evaluation):
         // kept once.
         if let Some(&i) = c.index.get(&k) {
+            c.asked[i] = true;
             return Ok(c.list[i].clone());
         }
         let n = c.list.len();
@@ -263,11 +291,12 @@ impl<'a> Objective<'a> {
         c.best = c.best.min(p.score(&e));
         c.index.insert(k, n);
         c.list.push(e.clone());
+        c.asked.push(true);
         c.new += 1;
         let best = c.best;
         drop(c);
         if let Some(f) = &self.on_new {
-            f(n + 1, best);
+            f(n + 1, best, self.stage());
         }
         Ok(e)
     }
@@ -284,6 +313,16 @@ impl<'a> Objective<'a> {
         }
     }
 
+    /// The fit's stage, as [`Objective::set_stage`] last set it.
+    pub fn stage(&self) -> Stage {
+        if self.stage.load(std::sync::atomic::Ordering::Relaxed) == 0 { Stage::Search } else { Stage::Profiles }
+    }
+
+    /// Sets the fit's stage (for its progress).
+    pub fn set_stage(&self, stage: Stage) {
+        self.stage.store(u8::from(stage == Stage::Profiles), std::sync::atomic::Ordering::Relaxed);
+    }
+
     /// The first error met, if any.
     pub fn take_error(&self) -> Option<FitError> {
         self.state.lock().unwrap_or_else(|p| p.into_inner()).error.take()
@@ -292,6 +331,12 @@ impl<'a> Objective<'a> {
     /// Evaluations made (in this process or read from a journal).
     pub fn evaluations(&self) -> usize {
         self.state.lock().unwrap_or_else(|p| p.into_inner()).list.len()
+    }
+
+    /// Distinct evaluations asked for by this process (made, or taken from the journal): on
+    /// a resumed fit, as many as an uninterrupted one had made at the same stage.
+    pub fn asked(&self) -> usize {
+        self.state.lock().unwrap_or_else(|p| p.into_inner()).asked.iter().filter(|&&a| a).count()
     }
 
     /// Evaluations made by this process.

@@ -43,3 +43,42 @@ pub fn header(problem: &Problem, max: usize, command: Option<Invocation>) -> Hea
 pub fn data_name(data: &Path) -> String {
     data.file_name().map_or_else(|| data.display().to_string(), |n| n.to_string_lossy().into_owned())
 }
+
+/// The folder of a fit's output directory where a fit started without a command line
+/// (from Python) keeps its scene, for `stickslip resume`.
+pub const INPUT_DIR: &str = "input";
+
+/// What `stickslip resume DIR` needs of a fit started from Python: its scene (overrides
+/// applied) written whole to `DIR/input/<scene name>.toml` (the name is the file's stem,
+/// and the scene read back is the same scene: the journal's fingerprint holds), and the
+/// `stickslip fit` command line of the same fit on that file, with absolute paths.
+pub fn python_invocation(
+    problem: &Problem,
+    data: &Path,
+    free: &[String],
+    friction_scale: f64,
+    max: usize,
+    out: &Path,
+) -> std::io::Result<Invocation> {
+    let cwd = std::env::current_dir()?;
+    let absolute = |p: &Path| cwd.join(p).to_string_lossy().into_owned();
+    let dir = out.join(INPUT_DIR);
+    std::fs::create_dir_all(&dir)?;
+    let text = toml::to_string(&problem.base.to_file()).expect("a scene always serializes");
+    let scene = crate::output::atomic::write_whole(&dir, &format!("{}.toml", problem.base.name), text.as_bytes())?;
+    let mut argv: Vec<String> = vec!["stickslip".into(), "fit".into(), absolute(&scene), absolute(data)];
+    for f in free {
+        argv.extend(["--free".into(), f.clone()]);
+    }
+    argv.extend([
+        "--replicas".into(),
+        problem.replicas.to_string(),
+        "--friction-scale".into(),
+        friction_scale.to_string(),
+        "--max-evaluations".into(),
+        max.to_string(),
+        "--out".into(),
+        absolute(out),
+    ]);
+    Ok(Invocation { argv, cwd })
+}

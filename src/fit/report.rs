@@ -86,6 +86,8 @@ pub fn fit_json(prob: &Problem, r: &FitResult, data_path: &str) -> String {
         "band_threshold": num(r.band_threshold),
         "simulation_noise": num(r.noise_ratio),
         "evaluations": r.evaluations,
+        "evaluations_search": r.search_evaluations,
+        "evaluations_profiles": r.evaluations - r.search_evaluations,
     });
     let mut s = serde_json::to_string_pretty(&value).expect("JSON values serialize");
     s.push('\n');

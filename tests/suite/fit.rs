@@ -33,28 +33,10 @@ use stickslip::fit::solve::{FitResult, fit};
 
 const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
 
-/// The cheap scene; `k0` and `kon0` are the parameters fitted.
-const TINY: &str = r#"
-[junctions]
-n = 50
-bond = "strong"
-force_law = "linear"
-kappa = 0.1
-lambda = 0.1
-k0 = 0.3
-kon0 = 0.3
-initial = "stationary"
-[plate]
-kinematic = true
-v = 1.0
-[run]
-engine = "exact"
-t_end = 300.0
-t_warmup = 30.0
-seed = 5
-[output]
-trace = false
-"#;
+/// The tiny scene the Python tests share, `k0` and `kon0` the parameters fitted; these
+/// tests run it with 50 junctions and longer runs ([`SIZE`]).
+const TINY: &str = include_str!("../fixtures/fit-tiny.toml");
+const SIZE: [&str; 3] = ["junctions.n=50", "run.t_end=300", "run.t_warmup=30"];
 
 /// The truth and the measured velocities.
 const K0: f64 = 0.5;
@@ -62,7 +44,8 @@ const KON0: f64 = 0.2;
 const VELOCITIES: [f64; 6] = [0.1, 0.2, 0.5, 1.0, 2.0, 3.0];
 
 fn scene(overrides: &[String]) -> Scene {
-    Scene::from_toml_str(TINY, "tiny", "tiny", overrides).unwrap()
+    let all: Vec<String> = SIZE.iter().map(|s| s.to_string()).chain(overrides.iter().cloned()).collect();
+    Scene::from_toml_str(TINY, "tiny", "tiny", &all).unwrap()
 }
 
 /// The model's mean friction per junction at the truth at each velocity, over 32 replicas
@@ -218,7 +201,7 @@ fn coverage_over_200_seeds() {
 
 fn files(dir: &Path) -> (String, String) {
     let scene = dir.join("tiny.toml");
-    std::fs::write(&scene, TINY).unwrap();
+    std::fs::write(&scene, toml::to_string(&self::scene(&[]).to_file()).unwrap()).unwrap();
     let data = dir.join("data.csv");
     std::fs::write(&data, data_csv(&truth_curve(), 13)).unwrap();
     (scene.to_str().unwrap().to_string(), data.to_str().unwrap().to_string())
