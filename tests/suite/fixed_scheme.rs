@@ -357,7 +357,13 @@ fn threads_give_the_eager_reference_bit_for_bit() {
     impl Check<'_> {
         fn run<L: ForceLaw, B: Bond, R>(&self, law: L, bond: B, rng: R)
         where
-            R: UniformSource + Clone + std::fmt::Debug + serde::Serialize + serde::de::DeserializeOwned + Send + 'static,
+            R: UniformSource
+                + Clone
+                + std::fmt::Debug
+                + serde::Serialize
+                + serde::de::DeserializeOwned
+                + Send
+                + 'static,
         {
             let s = self.s;
             let mut r = Reference::new(s);
@@ -368,7 +374,8 @@ fn threads_give_the_eager_reference_bit_for_bit() {
                 want.push(r.sample());
             }
             for threads in [1, 2, 3] {
-                let ctx = format!("{} {} {:?} {:?} on {threads} threads", L::NAME, B::NAME, s.fixed.rng, s.fixed.integrator);
+                let ctx =
+                    format!("{} {} {:?} {:?} on {threads} threads", L::NAME, B::NAME, s.fixed.rng, s.fixed.integrator);
                 let mut e = fixed::FixedEngine::new(s, law, bond, rng.clone(), fixed::LinearFlip);
                 e.set_threads(threads);
                 let mut got = vec![e.sample()];
@@ -416,7 +423,9 @@ fn threads_give_the_eager_reference_bit_for_bit() {
                     ("linear", "strong", _) => {
                         check.run(Linear::from_scene(&s), Strong::from_scene(&s), ParkMiller::new(seed).unwrap())
                     }
-                    ("linear", _, _) => check.run(Linear::from_scene(&s), Weak::from_scene(&s), ParkMiller::new(seed).unwrap()),
+                    ("linear", _, _) => {
+                        check.run(Linear::from_scene(&s), Weak::from_scene(&s), ParkMiller::new(seed).unwrap())
+                    }
                     (_, "strong", _) => {
                         check.run(Tilted::from_scene(&s), Strong::from_scene(&s), ParkMiller::new(seed).unwrap())
                     }
@@ -440,13 +449,21 @@ fn run_output_does_not_depend_on_threads() {
             let mut args = vec!["run", "scenarios/fig1.toml", "--threads"];
             let t = threads.to_string();
             args.push(&t);
-            for set in [n.as_str(), &law, "fixed.dt=0.1", "run.t_end=5", "junctions.initial=stationary", "output.sample_dt=0.1"] {
+            for set in [
+                n.as_str(),
+                &law,
+                "fixed.dt=0.1",
+                "run.t_end=5",
+                "junctions.initial=stationary",
+                "output.sample_dt=0.1",
+            ] {
                 args.extend(["--set", set]);
             }
             let out = dir.path().join("out");
             let out_s = out.to_str().unwrap();
             args.extend(["--out", out_s]);
-            let o = std::process::Command::new(BIN).args(&args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
+            let o =
+                std::process::Command::new(BIN).args(&args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
             assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         }
         let read = |d: &tempfile::TempDir, f: &str| std::fs::read(d.path().join("out").join(f)).unwrap();

@@ -250,9 +250,8 @@ where
         let dx = self.pending_dx;
         if L::IS_LINEAR {
             // Detached junctions add +0.0: the sum of the attached `x_i + dX` in index order.
-            let chunk_sum = |(qs, xs): (&[u8], &[f64])| {
-                qs.iter().zip(xs).fold(0.0, |s, (&q, &x)| s + select(mask(q), x + dx, 0.0))
-            };
+            let chunk_sum =
+                |(qs, xs): (&[u8], &[f64])| qs.iter().zip(xs).fold(0.0, |s, (&q, &x)| s + select(mask(q), x + dx, 0.0));
             self.law.force_x(total(self.q.chunks(CHUNK).zip(self.x.chunks(CHUNK)).map(chunk_sum)))
         } else {
             self.attached_force(dx)

@@ -16,9 +16,9 @@ pub mod team;
 
 pub use chunk::CHUNK;
 pub use engine::{DIVERGENCE_LIMIT, FixedEngine};
-pub use team::PARALLEL_MIN;
 pub use flip::{AsPrintedFlip, ExponentialFlip, Flip, LinearFlip};
 pub use integrator::Integrator;
+pub use team::PARALLEL_MIN;
 
 use super::{EngineError, EngineVisitor};
 use crate::physics::{Bond, ForceLaw};
