@@ -36,6 +36,9 @@ pub enum Command {
         /// Write checkpoint.bin into the output directory at most every SECONDS of wall time, so that a killed run can be resumed.
         #[arg(long, value_name = "SECONDS", value_parser = resume::parse_seconds, allow_hyphen_values = true)]
         checkpoint_every: Option<f64>,
+        /// Threads the fixed-step engine shares each step's junctions among (default: all cores; large N only). The results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Continue a killed run from the checkpoint in its output directory, or a killed sweep or compare from its journal.
     Resume(resume::ResumeArgs),

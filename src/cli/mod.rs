@@ -50,8 +50,8 @@ pub fn main() -> ExitCode {
         }
     };
     let code = match cli.command {
-        Command::Run { scene, engine, seed, out, checkpoint_every } => {
-            run::run(&scene, engine, seed, out, checkpoint_every)
+        Command::Run { scene, engine, seed, out, checkpoint_every, threads } => {
+            run::run(&scene, engine, seed, out, checkpoint_every, threads)
         }
         Command::Resume(args) => {
             study_resume::resume(&args.dir, args.checkpoint_every).unwrap_or_else(|| resume::resume(&args))

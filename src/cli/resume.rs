@@ -35,7 +35,13 @@ pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
 
 /// Resumes a run (the dispatch tries [`super::study_resume::resume`] first).
 pub(crate) fn resume(args: &ResumeArgs) -> ExitCode {
-    let opts = RunOptions { checkpoint_every: args.checkpoint_every, progress: true, stop: None };
+    // All cores, as `run` by default: the results do not depend on it.
+    let opts = RunOptions {
+        checkpoint_every: args.checkpoint_every,
+        progress: true,
+        stop: None,
+        threads: rayon::current_num_threads(),
+    };
     // A directory that cannot be written, or that another run holds, is reported before
     // anything else is done; it is held until the run is done.
     let _held = match args.dir.is_dir().then(|| prepare_out_dir(&args.dir)).transpose() {

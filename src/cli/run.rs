@@ -16,7 +16,11 @@ pub(crate) fn run(
     seed: Option<u64>,
     out: Option<PathBuf>,
     checkpoint_every: Option<f64>,
+    threads: Option<usize>,
 ) -> ExitCode {
+    if threads == Some(0) {
+        return fail(EXIT_BAD_INPUT, "--threads = 0: must be at least 1");
+    }
     let mut extra = Vec::new();
     if let Some(e) = engine {
         extra.push(format!("run.engine={}", if matches!(e, EngineArg::Exact) { "exact" } else { "fixed" }));
@@ -41,7 +45,8 @@ pub(crate) fn run(
     if let Some(w) = super::stability::warning(&scene) {
         eprintln!("{w}");
     }
-    let opts = RunOptions { checkpoint_every, progress: true, stop: None };
+    let threads = threads.unwrap_or_else(rayon::current_num_threads);
+    let opts = RunOptions { checkpoint_every, progress: true, stop: None, threads };
     match run_scene_with(&scene, Some(&out), &opts).and_then(|s| draw_plot(&scene, &out).map(|()| s)) {
         Ok(s) => emit(&summary_lines(&s, &out)),
         Err(e) => {

@@ -97,6 +97,11 @@ pub trait Engine: Serialize + DeserializeOwned + Send + 'static {
     fn sample(&self) -> Sample;
     /// Counters so far.
     fn counters(&self) -> Counters;
+    /// Lets the engine share its work among `threads` threads (the caller's included) from
+    /// now on; `1` keeps it on the caller's. The results are the same for every count. Not
+    /// part of the engine's state (a deserialized engine runs on one thread until told).
+    /// The default ignores it: the fixed-step engine uses it ([`super::fixed::FixedEngine`]).
+    fn set_threads(&mut self, _threads: usize) {}
 }
 
 /// Something to do with an engine once its concrete type is known (a run, a resume, a bench).

@@ -21,6 +21,15 @@ pub trait UniformSource {
             *u = self.uniform();
         }
     }
+    /// Skips the next `n` draws: the generator ends where `n` calls of
+    /// [`UniformSource::uniform`] leave it. By default those calls; the named generators
+    /// jump ahead in `O(log n)`.
+    #[inline]
+    fn skip(&mut self, n: u64) {
+        for _ in 0..n {
+            self.uniform();
+        }
+    }
     /// Whether [`UniformSource::raws`] gives the draws on a scale of their own (then
     /// [`UniformSource::to_uniform`] and [`UniformSource::raw_partition`] say how it maps).
     /// `false`: the raw draws are the uniforms.
@@ -89,6 +98,11 @@ impl UniformSource for ParkMiller {
     fn to_uniform(r: f64) -> f64 {
         r / f64::from(ParkMiller::MODULUS)
     }
+    /// `s <- a^n s mod m` ([`ParkMiller::advance`]).
+    #[inline]
+    fn skip(&mut self, n: u64) {
+        self.advance(n);
+    }
     /// A binary search over the states `[0, 2^31 - 1]` (31 divisions).
     fn raw_partition(keep: impl Fn(f64) -> bool) -> f64 {
         let (mut lo, mut hi) = (0u32, ParkMiller::MODULUS + 1);
@@ -110,6 +124,11 @@ impl UniformSource for Pcg64 {
     fn uniform(&mut self) -> f64 {
         use rand::Rng;
         ((self.next_u64() >> 11) as f64 + 0.5) * (1.0 / (1u64 << 53) as f64)
+    }
+    /// One uniform is one output of the generator: the LCG's own jump ahead by `n` steps.
+    #[inline]
+    fn skip(&mut self, n: u64) {
+        self.advance(u128::from(n));
     }
 }
 
@@ -171,6 +190,23 @@ mod tests {
             let u = one.uniform();
             assert_eq!(ParkMiller::to_uniform(r).to_bits(), u.to_bits());
         }
+    }
+
+    /// Both named generators skip ahead to where as many single draws lead.
+    #[test]
+    fn skipping_is_drawing() {
+        fn check<R: UniformSource + Clone>(g: R) {
+            for n in [0u64, 1, 2, 17, 256, 4097] {
+                let (mut one, mut skipped) = (g.clone(), g.clone());
+                for _ in 0..n {
+                    one.uniform();
+                }
+                skipped.skip(n);
+                assert_eq!(skipped.uniform().to_bits(), one.uniform().to_bits(), "{n} draws");
+            }
+        }
+        check(ParkMiller::new(77).unwrap());
+        check(pcg(77));
     }
 
     #[test]

@@ -57,6 +57,21 @@ impl ParkMiller {
         r as u32
     }
 
+    /// Skips `n` draws: the state becomes the one `n` calls of [`ParkMiller::next_state`]
+    /// would leave, `s(k + n) = a^n s(k) mod m`, in `O(log n)` multiplications.
+    #[inline]
+    pub fn advance(&mut self, n: u64) {
+        let (mut r, mut b, mut e) = (1u32, Self::MULTIPLIER, n);
+        while e > 0 {
+            if e & 1 == 1 {
+                r = mul_mod(r, b);
+            }
+            b = mul_mod(b, b);
+            e >>= 1;
+        }
+        self.state = mul_mod(self.state, r);
+    }
+
     /// Fills `out` with the next `out.len()` states, in order: the numbers that as many
     /// calls of [`ParkMiller::next_state`] return, and the generator ends where they would
     /// leave it.
@@ -154,6 +169,27 @@ mod tests {
             g.next_state();
         }
         assert_eq!(g.state(), ParkMiller::jump(1000));
+    }
+
+    /// Skipping `n` draws lands where `n` single draws do, for every `n` up to a few
+    /// hundred and for large ones (against [`ParkMiller::jump`]).
+    #[test]
+    fn advance_is_that_many_draws() {
+        for seed in [1, 2_147_483_646, 987_654_321] {
+            let mut one = ParkMiller::new(seed).unwrap();
+            for n in 0..300u64 {
+                let mut skipped = ParkMiller::new(seed).unwrap();
+                skipped.advance(n);
+                assert_eq!(skipped, one, "seed {seed}, {n} draws");
+                one.next_state();
+            }
+            for n in [4096u64, 100_000, 1 << 40, u64::from(ParkMiller::MODULUS) - 1] {
+                let mut skipped = ParkMiller::new(seed).unwrap();
+                skipped.advance(n);
+                let want = u64::from(seed as u32) * u64::from(ParkMiller::jump(n)) % u64::from(ParkMiller::MODULUS);
+                assert_eq!(u64::from(skipped.state()), want, "seed {seed}, {n} draws");
+            }
+        }
     }
 
     #[test]

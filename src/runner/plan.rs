@@ -25,6 +25,9 @@ pub struct RunOptions {
     /// [`RunError::Stopped`](super::RunError::Stopped), after writing a checkpoint into the output directory (if it
     /// has one) from which `stickslip resume` continues it.
     pub stop: Option<StopFlag>,
+    /// Threads the engine may share its work among ([`Engine::set_threads`]); `0` and `1`
+    /// keep it on the run's own thread. The results are the same for every count.
+    pub threads: usize,
 }
 
 /// What a run is: its scene, where it writes, and how it is carried out.

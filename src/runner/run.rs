@@ -89,6 +89,7 @@ fn run_engine<E: Engine, X: EventObservers>(
     start: RunStart,
 ) -> Result<Summary, RunError> {
     let scene = plan.scene;
+    engine.set_threads(plan.opts.threads);
     let started = Instant::now();
     let (work0, unit) = work(&engine);
     let span = progress::Span { t0: engine.time(), t_end: scene.run.t_end, work0, unit };

@@ -121,6 +121,12 @@ impl Simulation {
         Ok(outcome)
     }
 
+    /// Shares the engine's work among `threads` threads from now on ([`Engine::set_threads`]):
+    /// the same results for every count.
+    pub fn set_threads(&mut self, threads: usize) {
+        self.engine.set_threads(threads);
+    }
+
     /// The engine's whole state (MessagePack, as in a checkpoint, tagged with the engine's
     /// type), for [`Simulation::from_state`].
     pub fn state(&self) -> Vec<u8> {
@@ -148,6 +154,7 @@ trait ErasedEngine: Send {
     fn advance(&mut self, t_stop: f64, obs: Observed<'_>) -> Result<(), EngineError>;
     fn drive(&mut self, walk: &mut Walk, obs: Observed<'_>, stop: Option<&StopFlag>) -> Result<Outcome, EngineError>;
     fn state(&self) -> Vec<u8>;
+    fn set_threads(&mut self, threads: usize);
 }
 
 impl<E: Engine> ErasedEngine for E {
@@ -189,6 +196,9 @@ impl<E: Engine> ErasedEngine for E {
                 drive_walk(self, walk, &mut recording(r, Some(c)), stop, nothing_at_stops)
             }
         }
+    }
+    fn set_threads(&mut self, threads: usize) {
+        Engine::set_threads(self, threads);
     }
     fn state(&self) -> Vec<u8> {
         let mut v = Vec::new();

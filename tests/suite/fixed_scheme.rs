@@ -148,15 +148,20 @@ impl Reference {
             BondKind::Weak => Weak::from_scene(&self.s).k_off(self.tension(x)),
         }
     }
-    /// `F_b` with every attached junction at `x_i + shift`. For a law with `f^x = kappa x`
-    /// the engine's documented closed form `f^x(sum_i q_i x_i)` is used.
+    /// `F_b` with every attached junction at `x_i + shift`, summed as documented: each
+    /// chunk of `CHUNK` junctions in index order, then the chunk sums in chunk order. For a
+    /// law with `f^x = kappa x` the engine's documented closed form `f^x(sum_i q_i x_i)` is used.
     fn bond_force(&self, shift: f64) -> f64 {
-        let attached = self.q.iter().zip(&self.x).filter(|(q, _)| **q).map(|(_, x)| x + shift);
-        if self.law.is_linear {
-            self.force_x(attached.fold(0.0, |a, x| a + x))
-        } else {
-            attached.fold(0.0, |a, x| a + self.force_x(x))
-        }
+        let chunk_sum = |(qs, xs): (&[bool], &[f64])| {
+            let attached = qs.iter().zip(xs).filter(|(q, _)| **q).map(|(_, x)| x + shift);
+            if self.law.is_linear {
+                attached.fold(0.0, |a, x| a + x)
+            } else {
+                attached.fold(0.0, |a, x| a + self.force_x(x))
+            }
+        };
+        let sum = self.q.chunks(fixed::CHUNK).zip(self.x.chunks(fixed::CHUNK)).map(chunk_sum).fold(0.0, |a, c| a + c);
+        if self.law.is_linear { self.force_x(sum) } else { sum }
     }
     fn sample(&self) -> Sample {
         let (p, t) = (&self.s.plate, self.n as f64 * self.s.fixed.dt);
@@ -329,6 +334,159 @@ fn engine_matches_an_eager_reference_bit_for_bit() {
             }
         }
     }
+}
+
+// ---------------------------------------------------------------------------------------
+// Threads: the pass shared by a team, at N above the threshold.
+
+/// A scene large enough for a team (`N > PARALLEL_MIN`, several chunks and a short last
+/// one), every law and bond kind, both inertial integrators (velocity Verlet sums `F_b`
+/// twice a step) and both generators: after every step the plate, `F_b` and the counters,
+/// and at the end every junction's `q_i` and `x_i`, are bit for bit those of the eager
+/// reference (one draw at a time, in index order, `F_b` summed chunk by chunk) on 1, 2 and
+/// 3 threads.
+#[test]
+fn threads_give_the_eager_reference_bit_for_bit() {
+    use stickslip::physics::{Linear, Tilted};
+    let n = fixed::PARALLEL_MIN + 2 * fixed::CHUNK + 123;
+    let steps = 6;
+    struct Check<'a> {
+        s: &'a Scene,
+        steps: usize,
+    }
+    impl Check<'_> {
+        fn run<L: ForceLaw, B: Bond, R>(&self, law: L, bond: B, rng: R)
+        where
+            R: UniformSource
+                + Clone
+                + std::fmt::Debug
+                + serde::Serialize
+                + serde::de::DeserializeOwned
+                + Send
+                + 'static,
+        {
+            let s = self.s;
+            let mut r = Reference::new(s);
+            let mut events = Vec::new();
+            let mut want = vec![r.sample()];
+            for _ in 0..self.steps {
+                r.step(&mut events);
+                want.push(r.sample());
+            }
+            for threads in [1, 2, 3] {
+                let ctx =
+                    format!("{} {} {:?} {:?} on {threads} threads", L::NAME, B::NAME, s.fixed.rng, s.fixed.integrator);
+                let mut e = fixed::FixedEngine::new(s, law, bond, rng.clone(), fixed::LinearFlip);
+                e.set_threads(threads);
+                let mut got = vec![e.sample()];
+                for k in 1..=self.steps {
+                    e.advance(k as f64 * s.fixed.dt, &mut Nothing).unwrap();
+                    got.push(e.sample());
+                }
+                assert_eq!(got, want, "{ctx}");
+                let c = e.counters();
+                let ruptures = events.iter().filter(|ev| ev.kind == EventKind::Rupture).count() as u64;
+                assert_eq!((c.ruptures, c.formations), (ruptures, events.len() as u64 - ruptures), "{ctx}");
+                for i in 0..s.junctions.n {
+                    assert_eq!(e.is_attached(i), r.q[i], "{ctx}: junction {i}");
+                    assert_eq!(e.extension(i).to_bits(), r.x[i].to_bits(), "{ctx}: junction {i}");
+                }
+            }
+        }
+    }
+    for extra in [
+        &["fixed.integrator=semi-implicit-euler"][..],
+        &["fixed.integrator=velocity-verlet"],
+        &["fixed.integrator=velocity-verlet", "fixed.rng=pcg"],
+    ] {
+        let n = format!("junctions.n={n}");
+        let mut o = vec![n.as_str(), "fixed.dt=0.1", "junctions.initial=stationary", "junctions.reattach=unstretched"];
+        o.extend_from_slice(extra);
+        for law in ["linear", "tilted"] {
+            for bond in ["strong", "weak"] {
+                let (law_o, bond_o) = (format!("junctions.force_law={law}"), format!("junctions.bond={bond}"));
+                let mut o = o.clone();
+                o.extend_from_slice(&[&law_o, &bond_o]);
+                let s = scene(&o);
+                // Linear law and velocity Verlet: the engine's closed form for F_b' differs
+                // from the reference's sum in rounding; the first-order scheme is compared.
+                if law == "linear" && s.fixed.integrator == IntegratorKind::VelocityVerlet {
+                    continue;
+                }
+                let check = Check { s: &s, steps };
+                let seed = s.run.seed;
+                match (law, bond, s.fixed.rng) {
+                    (_, _, RngKind::Pcg) if law == "tilted" && bond == "weak" => {
+                        check.run(Tilted::from_scene(&s), Weak::from_scene(&s), rng::pcg(seed))
+                    }
+                    (_, _, RngKind::Pcg) => continue,
+                    ("linear", "strong", _) => {
+                        check.run(Linear::from_scene(&s), Strong::from_scene(&s), ParkMiller::new(seed).unwrap())
+                    }
+                    ("linear", _, _) => {
+                        check.run(Linear::from_scene(&s), Weak::from_scene(&s), ParkMiller::new(seed).unwrap())
+                    }
+                    (_, "strong", _) => {
+                        check.run(Tilted::from_scene(&s), Strong::from_scene(&s), ParkMiller::new(seed).unwrap())
+                    }
+                    _ => check.run(Tilted::from_scene(&s), Weak::from_scene(&s), ParkMiller::new(seed).unwrap()),
+                }
+            }
+        }
+    }
+}
+
+/// `stickslip run --threads 1, 2, 3` write the same files, byte for byte (`summary.json`
+/// apart from `wall_seconds`), at `N` above the threshold; `--threads 0` is refused.
+#[test]
+fn run_output_does_not_depend_on_threads() {
+    const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
+    let n = format!("junctions.n={}", fixed::PARALLEL_MIN + fixed::CHUNK / 2);
+    let dirs: Vec<tempfile::TempDir> = (0..3).map(|_| tempfile::tempdir().unwrap()).collect();
+    for law in ["linear", "tilted"] {
+        for (threads, dir) in (1..=3).zip(&dirs) {
+            let law = format!("junctions.force_law={law}");
+            let mut args = vec!["run", "scenarios/fig1.toml", "--threads"];
+            let t = threads.to_string();
+            args.push(&t);
+            for set in [
+                n.as_str(),
+                &law,
+                "fixed.dt=0.1",
+                "run.t_end=5",
+                "junctions.initial=stationary",
+                "output.sample_dt=0.1",
+            ] {
+                args.extend(["--set", set]);
+            }
+            let out = dir.path().join("out");
+            let out_s = out.to_str().unwrap();
+            args.extend(["--out", out_s]);
+            let o =
+                std::process::Command::new(BIN).args(&args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        }
+        let read = |d: &tempfile::TempDir, f: &str| std::fs::read(d.path().join("out").join(f)).unwrap();
+        let summary = |d: &tempfile::TempDir| {
+            let mut v: serde_json::Value = serde_json::from_slice(&read(d, "summary.json")).unwrap();
+            assert!(v.as_object_mut().unwrap().remove("wall_seconds").is_some());
+            v
+        };
+        for d in &dirs[1..] {
+            let trace = read(d, "trace.csv");
+            assert!(trace.len() > 1000 && trace == read(&dirs[0], "trace.csv"), "{law}: trace.csv differs");
+            assert_eq!(summary(d), summary(&dirs[0]), "{law}");
+        }
+    }
+    let o = std::process::Command::new(BIN)
+        .args(["run", "scenarios/fig1.toml", "--threads", "0", "--out"])
+        .arg(dirs[0].path().join("refused"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(String::from_utf8_lossy(&o.stderr).trim().lines().count(), 1);
+    assert!(!dirs[0].path().join("refused").exists());
 }
 
 // ---------------------------------------------------------------------------------------

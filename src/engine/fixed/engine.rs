@@ -6,17 +6,22 @@
 //! single pass over the junctions (flips, rates and `F_b` in the same pass). The values are
 //! bit for bit those of the eager scheme; every read of `x_i` between steps
 //! ([`FixedEngine::extension`], [`Engine::sample`]) applies the pending update on the fly.
+//!
+//! The pass goes chunk by chunk ([`super::chunk`]); with a [`Team`] of threads
+//! ([`Engine::set_threads`]) the chunks are shared between them, with the same results.
 
 use std::marker::PhantomData;
 
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
+use super::chunk::{BLOCK, CHUNK, ChunkSums, StepParams, mask, pack_attached, pass_chunk, select, total};
 use super::flip::Flip;
 use super::integrator::{Integrator, PlateState};
+use super::team::Team;
 use crate::engine::alloc::{self, AllocError};
 use crate::engine::{Counters, Engine, EngineError};
-use crate::observe::{EventKind, JunctionEvent, Observer, Sample, Segment};
+use crate::observe::{Nothing, Observer, Sample, Segment};
 use crate::physics::{Bond, ForceLaw, Formation, Plate};
 use crate::rng::UniformSource;
 use crate::scene::{EngineKind, Initial, Reattach, Scene};
@@ -61,23 +66,10 @@ pub struct FixedEngine<L, B, R, F> {
     attached: u64,
     ruptures: u64,
     formations: u64,
+    /// The threads that share the pass ([`Engine::set_threads`]); not part of the state.
+    #[serde(skip)]
+    team: Option<Team>,
 }
-
-/// The mask of a junction state byte: `!0` for `q = 1`, `0` for `q = 0`.
-#[inline(always)]
-fn mask(q: u8) -> u64 {
-    u64::from(q).wrapping_neg()
-}
-
-/// `if mask == !0 { a } else { b }` on the bits, for a mask from [`mask`]: branch-free.
-#[inline(always)]
-fn select(mask: u64, a: f64, b: f64) -> f64 {
-    f64::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
-}
-
-/// Junctions per block of [`FixedEngine::junction_pass`]: the block's uniforms and terms
-/// of `F_b` (4 KiB) stay in the L1 cache.
-const BLOCK: usize = 256;
 
 /// What one pass over the junctions found.
 #[derive(Clone, Copy, Debug)]
@@ -144,6 +136,7 @@ where
             attached,
             ruptures: 0,
             formations: 0,
+            team: None,
         })
     }
 
@@ -178,90 +171,56 @@ where
     }
 
     /// Steps 1 and 2 in one pass over the junctions, after applying the previous step's
-    /// pending update (4) to each `x_i`:
-    /// `xi_i ~ U(0,1)`, one per junction in index order; `k = q_i ? k_off(f(x_i)) : k_on`;
-    /// flip per `F`; re-attachment rule; `F_b = sum_i q_i f^x(x_i)` with the new `q`.
+    /// pending update (4) to each `x_i`: `xi_i ~ U(0,1)`, one per junction in index order;
+    /// `k = q_i ? k_off(f(x_i)) : k_on`; flip per `F`; re-attachment rule;
+    /// `F_b = sum_i q_i f^x(x_i)` with the new `q`, summed chunk by chunk ([`total`]).
     ///
-    /// The junctions go in blocks of [`BLOCK`]: the block's draws are made at once, on the
-    /// generator's raw scale ([`UniformSource::raws`]: Park-Miller's states, several lanes
-    /// at once, the same numbers in the same order), then each junction is updated with no
-    /// dependence on its neighbours (the compiler vectorises it), and last the block's
-    /// terms of `F_b` are added to the sum one by one in index order, as a
-    /// junction-by-junction loop adds them. The thresholds shared by many junctions are
-    /// moved to the raw scale once per step ([`Flip::raw_threshold`], exact), so a draw is
-    /// compared without its division; a weak bond's own threshold is compared with the
-    /// draw's uniform ([`UniformSource::to_uniform`]).
+    /// Each chunk is [`pass_chunk`] from the generator's state at its first draw. Alone, or
+    /// when the observer wants events (reported in index order), the chunks go in order on
+    /// this thread and the generator runs through them; with a team, chunk `c` starts from
+    /// the step's state skipped by `c CHUNK` draws, the team's threads take the chunks, and
+    /// the generator then skips the step's `N` draws. The thresholds shared by many
+    /// junctions are moved to the raw scale once per step ([`Flip::raw_threshold`], exact),
+    /// so a draw is compared without its division.
     #[inline(always)]
     fn junction_pass<O: Observer>(&mut self, t: f64, on_threshold: f64, obs: &mut O) -> Pass {
-        let (dx, relax) = (self.pending_dx, self.pending_relax);
-        let (law, bond, dt) = (self.law, self.bond, self.dt);
-        let off_cut = F::raw_threshold::<R>(self.strong_off_threshold);
-        let on_cut = F::raw_threshold::<R>(on_threshold);
-        let unstretched = self.unstretched;
-        let rng = &mut self.rng;
-        let mut sum = 0.0;
-        let mut ruptures = 0u64;
-        let mut formations = 0u64;
-        // `q_i` is random, so a branch on it would be mispredicted about half the time.
-        // Every choice that depends on it is a bitwise select under a mask computed from
-        // the stored byte (`0` or `!0`), which the compiler cannot turn back into a branch.
-        let keep_formed = if unstretched { 0 } else { !0u64 };
-        let mut draws = [0.0; BLOCK];
-        // Linear law: `q_i x_i` per junction. Other laws: the attached junctions' `x_i`,
-        // packed in index order, then their `f^x(x_i)`.
-        let mut terms = [0.0; BLOCK];
-        for (block, (qs, xs)) in self.q.chunks_mut(BLOCK).zip(self.x.chunks_mut(BLOCK)).enumerate() {
-            let draws = &mut draws[..qs.len()];
-            rng.raws(draws);
-            let mut packed = 0;
-            for (j, ((qi, xi), &r)) in qs.iter_mut().zip(xs.iter_mut()).zip(draws.iter()).enumerate() {
-                let q_old = *qi;
-                let was = mask(q_old);
-                // Step n-1's update (4): x_i(t_n).
-                let x_n = select(was, *xi + dx, *xi * relax);
-                // Rates from the state at t_n; strong-bond thresholds are hoisted.
-                let flip = if B::IS_WEAK && q_old != 0 {
-                    F::flips(R::to_uniform(r), F::threshold(bond.k_off(law.tension(x_n)) * dt))
-                } else {
-                    F::flips(r, select(was, off_cut, on_cut))
-                };
-                let q_new = q_old ^ u8::from(flip);
-                let now = mask(q_new);
-                let formed = now & !was;
-                // Re-attachment: `x_i = 0` for a formation when `reattach = "unstretched"`.
-                let x_new = f64::from_bits(x_n.to_bits() & (keep_formed | !formed));
-                *xi = x_new;
-                *qi = q_new;
-                ruptures += u64::from(q_old & !q_new);
-                formations += u64::from(q_new & !q_old);
-                if L::IS_LINEAR {
-                    // A detached junction adds +0.0, which leaves the sum's bits unchanged
-                    // (the sum starts at +0.0, so it is never -0.0).
-                    terms[j] = select(now, x_new, 0.0);
-                } else {
-                    terms[packed] = x_new;
-                    packed += usize::from(q_new);
-                }
-                if O::EVENTS && flip {
-                    obs.event(&JunctionEvent {
-                        t,
-                        junction: (block * BLOCK + j) as u32,
-                        kind: if q_old != 0 { EventKind::Rupture } else { EventKind::Formation },
-                        extension: x_new,
-                        tension: law.tension(x_new),
-                    });
-                }
+        let params = StepParams {
+            law: self.law,
+            bond: self.bond,
+            dt: self.dt,
+            t,
+            dx: self.pending_dx,
+            relax: self.pending_relax,
+            off_cut: F::raw_threshold::<R>(self.strong_off_threshold),
+            on_cut: F::raw_threshold::<R>(on_threshold),
+            keep_formed: if self.unstretched { 0 } else { !0u64 },
+        };
+        let chunks = self.q.chunks_mut(CHUNK).zip(self.x.chunks_mut(CHUNK));
+        let sums: Vec<ChunkSums> = match &self.team {
+            Some(team) if !O::EVENTS => {
+                let mut start = self.rng.clone();
+                let items = chunks.map(|(qs, xs)| {
+                    let rng = start.clone();
+                    start.skip(qs.len() as u64);
+                    (rng, qs, xs)
+                });
+                let sums = team.map(items, |c, (mut rng, qs, xs)| {
+                    pass_chunk::<L, B, R, F, Nothing>(&params, &mut rng, qs, xs, c * CHUNK, &mut Nothing)
+                });
+                self.rng = start;
+                sums
             }
-            let terms = if L::IS_LINEAR {
-                &terms[..qs.len()]
-            } else {
-                law.force_x_many(&mut terms[..packed]);
-                &terms[..packed]
-            };
-            for &term in terms {
-                sum += term;
+            _ => {
+                let rng = &mut self.rng;
+                chunks
+                    .enumerate()
+                    .map(|(c, (qs, xs))| pass_chunk::<L, B, R, F, O>(&params, rng, qs, xs, c * CHUNK, obs))
+                    .collect()
             }
-        }
+        };
+        let sum = total(sums.iter().map(|c| c.sum));
+        let ruptures: u64 = sums.iter().map(|c| c.ruptures).sum();
+        let formations: u64 = sums.iter().map(|c| c.formations).sum();
         self.pending_dx = 0.0;
         self.pending_relax = 1.0;
         self.ruptures += ruptures;
@@ -269,7 +228,7 @@ where
         self.attached = self.attached + formations - ruptures;
         if L::IS_LINEAR {
             // f^x(x) = kappa x is linear, so sum_i q_i f^x(x_i) = f^x(sum_i q_i x_i).
-            Pass { bond_force: law.force_x(sum), attached_extension: sum }
+            Pass { bond_force: self.law.force_x(sum), attached_extension: sum }
         } else {
             Pass { bond_force: sum, attached_extension: f64::NAN }
         }
@@ -285,35 +244,42 @@ where
         }
     }
 
-    /// `F_b` at `t_n` from `(q, x)` before step `n`'s flips.
+    /// `F_b` at `t_n` from `(q, x)` before step `n`'s flips, summed chunk by chunk as the
+    /// pass sums it.
     fn bond_force_now(&self) -> f64 {
         let dx = self.pending_dx;
         if L::IS_LINEAR {
             // Detached junctions add +0.0: the sum of the attached `x_i + dX` in index order.
-            let sum = self.q.iter().zip(&self.x).fold(0.0, |s, (&q, &x)| s + select(mask(q), x + dx, 0.0));
-            self.law.force_x(sum)
+            let chunk_sum =
+                |(qs, xs): (&[u8], &[f64])| qs.iter().zip(xs).fold(0.0, |s, (&q, &x)| s + select(mask(q), x + dx, 0.0));
+            self.law.force_x(total(self.q.chunks(CHUNK).zip(self.x.chunks(CHUNK)).map(chunk_sum)))
         } else {
             self.attached_force(dx)
         }
     }
 
-    /// `sum_i q_i f^x(x_i + dx)`, added in index order: the attached junctions' `x_i + dx`
-    /// packed block by block and their forces evaluated together ([`ForceLaw::force_x_many`]).
+    /// `sum_i q_i f^x(x_i + dx)`, summed chunk by chunk as the pass sums it: the attached
+    /// junctions' `x_i + dx` packed block by block and their forces evaluated together
+    /// ([`ForceLaw::force_x_many`]); with a team, the chunks are shared between its threads.
     fn attached_force(&self, dx: f64) -> f64 {
-        let mut packed = [0.0; BLOCK];
-        let mut sum = 0.0;
-        for (qs, xs) in self.q.chunks(BLOCK).zip(self.x.chunks(BLOCK)) {
-            let mut k = 0;
-            for (&q, &x) in qs.iter().zip(xs) {
-                packed[k] = x + dx;
-                k += usize::from(q);
+        let law = self.law;
+        let chunk_sum = move |(qs, xs): (&[u8], &[f64])| {
+            let mut packed = [0.0; BLOCK];
+            let mut sum = 0.0;
+            for (qs, xs) in qs.chunks(BLOCK).zip(xs.chunks(BLOCK)) {
+                let k = pack_attached(qs, xs, dx, &mut packed);
+                law.force_x_many(&mut packed[..k]);
+                for &f in &packed[..k] {
+                    sum += f;
+                }
             }
-            self.law.force_x_many(&mut packed[..k]);
-            for &f in &packed[..k] {
-                sum += f;
-            }
+            sum
+        };
+        let chunks = self.q.chunks(CHUNK).zip(self.x.chunks(CHUNK));
+        match &self.team {
+            Some(team) => total(team.map(chunks, |_, chunk| chunk_sum(chunk))),
+            None => total(chunks.map(chunk_sum)),
         }
-        sum
     }
 
     /// The friction (driving-spring) force `F = K (V t_n - X_n)`.
@@ -402,6 +368,15 @@ where
         }
     }
 
+    /// A [`Team`] of `threads` threads shares each step's pass (and velocity Verlet's second
+    /// sum of `F_b`) from now on, when `N` is large enough to gain from it
+    /// ([`super::team::PARALLEL_MIN`]); a run that logs events keeps its pass on one thread.
+    fn set_threads(&mut self, threads: usize) {
+        if self.team.as_ref().map_or(1, Team::threads) != threads.max(1) {
+            self.team = Team::for_junctions(threads, self.q.len());
+        }
+    }
+
     fn counters(&self) -> Counters {
         Counters {
             ruptures: self.ruptures,
@@ -420,14 +395,6 @@ mod tests {
     use crate::physics::{Linear, Strong};
     use crate::rng::ParkMiller;
     use crate::test_scenes as testkit;
-
-    #[test]
-    fn masks_select_bit_exactly() {
-        assert_eq!((mask(1), mask(0)), (!0, 0));
-        assert_eq!(select(mask(1), -0.0, 1.0).to_bits(), (-0.0f64).to_bits());
-        assert_eq!(select(mask(0), f64::NAN, 2.5), 2.5);
-        assert!(select(mask(1), f64::NAN, 2.5).is_nan());
-    }
 
     #[test]
     fn pending_update_is_applied_on_every_read() {

@@ -2,18 +2,23 @@
 //! fixed-step engine").
 //!
 //! - [`dispatch`] resolves the scene's options into type parameters once per run;
-//! - [`engine`] holds the state and the step;
+//! - [`engine`] holds the state and the step, [`chunk`] the step's pass over one chunk of
+//!   junctions, [`team`] the threads that share the chunks;
 //! - [`flip`] the flip rules, [`integrator`] the plate integrators, [`stability`] their
 //!   stability limits at a scene's parameters (`stickslip stability`).
 
+pub mod chunk;
 pub mod engine;
 pub mod flip;
 pub mod integrator;
 pub mod stability;
+pub mod team;
 
+pub use chunk::CHUNK;
 pub use engine::{DIVERGENCE_LIMIT, FixedEngine};
 pub use flip::{AsPrintedFlip, ExponentialFlip, Flip, LinearFlip};
 pub use integrator::Integrator;
+pub use team::PARALLEL_MIN;
 
 use super::contract::{EngineError, EngineVisitor};
 use crate::physics::{Bond, ForceLaw};
