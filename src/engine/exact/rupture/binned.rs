@@ -134,10 +134,6 @@ pub struct BinnedRupture {
     /// recomputes only the rest: the same additions in the same order, so the same sums).
     #[serde(skip)]
     fresh: Fresh,
-    /// Which bins each term covers under the current bounds, and the terms' sums (a
-    /// function of the bins and the bounds, recomputed when they change).
-    #[serde(skip)]
-    split: Split,
     /// The next [`AHEAD`] candidates' tickets; `head` is the next one's.
     tickets: [Ticket; AHEAD],
     head: u8,
@@ -166,7 +162,6 @@ impl BinnedRupture {
             hi: HALF,
             cumulative: Vec::new(),
             fresh: Fresh(0),
-            split: Split::default(),
             tickets,
             head: 0,
             spare: Spares { buffers: Vec::new(), limit: n },
@@ -216,69 +211,58 @@ impl BinnedRupture {
     fn touched(&mut self, j: usize) {
         self.fresh.0 = if self.lo == self.hi || j < self.lo { 0 } else { self.fresh.0.min(j - self.lo) };
     }
-    /// The split of the bins between the terms under the current bounds (computed by the
-    /// last plan; recomputed from the bounds after a checkpoint is read).
+    /// `[W0, W1]`, the bins' bound sums.
     #[inline]
-    fn split(&mut self) -> Split {
-        if !self.split.valid {
-            self.split = split(&self.cumulative, self.lo, self.scale, self.h.y_lo, self.h.y_hi);
-        }
-        self.split
+    fn totals(&self) -> [f64; 2] {
+        self.cumulative.last().copied().unwrap_or([0.0; 2])
     }
-    /// The bin (index) of term `k` among the bins `start..end` (relative to `lo`) where the
-    /// running sum first exceeds `v` (`sum before start <= v < sum at end`); an empty bin
-    /// is never chosen (its sum equals its predecessor's), and a `v` at the end's sum by
-    /// round-off lands on the last occupied bin of the range.
+    /// The bin (index) of term `k` where the running sum first exceeds `v` (`0 <= v <
+    /// total`); an empty bin is never chosen (its sum equals its predecessor's), and a `v`
+    /// at the total by round-off lands on the last occupied bin.
     #[inline]
-    fn find(&self, k: usize, v: f64, start: usize, end: usize) -> usize {
-        let c = &self.cumulative[..end];
+    fn find(&self, k: usize, v: f64) -> usize {
+        let c = &self.cumulative;
         // The first entry above v: counted without branches over a few bins (the common
         // case), by bisection over many.
-        let i = start
-            + if end - start <= 32 {
-                c[start..].iter().map(|c| usize::from(c[k] <= v)).sum::<usize>()
-            } else {
-                c[start..].partition_point(|c| c[k] <= v)
-            };
-        if i < end {
+        let i = if c.len() <= 32 {
+            c.iter().map(|c| usize::from(c[k] <= v)).sum()
+        } else {
+            c.partition_point(|c| c[k] <= v)
+        };
+        if i < c.len() {
             return self.lo + i;
         }
         // Round-off: the last bin of positive weight.
-        let mut i = end - 1;
-        while i > start && c[i - 1][k] == c[i][k] {
+        let mut i = c.len() - 1;
+        while i > 0 && c[i - 1][k] == c[i][k] {
             i -= 1;
         }
         self.lo + i
     }
     /// The bin a candidate with uniform `u` would choose now, if any junction is binned.
     #[inline]
-    fn bin_for(&self, u: f64, split: Split) -> Option<usize> {
-        self.bin_for_hinted(u, u32::MAX, split)
+    fn bin_for(&self, u: f64) -> Option<usize> {
+        self.bin_for_hinted(u, u32::MAX)
     }
     /// [`BinnedRupture::bin_for`], trying the bin `hint` first: it is the answer if the
     /// running sums cross the candidate's value there (the sums are non-decreasing, so the
     /// first entry above the value is unique), which two comparisons tell, else the sums are
     /// searched. The same bin either way.
     #[inline]
-    fn bin_for_hinted(&self, u: f64, hint: u32, split: Split) -> Option<usize> {
-        let (m, p) = self.h.terms(split.w);
+    fn bin_for_hinted(&self, u: f64, hint: u32) -> Option<usize> {
+        let (m, p) = self.h.terms(self.totals());
         // Also `None` for a NaN total.
         if (m + p).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return None;
         }
         let u = u * (m + p);
-        let n = self.cumulative.len();
-        let (k, v, start, end) = if u < m || split.start1 >= n {
-            (0, u / self.h.e_hi, 0, split.end0)
-        } else {
-            (1, (u - m) / self.h.e_lo + split.base1, split.start1, n)
-        };
+        let (k, v) = if u < m { (0, u / self.h.e_hi) } else { (1, (u - m) / self.h.e_lo) };
         let c = &self.cumulative;
         let i = (hint as usize).wrapping_sub(self.lo);
-        if start <= i && i < end && v < c[i][k] && (i == start || c[i - 1][k] <= v) {
+        if i < c.len() && v < c[i][k] && (i == 0 || c[i - 1][k] <= v) {
             return Some(self.lo + i);
         }
-        Some(self.find(k, v, start, end))
+        Some(self.find(k, v))
     }
     /// Adds the junction in `slot` with anchor `c` to its bin, and records its position.
     fn insert(&mut self, attached: &mut [Attached], slot: usize, c: f64) {
@@ -320,55 +304,6 @@ impl BinnedRupture {
         let unbinned = attached.iter().filter(|a| a.bin == UNBINNED).count();
         assert_eq!(members + unbinned, attached.len());
     }
-}
-
-/// Which bins each term of the bound covers under bounds `[y_lo, y_hi]`, as indices
-/// relative to `lo`: term 0 (`exp(a y_hi) U0_j`, the bound on `exp(a (y - c))`) the bins
-/// `..end0`, term 1 (`exp(-a y_lo) U1_j`, on `exp(a (c - y))`) the bins `start1..`. A bin
-/// whose anchors all lie above `y_hi` (its index above that of `y_hi`: `floor(c a / h)`
-/// is monotone in `c`, so `c > y_hi >= y` for each member) ruptures at `exp(a (c - y))`,
-/// which term 1 bounds alone; one whose anchors all lie below `y_lo`, at `exp(a (y - c))`,
-/// bounded by term 0 alone. Every bin is in one term at least (`y_lo <= y_hi`). `w` is
-/// `[W0, W1]` over the covered bins, `base1` the running sum of term 1 before `start1`.
-#[derive(Clone, Copy, Debug, Default)]
-struct Split {
-    valid: bool,
-    end0: usize,
-    start1: usize,
-    w: [f64; 2],
-    base1: f64,
-}
-
-impl PartialEq for Split {
-    /// A cache of the bins and the bounds: any two compare equal.
-    fn eq(&self, _: &Split) -> bool {
-        true
-    }
-}
-
-/// The [`Split`] of the bins `lo..lo + cumulative.len()` with running sums `cumulative` at
-/// bounds `[y_lo, y_hi]` (`scale = a / h`); both terms over every bin when the bounds are not
-/// ordered numbers or `a` is not positive.
-fn split(cumulative: &[[f64; 2]], lo: usize, scale: f64, y_lo: f64, y_hi: f64) -> Split {
-    let n = cumulative.len();
-    let (mut end0, mut start1) = (n, 0);
-    if scale > 0.0 && y_lo <= y_hi {
-        // The bin index of `y` relative to `lo`, saturating (the bounds need not be finite).
-        let rel = |y: f64| -> i64 {
-            let t = y * scale;
-            let mut j = t as i64;
-            if (j as f64) > t {
-                j -= 1;
-            }
-            j.saturating_add(HALF as i64).saturating_sub(lo as i64)
-        };
-        end0 = rel(y_hi).saturating_add(1).clamp(0, n as i64) as usize;
-        start1 = rel(y_lo).clamp(0, n as i64) as usize;
-    }
-    let w0 = if end0 > 0 { cumulative[end0 - 1][0] } else { 0.0 };
-    let base1 = if start1 > 0 { cumulative[start1 - 1][1] } else { 0.0 };
-    let w1 = if start1 < n { cumulative[n - 1][1] - base1 } else { 0.0 };
-    Split { valid: true, end0, start1, w: [w0, w1], base1 }
 }
 
 /// The number of leading running sums of [`BinnedRupture`] that still hold: a cache of
@@ -498,16 +433,10 @@ impl RuptureModel for BinnedRupture {
             }
         }
     }
-    /// The running sums are brought up to date, and split between the terms at the
-    /// horizon's bounds.
     fn plan(&mut self, bounds: impl FnMut(f64) -> (f64, f64), n_att: usize) -> Plan {
         self.sum_up();
-        self.split.valid = false;
-        let (c, lo, scale, out) = (&self.cumulative, self.lo, self.scale, &mut self.split);
-        self.h.plan(bounds, n_att, self.k0, self.a, |y_lo, y_hi| {
-            *out = split(c, lo, scale, y_lo, y_hi);
-            out.w
-        })
+        let w = self.totals();
+        self.h.plan(bounds, n_att, self.k0, self.a, w)
     }
     /// The bins' sums are recomputed here (the attached junctions may have changed since the
     /// last step).
@@ -515,8 +444,7 @@ impl RuptureModel for BinnedRupture {
     fn bound(&mut self, y_lo: f64, y_hi: f64) -> f64 {
         self.sum_up();
         self.h.set_bounds(self.a, y_lo, y_hi);
-        self.split = split(&self.cumulative, self.lo, self.scale, y_lo, y_hi);
-        let (m, p) = self.h.terms(self.split.w);
+        let (m, p) = self.h.terms(self.totals());
         self.k0 * (m + p)
     }
     #[inline]
@@ -534,18 +462,13 @@ impl RuptureModel for BinnedRupture {
         let t = self.tickets[h];
         self.tickets[h] = Ticket::draw(rng);
         self.head = ((h + 1) & (AHEAD - 1)) as u8;
-        let split = self.split();
-        let j = self.bin_for_hinted(t.u, t.hint, split).expect("a rupture candidate with no binned junction");
+        let j = self.bin_for_hinted(t.u, t.hint).expect("a rupture candidate with no binned junction");
         let bin = &self.bins[j];
         let m = bin.members[index(t.pick, bin.members.len())];
         let (e_hi, e_lo) = (self.h.e_hi, self.h.e_lo);
         let u = bin.bound;
-        self.request(attached, split);
-        // The bin's bound: the terms that cover it.
-        let i = j - self.lo;
-        let b0 = if i < split.end0 { e_hi * u[0] } else { 0.0 };
-        let b1 = if i >= split.start1 { e_lo * u[1] } else { 0.0 };
-        let ub = rng.uniform() * (b0 + b1);
+        self.request(attached);
+        let ub = rng.uniform() * (e_hi * u[0] + e_lo * u[1]);
         let slot = m.slot as usize;
         law.accept(ub, [1.0 / m.e, m.e], e_hi, e_lo, self.a, y, || attached[slot].c).then_some(slot)
     }
@@ -612,10 +535,10 @@ impl BinnedRupture {
     /// candidates ago, is read now). The addresses need not be valid (a prefetch never
     /// faults).
     #[inline(always)]
-    fn request(&mut self, attached: &[Attached], split: Split) {
+    fn request(&mut self, attached: &[Attached]) {
         let b = (self.head as usize + AHEAD - 1) & (AHEAD - 1);
         let back = self.tickets[b];
-        if let Some(j) = self.bin_for(back.u, split) {
+        if let Some(j) = self.bin_for(back.u) {
             self.tickets[b].hint = j as u32;
             let bin = &self.bins[j];
             let n = bin.members.len();

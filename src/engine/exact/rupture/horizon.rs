@@ -149,9 +149,7 @@ impl Horizon {
         (self.e_hi * w[0], self.e_lo * w[1])
     }
     /// The candidate rate `B = k0 (exp(a y_hi) W0 + exp(-a y_lo) W1)` over the plate's path
-    /// from now (`bounds(h)`: its proven bounds over the next `h`), for `n_att` attached
-    /// junctions whose weights sum to `w(y_lo, y_hi)` (a model may leave out of `W0` the
-    /// junctions anchored above `y_hi`, out of `W1` those below `y_lo`), and its
+    /// from now (`bounds(h)`: its proven bounds over the next `h`), for `n_att` attached junctions whose weights sum to `w`, and its
     /// horizon: the longest (within a factor 2) whose spread `a (y_hi - y_lo)` is at most
     /// [`SPREAD`] and that covers about [`CANDIDATES_PER_HORIZON`] candidates at the last rate.
     pub fn plan(
@@ -160,7 +158,7 @@ impl Horizon {
         n_att: usize,
         k0: f64,
         a: f64,
-        w: impl FnOnce(f64, f64) -> [f64; 2],
+        w: [f64; 2],
     ) -> Plan {
         self.immediate = false;
         self.bounding = false;
@@ -171,7 +169,7 @@ impl Horizon {
             // Constant rate k0: the bound is exact up to the factor of its two terms (2 with
             // the tree's weights, about 2.2 with the bins' bounds).
             self.set_bounds(a, 0.0, 0.0);
-            let (m, p) = self.terms(w(0.0, 0.0));
+            let (m, p) = self.terms(w);
             return Plan { rate: k0 * (m + p), horizon: f64::INFINITY };
         }
         let cap =
@@ -195,7 +193,7 @@ impl Horizon {
         self.horizon = h;
         self.set_grid_bounds(a, b.0, b.1);
         self.bounding = true;
-        let (m, p) = self.terms(w(b.0, b.1));
+        let (m, p) = self.terms(w);
         let rate = k0 * (m + p);
         if a * (b.1 - b.0) > SPREAD || !rate.is_finite() {
             // Not even HORIZON_MIN resolves the rates (the plate crosses more than 1/a in

@@ -67,8 +67,7 @@ impl RuptureModel for TreeRupture {
         self.tree.swap_remove(slot, last);
     }
     fn plan(&mut self, bounds: impl FnMut(f64) -> (f64, f64), n_att: usize) -> Plan {
-        let w = self.tree.total();
-        self.h.plan(bounds, n_att, self.k0, self.a, |_, _| w)
+        self.h.plan(bounds, n_att, self.k0, self.a, self.tree.total())
     }
     #[inline]
     fn bound(&mut self, y_lo: f64, y_hi: f64) -> f64 {
