@@ -129,11 +129,6 @@ pub struct BinnedRupture {
     /// by [`BinnedRupture::plan`] after every event (never accumulated across events); their
     /// last entry is `[W0, W1]`.
     cumulative: Vec<[f64; 2]>,
-    /// How many leading entries of `cumulative` still hold for the current bins (those
-    /// below the lowest bin changed since the last [`BinnedRupture::sum_up`], which
-    /// recomputes only the rest: the same additions in the same order, so the same sums).
-    #[serde(skip)]
-    fresh: Fresh,
     /// The next [`AHEAD`] candidates' tickets; `head` is the next one's.
     tickets: [Ticket; AHEAD],
     head: u8,
@@ -161,7 +156,6 @@ impl BinnedRupture {
             lo: HALF,
             hi: HALF,
             cumulative: Vec::new(),
-            fresh: Fresh(0),
             tickets,
             head: 0,
             spare: Spares { buffers: Vec::new(), limit: n },
@@ -192,24 +186,15 @@ impl BinnedRupture {
         }
         (j + HALF as i64) as usize
     }
-    /// Recomputes the running sums over the occupied bins from their counts, from the
-    /// lowest bin changed since the last call on ([`Fresh`]).
+    /// Recomputes the running sums over the occupied bins from their counts.
     fn sum_up(&mut self) {
-        let keep = self.fresh.0.min(self.hi - self.lo).min(self.cumulative.len());
-        self.cumulative.truncate(keep);
-        let mut acc = self.cumulative.last().copied().unwrap_or([0.0f64; 2]);
-        for bin in &self.bins[self.lo + keep..self.hi] {
+        self.cumulative.clear();
+        let mut acc = [0.0f64; 2];
+        for bin in &self.bins[self.lo..self.hi] {
             let (n, u) = (count(bin.members.len()), bin.bound);
             acc = [acc[0] + n * u[0], acc[1] + n * u[1]];
             self.cumulative.push(acc);
         }
-        self.fresh.0 = self.hi - self.lo;
-    }
-    /// Bin `j`'s count changed: the running sums from it on are stale. Called before `lo`
-    /// moves (a bin below the old `lo`, or a new `lo`, makes them all stale).
-    #[inline]
-    fn touched(&mut self, j: usize) {
-        self.fresh.0 = if self.lo == self.hi || j < self.lo { 0 } else { self.fresh.0.min(j - self.lo) };
     }
     /// `[W0, W1]`, the bins' bound sums.
     #[inline]
@@ -242,27 +227,13 @@ impl BinnedRupture {
     /// The bin a candidate with uniform `u` would choose now, if any junction is binned.
     #[inline]
     fn bin_for(&self, u: f64) -> Option<usize> {
-        self.bin_for_hinted(u, u32::MAX)
-    }
-    /// [`BinnedRupture::bin_for`], trying the bin `hint` first: it is the answer if the
-    /// running sums cross the candidate's value there (the sums are non-decreasing, so the
-    /// first entry above the value is unique), which two comparisons tell, else the sums are
-    /// searched. The same bin either way.
-    #[inline]
-    fn bin_for_hinted(&self, u: f64, hint: u32) -> Option<usize> {
         let (m, p) = self.h.terms(self.totals());
         // Also `None` for a NaN total.
         if (m + p).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return None;
         }
         let u = u * (m + p);
-        let (k, v) = if u < m { (0, u / self.h.e_hi) } else { (1, (u - m) / self.h.e_lo) };
-        let c = &self.cumulative;
-        let i = (hint as usize).wrapping_sub(self.lo);
-        if i < c.len() && v < c[i][k] && (i == 0 || c[i - 1][k] <= v) {
-            return Some(self.lo + i);
-        }
-        Some(self.find(k, v))
+        Some(if u < m { self.find(0, u / self.h.e_hi) } else { self.find(1, (u - m) / self.h.e_lo) })
     }
     /// Adds the junction in `slot` with anchor `c` to its bin, and records its position.
     fn insert(&mut self, attached: &mut [Attached], slot: usize, c: f64) {
@@ -274,7 +245,6 @@ impl BinnedRupture {
             grow(&mut bin.members, &mut self.spare);
         }
         bin.members.push(m);
-        self.touched(j);
         if self.lo == self.hi {
             (self.lo, self.hi) = (j, j + 1);
         } else {
@@ -303,18 +273,6 @@ impl BinnedRupture {
         }
         let unbinned = attached.iter().filter(|a| a.bin == UNBINNED).count();
         assert_eq!(members + unbinned, attached.len());
-    }
-}
-
-/// The number of leading running sums of [`BinnedRupture`] that still hold: a cache of
-/// the bins' state, not state itself (a checkpoint recomputes them all; any two compare
-/// equal).
-#[derive(Clone, Copy, Debug, Default)]
-struct Fresh(usize);
-
-impl PartialEq for Fresh {
-    fn eq(&self, _: &Fresh) -> bool {
-        true
     }
 }
 
@@ -409,7 +367,6 @@ impl RuptureModel for BinnedRupture {
             return;
         }
         let j = self.bin_of(a.c);
-        self.touched(j);
         let bin = &mut self.bins[j];
         let p = a.bin as usize;
         bin.members.swap_remove(p);
@@ -421,10 +378,6 @@ impl RuptureModel for BinnedRupture {
         } else {
             // An emptied bin's buffer becomes a spare (the anchors drift through the bins).
             self.spare.keep(std::mem::take(&mut bin.members));
-            if j == self.lo {
-                // The sums are indexed from `lo`, which moves.
-                self.fresh.0 = 0;
-            }
             while self.lo < self.hi && self.bins[self.lo].members.is_empty() {
                 self.lo += 1;
             }
@@ -462,7 +415,7 @@ impl RuptureModel for BinnedRupture {
         let t = self.tickets[h];
         self.tickets[h] = Ticket::draw(rng);
         self.head = ((h + 1) & (AHEAD - 1)) as u8;
-        let j = self.bin_for_hinted(t.u, t.hint).expect("a rupture candidate with no binned junction");
+        let j = self.bin_for(t.u).expect("a rupture candidate with no binned junction");
         let bin = &self.bins[j];
         let m = bin.members[index(t.pick, bin.members.len())];
         let (e_hi, e_lo) = (self.h.e_hi, self.h.e_lo);
@@ -486,7 +439,6 @@ impl RuptureModel for BinnedRupture {
             }
         }
         (self.lo, self.hi) = (HALF, HALF);
-        self.fresh.0 = 0;
         // The new bins' counts over the range they span (not the whole table), then a buffer
         // for each that holds its count.
         let a = self.a;
