@@ -59,34 +59,36 @@ pub fn phi_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
     };
     let a = -law.kappa * l0;
     out[0] = -a * t;
-    // One pass, without an array of the `P_k` (as `phi_taylor_lanes`): at odd `k`, `phi_k`
-    // needs `P_(k-1)` and `Q_k = P_k / t`, `phi_(k+1)` needs `Q_k` and `P_(k+1)`; then the
-    // two chains step to `P_(k+3)` and `Q_(k+2)`. phi_k = a R^-k (P_(k-1) - t P_k): odd k:
-    // P_(k-1) - s Q_k; even k: t (Q_(k-1) - P_k).
-    let (mut pm, mut pp, mut qm, mut qc) = (1.0, 1.5 * s - 0.5, 0.0, 1.0);
+    // pk[k] = P_k (even k), P_k / t (odd k), k <= n.
+    let mut pk = [0.0; PMAX + 3];
+    pk[0] = 1.0;
+    pk[1] = 1.0;
+    pk[2] = 1.5 * s - 0.5;
+    pk[3] = 2.5 * s - 1.5;
+    let (mut e0, mut e1, mut o0, mut o1) = (pk[0], pk[2], pk[1], pk[3]);
+    let mut k = 2;
+    while k + 2 < n {
+        let [al, be, ga] = LEGENDRE2[k];
+        let ne = (al * s - be) * e1 - ga * e0;
+        let [al, be, ga] = LEGENDRE2[k + 1];
+        let no = (al * s - be) * o1 - ga * o0;
+        (e0, e1, o0, o1) = (e1, ne, o1, no);
+        pk[k + 2] = ne;
+        pk[k + 3] = no;
+        k += 2;
+    }
+    // phi_k = a R^-k (P_(k-1) - t P_k): odd k: P_(k-1) - s Q_k; even k: t (Q_(k-1) - P_k).
     let (mut so, mut se) = (a * inv_r, a * inv_u);
     let mut k = 1;
-    while k < n {
-        out[k] = so * (pm - s * qc);
-        if k + 1 == n {
-            break;
-        }
-        out[k + 1] = se * (t * (qc - pp));
-        if k + 2 >= n {
-            break;
-        }
+    while k + 1 < n {
+        out[k] = so * (pk[k - 1] - s * pk[k]);
+        out[k + 1] = se * (t * (pk[k] - pk[k + 1]));
         so *= inv_u;
         se *= inv_u;
-        let [ae, be, ge] = LEGENDRE2[k + 1];
-        let pn = (ae * s - be) * pp - ge * pm;
-        let qn = if k == 1 {
-            2.5 * s - 1.5
-        } else {
-            let [ao, bo, go] = LEGENDRE2[k];
-            (ao * s - bo) * qc - go * qm
-        };
-        (pm, pp, qm, qc) = (pp, pn, qc, qn);
         k += 2;
+    }
+    if k < n {
+        out[k] = so * (pk[k - 1] - s * pk[k]);
     }
 }
 
@@ -132,7 +134,9 @@ pub(super) fn phi_taylor_lanes<const W: usize>(
     for l in 0..W {
         acc[0][l % LANES] += -a * t[l];
     }
-    // The one pass of `phi_taylor`, lane by lane: the same operations in the same order.
+    // One pass, without `phi_taylor`'s array of `P_k`: at odd `k`, `phi_k` needs `P_(k-1)`
+    // and `Q_k = P_k / t`, `phi_(k+1)` needs `Q_k` and `P_(k+1)`; then the two chains step
+    // to `P_(k+3)` and `Q_(k+2)`. The same operations as `phi_taylor`'s two loops.
     let mut pm = [1.0; W]; // P_(k-1)
     let mut pp = [0.0; W]; // P_(k+1)
     let mut qm = [0.0; W]; // Q_(k-2)
