@@ -355,6 +355,7 @@ impl TimeSeries {
 
     /// [`TimeSeries::integrals`].
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // the iterator's `Zip::new` is a call in `release`
     fn integrals_in(&self, s: f64, c: f64) -> (f64, f64) {
         let mut q = [0.0; ORDER + 1];
         let mut sk = 1.0;
