@@ -355,11 +355,13 @@ impl TimeSeries {
 
     /// [`TimeSeries::integrals`].
     #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // the iterator's `Zip::new` is a call in `release`
     fn integrals_in(&self, s: f64, c: f64) -> (f64, f64) {
         let mut q = [0.0; ORDER + 1];
         let mut sk = 1.0;
-        for (qk, uk) in q.iter_mut().zip(&self.u[..self.order + 1]) {
-            *qk = uk * sk;
+        // An index loop: `Zip::new` is an out-of-line call here in the `release` build.
+        for k in 0..=self.order.min(ORDER) {
+            q[k] = self.u[k] * sk;
             sk *= s;
         }
         q[0] -= c;
