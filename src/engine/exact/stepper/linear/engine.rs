@@ -73,7 +73,7 @@ struct Trajectories {
 }
 
 impl Trajectories {
-    const SLOTS: usize = 64;
+    const SLOTS: usize = 256;
 
     /// Every slot empty, and `traj` the current trajectory.
     fn holding(traj: Trajectory) -> Trajectories {
