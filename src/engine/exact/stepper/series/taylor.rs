@@ -355,11 +355,10 @@ impl TimeSeries {
 
     /// [`TimeSeries::integrals`].
     #[inline(always)]
-    #[allow(clippy::needless_range_loop)] // the iterator's `Zip::new` is a call in `release`
+    #[allow(clippy::needless_range_loop)] // an iterator's `Zip::new` is an out-of-line call in `release`
     fn integrals_in(&self, s: f64, c: f64) -> (f64, f64) {
         let mut q = [0.0; ORDER + 1];
         let mut sk = 1.0;
-        // An index loop: `Zip::new` is an out-of-line call here in the `release` build.
         for k in 0..=self.order.min(ORDER) {
             q[k] = self.u[k] * sk;
             sk *= s;
