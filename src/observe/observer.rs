@@ -38,7 +38,9 @@ pub trait Observer {
     /// The time up to which this observer reads no piece's integrals: a piece that ends at
     /// or before it may be reported with its integrals zero (an engine then skips computing
     /// them). `-inf` (every piece's integrals) by default; the window's start for window
-    /// statistics; `+inf` for an observer that reads times or samples only.
+    /// statistics; `+inf` for an observer that reads times or samples only. An engine may
+    /// read it (and [`Observer::stretch_until`]) once per advance: neither may change
+    /// between two grid stops.
     #[inline]
     fn integrals_after(&self) -> f64 {
         f64::NEG_INFINITY

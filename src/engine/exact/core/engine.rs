@@ -56,6 +56,7 @@ impl<S: Stepper, R: RuptureModel> Engine for Exact<S, R> {
     /// thinning horizon, the piece is closed and a new one opened.
     fn advance<O: Observer>(&mut self, t_stop: f64, obs: &mut O) -> Result<(), EngineError> {
         let Exact { core, stepper: s, rupture: r } = self;
+        s.begin(core, obs);
         loop {
             // In the local frame, which a re-basing inside this loop moves.
             let tau_stop = core.frame.local(t_stop).max(core.tau);

@@ -143,6 +143,10 @@ pub trait Stepper: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send
         }
         Ok(false)
     }
+    /// An advance begins: a stepper reads what it needs of the observers' contract here,
+    /// once per advance rather than once per event (their bounds do not change within one).
+    #[inline]
+    fn begin<O: Observer>(&mut self, _core: &Core<Self::Queue>, _obs: &O) {}
     /// Reports the current piece up to `t` as a segment and moves the plate there.
     fn close<O: Observer>(&mut self, core: &mut Core<Self::Queue>, t: f64, obs: &mut O) -> Result<(), EngineError>;
     /// The advance ends here (its last piece closed): a stepper that sums pieces for the

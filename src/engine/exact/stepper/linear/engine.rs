@@ -143,6 +143,9 @@ pub struct LinearStepper<Q: ChannelQueue, M: PlateMotion = Dynamic> {
     /// advance, so never written).
     #[serde(skip)]
     sums: report::Sums,
+    /// The observers' window, read at the start of every advance (so never written).
+    #[serde(skip)]
+    window: report::Window,
     #[serde(skip)]
     types: std::marker::PhantomData<(Q, M)>,
 }
@@ -180,6 +183,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
             },
             next_formation,
             sums: report::Sums::default(),
+            window: report::Window::default(),
             types: std::marker::PhantomData,
         };
         Ok(Exact::start(core, stepper, rupture))
@@ -189,7 +193,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
 impl<Q: ChannelQueue, M: PlateMotion> LinearStepper<Q, M> {
     /// Reports `[piece.tau0, tau1]` given the state and integrals at `tau1` as raw integrals
     /// ([`report::piece`]: no division), or sums it for an observer that takes stretches
-    /// ([`Observer::STRETCHES`]: inside `[integrals_after, stretch_until]`; nothing before),
+    /// ([`Observer::STRETCHES`]: inside the observers' [`report::Window`]; nothing before),
     /// and moves there.
     #[inline(always)]
     fn report_piece<O: Observer>(
@@ -204,18 +208,15 @@ impl<Q: ChannelQueue, M: PlateMotion> LinearStepper<Q, M> {
         let pc = &self.piece;
         let h = tau1 - pc.tau0;
         if h > 0.0 {
-            let start = report::Start {
-                t0: core.frame.time(pc.tau0),
-                y0: pc.y0,
-                // Lag w.r.t. the driver: lag(s) = lag0 + (y(s) - y0 - V s).
-                lag0: core.frame.lag(pc.y0, pc.tau0),
-                n_att: core.bags.n_attached(),
-                anchor_sum: core.bags.anchor_sum(),
-            };
-            let t1 = core.frame.time(tau1);
-            if O::STRETCHES && O::SEGMENTS && start.t0 >= obs.integrals_after() && t1 <= obs.stretch_until() {
-                self.sums.add(&start, pc.v0, t1, h, y1, v1, ints, core.plate.v);
-            } else if !O::STRETCHES || t1 > obs.integrals_after() {
+            // Lag w.r.t. the driver: lag(s) = lag0 + (y(s) - y0 - V s).
+            let lag0 = core.frame.lag(pc.y0, pc.tau0);
+            let (n_att, anchor_sum) = (core.bags.n_attached(), core.bags.anchor_sum());
+            if O::STRETCHES && O::SEGMENTS && self.window.sums(pc.tau0, tau1) {
+                let piece = report::Summed { tau0: pc.tau0, y0: pc.y0, v0: pc.v0, lag0, n_att, h, y1, v1, ints };
+                self.sums.add(&piece, &core.frame, tau1, core.plate.v);
+            } else if !O::STRETCHES || self.window.integrals(tau1) {
+                let start = report::Start { t0: core.frame.time(pc.tau0), y0: pc.y0, lag0, n_att, anchor_sum };
+                let t1 = core.frame.time(tau1);
                 obs.piece(&report::piece(&start, t1, h, y1, ints, &core.plate, self.kappa));
             }
         }
@@ -255,8 +256,8 @@ impl<Q: ChannelQueue, M: PlateMotion> LinearStepper<Q, M> {
     /// Whether a piece ending at local time `tau1` is reported with its integrals
     /// ([`Observer::integrals_after`]: none in the warm-up for a run's observers).
     #[inline(always)]
-    fn integrals<O: Observer>(core: &Core<Q>, tau1: f64, obs: &O) -> bool {
-        O::SEGMENTS && core.frame.time(tau1) > obs.integrals_after()
+    fn integrals<O: Observer>(&self, tau1: f64) -> bool {
+        O::SEGMENTS && self.window.integrals(tau1)
     }
 
     /// The plate along the current piece, as a kinematic drive.
@@ -320,7 +321,8 @@ impl<Q: ChannelQueue, M: PlateMotion> Stepper for LinearStepper<Q, M> {
 
     /// The candidate's state (and, if accepted, the piece's integrals) at `t`, from the closed
     /// form; a kinematic plate's formations are thinned in the rate ([`Stepper::formation_acceptance`]).
-    #[inline]
+    /// Always inlined, as [`Stepper::close`].
+    #[inline(always)]
     fn formation<O: Observer>(&mut self, core: &mut Core<Q>, t: f64, obs: &mut O) -> Result<bool, EngineError> {
         if M::KINEMATIC {
             self.close_kinematic(core, t, obs);
@@ -328,7 +330,7 @@ impl<Q: ChannelQueue, M: PlateMotion> Stepper for LinearStepper<Q, M> {
             return Ok(true);
         }
         let h = t - self.piece.tau0;
-        let (y, v, ints) = self.piece.traj.current().at_maybe_integrals(h, core.plate.v, Self::integrals(core, t, obs));
+        let (y, v, ints) = self.piece.traj.current().at_maybe_integrals(h, core.plate.v, self.integrals::<O>(t));
         if core.accepts_formation(v) {
             self.report_piece(core, t, y, v, ints, obs);
             self.check(core)?;
@@ -345,11 +347,16 @@ impl<Q: ChannelQueue, M: PlateMotion> Stepper for LinearStepper<Q, M> {
             self.close_kinematic(core, t, obs);
         } else {
             let h = (t - self.piece.tau0).max(0.0);
-            let (y1, v1, ints) =
-                self.piece.traj.current().at_maybe_integrals(h, core.plate.v, Self::integrals(core, t, obs));
+            let (y1, v1, ints) = self.piece.traj.current().at_maybe_integrals(h, core.plate.v, self.integrals::<O>(t));
             self.report_piece(core, t, y1, v1, ints, obs);
         }
         self.check(core)
+    }
+
+    /// Reads the observers' window in local time.
+    #[inline]
+    fn begin<O: Observer>(&mut self, core: &Core<Q>, obs: &O) {
+        self.window = report::Window::new(obs.integrals_after(), obs.stretch_until(), &core.frame);
     }
 
     /// Reports the pieces summed in this advance as one stretch.
@@ -376,8 +383,9 @@ impl<Q: ChannelQueue, M: PlateMotion> Stepper for LinearStepper<Q, M> {
     }
 
     #[inline]
-    fn shifted(&mut self, _core: &Core<Q>, _dtau: f64, dy: f64) {
+    fn shifted(&mut self, core: &Core<Q>, _dtau: f64, dy: f64) {
         self.sums.shifted(dy);
+        self.window.relocate(&core.frame);
         self.y = 0.0;
         self.piece.tau0 = 0.0;
         self.piece.y0 = 0.0;

@@ -17,6 +17,7 @@
 //! the bond and viscous forces' integrals follow from the plate's state at the stretch's
 //! two ends ([`Stretch`]).
 
+use crate::engine::exact::core::frame::Frame;
 use crate::engine::exact::stepper::linear::propagator::Integrals;
 use crate::observe::shifted::ShiftedSums;
 use crate::observe::{Piece, Stretch};
@@ -52,6 +53,67 @@ pub(super) fn piece(start: &Start, t1: f64, h: f64, y1: f64, ints: Integrals, p:
     }
 }
 
+/// The observers' window ([`Observer::integrals_after`](crate::observe::Observer::integrals_after),
+/// [`Observer::stretch_until`](crate::observe::Observer::stretch_until)), read once per
+/// advance, in local time: compared with a piece's local ends, with no conversion per piece.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Window {
+    /// The absolute bounds.
+    after: f64,
+    until: f64,
+    /// The same in local time.
+    lo: f64,
+    hi: f64,
+}
+
+impl Default for Window {
+    /// No integrals read, nothing summed (until an advance reads the observers).
+    fn default() -> Window {
+        Window { after: f64::INFINITY, until: f64::NEG_INFINITY, lo: f64::INFINITY, hi: f64::NEG_INFINITY }
+    }
+}
+
+impl Window {
+    /// Integrals read after absolute time `after`, pieces summed up to `until`, in `frame`.
+    #[inline]
+    pub(super) fn new(after: f64, until: f64, frame: &Frame) -> Window {
+        Window { after, until, lo: frame.local(after), hi: frame.local(until) }
+    }
+
+    /// The same bounds in the frame moved to `frame`.
+    #[inline]
+    pub(super) fn relocate(&mut self, frame: &Frame) {
+        *self = Window::new(self.after, self.until, frame);
+    }
+
+    /// Whether a piece ending at local `tau1` is read with its integrals.
+    #[inline(always)]
+    pub(super) fn integrals(&self, tau1: f64) -> bool {
+        tau1 > self.lo
+    }
+
+    /// Whether the piece `[tau0, tau1]` (local) is summed into the stretch.
+    #[inline(always)]
+    pub(super) fn sums(&self, tau0: f64, tau1: f64) -> bool {
+        tau0 >= self.lo && tau1 <= self.hi
+    }
+}
+
+/// A piece to sum: its local start `tau0`, state `(y0, v0)` and lag `lag0` there, attached
+/// count, length `h`, end state `(y1, v1)` and the propagator's integrals.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Summed {
+    pub tau0: f64,
+    pub y0: f64,
+    pub v0: f64,
+    pub lag0: f64,
+    pub n_att: usize,
+    pub h: f64,
+    pub y1: f64,
+    pub v1: f64,
+    pub ints: Integrals,
+}
+
 /// The pieces summed since the last report (lag units, local positions): empty when
 /// `weight = 0`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -75,27 +137,26 @@ pub(super) struct Sums {
 }
 
 impl Sums {
-    /// Adds the piece `[start.t0, t1]` of length `h` from velocity `v0`, ending at
-    /// `(y1, v1)`, with the propagator's integrals `ints` (drift `v`).
+    /// Adds the piece `p`, ending at local `tau1` in `frame`, with drift `v`.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn add(&mut self, start: &Start, v0: f64, t1: f64, h: f64, y1: f64, v1: f64, ints: Integrals, v: f64) {
+    pub(super) fn add(&mut self, p: &Summed, frame: &Frame, tau1: f64, v: f64) {
         if self.weight == 0.0 {
-            self.t0 = start.t0;
-            self.lag_ref = start.lag0;
-            self.y0 = start.y0;
-            self.v0 = v0;
+            self.t0 = frame.time(p.tau0);
+            self.lag_ref = p.lag0;
+            self.y0 = p.y0;
+            self.v0 = p.v0;
         }
-        let d = start.lag0 - self.lag_ref;
-        let w1 = ints.i1 - 0.5 * v * h * h;
+        let h = p.h;
+        let d = p.lag0 - self.lag_ref;
+        let w1 = p.ints.i1 - 0.5 * v * h * h;
         let hd = h * d;
         self.weight += h;
         self.s1 += hd + w1;
-        self.s2 += hd * d + (2.0 * d * w1 + ints.i2);
-        self.attached += h * start.n_att as f64;
-        self.t1 = t1;
-        self.y1 = y1;
-        self.v1 = v1;
+        self.s2 += hd * d + (2.0 * d * w1 + p.ints.i2);
+        self.attached += h * p.n_att as f64;
+        self.t1 = frame.time(tau1);
+        self.y1 = p.y1;
+        self.v1 = p.v1;
     }
 
     /// The local origin moved by `dy` in position.
@@ -174,6 +235,7 @@ mod tests {
             let kappa = 0.1 + u();
             // Local frame: absolute time t = epoch + tau, lag = y - V tau + lag_ref.
             let (epoch, lag_ref) = (u() - 0.5, 3.0 * (u() - 0.5));
+            let frame = Frame { epoch, x_ref: 0.0, lag_ref, v: p.v };
             let hs: Vec<f64> = (0..8 + (u() * 20.0) as usize).map(|_| 0.01 + 0.4 * u()).collect();
             let mut ends = Vec::new();
             hs.iter().fold(0.0, |tau, h| {
@@ -198,7 +260,8 @@ mod tests {
                 let start = Start { t0: epoch + tau, y0: y, lag0: (y - p.v * tau) + lag_ref, n_att, anchor_sum };
                 stats.piece(&piece(&start, epoch + (tau + h), h, y1, ints, &p, kappa));
                 if start.t0 >= t_lo && epoch + (tau + h) <= t_hi {
-                    sums.add(&start, v, epoch + (tau + h), h, y1, v1, ints, p.v);
+                    let summed = Summed { tau0: tau, y0: y, v0: v, lag0: start.lag0, n_att, h, y1, v1, ints };
+                    sums.add(&summed, &frame, tau + h, p.v);
                 }
                 if u() < 0.3 {
                     stats.stop();
