@@ -11,7 +11,7 @@ use crate::engine::exact::stepper::contract::{Stepper, WeakRuptures};
 use crate::observe::{EventKind, Observer};
 
 /// Ruptures the attached junction in `slot` now.
-#[inline]
+#[inline(always)]
 pub fn rupture<S: Stepper, R: RuptureModel, O: Observer>(
     core: &mut Core<S::Queue>,
     s: &mut S,

@@ -225,7 +225,7 @@ impl BinnedRupture {
         self.lo + i
     }
     /// The bin a candidate with uniform `u` would choose now, if any junction is binned.
-    #[inline]
+    #[inline(always)]
     fn bin_for(&self, u: f64) -> Option<usize> {
         let (m, p) = self.h.terms(self.totals());
         // Also `None` for a NaN total.
