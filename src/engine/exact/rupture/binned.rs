@@ -236,6 +236,7 @@ impl BinnedRupture {
         Some(if u < m { self.find(0, u / self.h.e_hi) } else { self.find(1, (u - m) / self.h.e_lo) })
     }
     /// Adds the junction in `slot` with anchor `c` to its bin, and records its position.
+    #[inline(always)]
     fn insert(&mut self, attached: &mut [Attached], slot: usize, c: f64) {
         let j = self.bin_of(c);
         let bin = &mut self.bins[j];
@@ -353,7 +354,7 @@ impl RuptureModel for BinnedRupture {
         self.insert(attached, slot, c);
         true
     }
-    #[inline]
+    #[inline(always)]
     fn detached(&mut self, attached: &mut [Attached], slot: usize, last: usize, a: &Attached) {
         // The junction that moved from `last` into `slot`: its member now points at `slot`.
         if slot != last {

@@ -152,6 +152,7 @@ impl Horizon {
     /// from now (`bounds(h)`: its proven bounds over the next `h`), for `n_att` attached junctions whose weights sum to `w`, and its
     /// horizon: the longest (within a factor 2) whose spread `a (y_hi - y_lo)` is at most
     /// [`SPREAD`] and that covers about [`CANDIDATES_PER_HORIZON`] candidates at the last rate.
+    #[inline(always)]
     pub fn plan(
         &mut self,
         mut bounds: impl FnMut(f64) -> (f64, f64),
