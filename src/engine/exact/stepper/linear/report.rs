@@ -218,6 +218,28 @@ mod tests {
             .sum()
     }
 
+    /// The window in local time: a piece that starts where the window opens (the runner's
+    /// stop at the warm-up's end, in local time `local(t_lo)`) is summed, one that ends
+    /// there is not read, one that ends after the window's end is reported as a piece; the
+    /// same after the frame moves; and before any advance nothing is read.
+    #[test]
+    fn window_in_local_time() {
+        let mut frame = Frame { epoch: 1.25, x_ref: 0.0, lag_ref: 0.0, v: 0.5 };
+        let (t_lo, t_hi) = (20.1, 40.3);
+        let mut w = Window::new(t_lo, t_hi, &frame);
+        let (lo, hi) = (frame.local(t_lo), frame.local(t_hi));
+        assert!(!w.integrals(lo) && w.integrals(lo + 1e-9));
+        assert!(w.sums(lo, lo + 1.0) && w.sums(hi - 1.0, hi));
+        assert!(!w.sums(lo - 1e-9, lo + 1.0) && !w.sums(hi - 1.0, hi + 1e-9));
+        frame.shift(7.5, 3.0);
+        w.relocate(&frame);
+        let (lo, hi) = (frame.local(t_lo), frame.local(t_hi));
+        assert!(!w.integrals(lo) && w.integrals(lo + 1e-9));
+        assert!(w.sums(lo, hi) && !w.sums(lo, hi + 1e-9));
+        let none = Window::default();
+        assert!(!none.integrals(1e300) && !none.sums(0.0, 0.0));
+    }
+
     /// Random plates (under- and overdamped, `M = 0` too), random chains of pieces with
     /// random attached counts and anchors, random grid stops, a window from one piece
     /// boundary to another (the runner stops at both): the window statistics summed from
