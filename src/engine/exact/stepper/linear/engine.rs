@@ -208,16 +208,23 @@ impl<Q: ChannelQueue, M: PlateMotion> LinearStepper<Q, M> {
         let pc = &self.piece;
         let h = tau1 - pc.tau0;
         if h > 0.0 {
-            // Lag w.r.t. the driver: lag(s) = lag0 + (y(s) - y0 - V s).
-            let lag0 = core.frame.lag(pc.y0, pc.tau0);
-            let (n_att, anchor_sum) = (core.bags.n_attached(), core.bags.anchor_sum());
+            let span = report::Span {
+                tau0: pc.tau0,
+                tau1,
+                h,
+                y0: pc.y0,
+                v0: pc.v0,
+                // Lag w.r.t. the driver: lag(s) = lag0 + (y(s) - y0 - V s).
+                lag0: core.frame.lag(pc.y0, pc.tau0),
+                y1,
+                v1,
+                n_att: core.bags.n_attached(),
+                ints,
+            };
             if O::STRETCHES && O::SEGMENTS && self.window.sums(pc.tau0, tau1) {
-                let piece = report::Summed { tau0: pc.tau0, y0: pc.y0, v0: pc.v0, lag0, n_att, h, y1, v1, ints };
-                self.sums.add(&piece, &core.frame, tau1, core.plate.v);
+                self.sums.add(&span, &core.frame, core.plate.v);
             } else if !O::STRETCHES || self.window.integrals(tau1) {
-                let start = report::Start { t0: core.frame.time(pc.tau0), y0: pc.y0, lag0, n_att, anchor_sum };
-                let t1 = core.frame.time(tau1);
-                obs.piece(&report::piece(&start, t1, h, y1, ints, &core.plate, self.kappa));
+                obs.piece(&report::piece(&span, &core.frame, core.bags.anchor_sum(), &core.plate, self.kappa));
             }
         }
         core.tau = tau1;

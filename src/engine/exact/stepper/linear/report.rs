@@ -23,33 +23,40 @@ use crate::observe::shifted::ShiftedSums;
 use crate::observe::{Piece, Stretch};
 use crate::physics::Plate;
 
-/// Where a piece starts: absolute time `t0`, local position `y0` and lag `lag0`; the
-/// attached count and the anchors' sum `C` (constant on the piece).
+/// A finished piece `[tau0, tau1]` (local times, length `h`): the plate's state `(y0, v0)`
+/// and lag `lag0` at its start, its state `(y1, v1)` at its end, the attached count (constant
+/// on the piece) and the propagator's integrals over it.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Start {
-    pub t0: f64,
+pub(super) struct Span {
+    pub tau0: f64,
+    pub tau1: f64,
+    pub h: f64,
     pub y0: f64,
+    pub v0: f64,
     pub lag0: f64,
+    pub y1: f64,
+    pub v1: f64,
     pub n_att: usize,
-    pub anchor_sum: f64,
+    pub ints: Integrals,
 }
 
-/// The piece `[start.t0, t1]` of length `h` (local) ending at `y1`, with the propagator's
-/// integrals `ints` (drift `V` of the plate `p`), for the law's slope `kappa`.
+/// The span `s` in `frame` as a [`Piece`] of raw integrals, for the anchors' sum `C`
+/// (`anchor_sum`, constant on the piece), drift `V` of the plate `p` and the law's slope `kappa`.
 #[inline(always)]
-pub(super) fn piece(start: &Start, t1: f64, h: f64, y1: f64, ints: Integrals, p: &Plate, kappa: f64) -> Piece {
+pub(super) fn piece(s: &Span, frame: &Frame, anchor_sum: f64, p: &Plate, kappa: f64) -> Piece {
+    let (h, ints) = (s.h, s.ints);
     let w1 = ints.i1 - 0.5 * p.v * h * h;
-    let n = start.n_att as f64;
+    let n = s.n_att as f64;
     Piece {
-        t0: start.t0,
-        t1,
+        t0: frame.time(s.tau0),
+        t1: frame.time(s.tau1),
         h,
-        friction0: -p.k * start.lag0,
+        friction0: -p.k * s.lag0,
         dev: -p.k * w1,
         dev2: p.k * p.k * ints.i2,
-        bond: kappa * (n * (h * start.y0 + ints.i1) - h * start.anchor_sum),
-        viscous: p.eta * (y1 - start.y0),
-        attached: start.n_att as u64,
+        bond: kappa * (n * (h * s.y0 + ints.i1) - h * anchor_sum),
+        viscous: p.eta * (s.y1 - s.y0),
+        attached: s.n_att as u64,
     }
 }
 
@@ -99,21 +106,6 @@ impl Window {
     }
 }
 
-/// A piece to sum: its local start `tau0`, state `(y0, v0)` and lag `lag0` there, attached
-/// count, length `h`, end state `(y1, v1)` and the propagator's integrals.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Summed {
-    pub tau0: f64,
-    pub y0: f64,
-    pub v0: f64,
-    pub lag0: f64,
-    pub n_att: usize,
-    pub h: f64,
-    pub y1: f64,
-    pub v1: f64,
-    pub ints: Integrals,
-}
-
 /// The pieces summed since the last report (lag units, local positions): empty when
 /// `weight = 0`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -137,9 +129,9 @@ pub(super) struct Sums {
 }
 
 impl Sums {
-    /// Adds the piece `p`, ending at local `tau1` in `frame`, with drift `v`.
+    /// Adds the span `p` in `frame`, with drift `v`.
     #[inline(always)]
-    pub(super) fn add(&mut self, p: &Summed, frame: &Frame, tau1: f64, v: f64) {
+    pub(super) fn add(&mut self, p: &Span, frame: &Frame, v: f64) {
         if self.weight == 0.0 {
             self.t0 = frame.time(p.tau0);
             self.lag_ref = p.lag0;
@@ -154,7 +146,7 @@ impl Sums {
         self.s1 += hd + w1;
         self.s2 += hd * d + (2.0 * d * w1 + p.ints.i2);
         self.attached += h * p.n_att as f64;
-        self.t1 = frame.time(tau1);
+        self.t1 = frame.time(p.tau1);
         self.y1 = p.y1;
         self.v1 = p.v1;
     }
@@ -279,18 +271,19 @@ mod tests {
                 let a = p.k * (p.v * tau - lag_ref) + kappa * anchor_sum;
                 let tr = LinearPlate::new(p.mass, p.eta, k_eff).trajectory(y, v, a, p.k * p.v);
                 let (y1, v1, ints) = tr.at_with_integrals(h, p.v);
-                let start = Start { t0: epoch + tau, y0: y, lag0: (y - p.v * tau) + lag_ref, n_att, anchor_sum };
-                stats.piece(&piece(&start, epoch + (tau + h), h, y1, ints, &p, kappa));
-                if start.t0 >= t_lo && epoch + (tau + h) <= t_hi {
-                    let summed = Summed { tau0: tau, y0: y, v0: v, lag0: start.lag0, n_att, h, y1, v1, ints };
-                    sums.add(&summed, &frame, tau + h, p.v);
+                let span =
+                    Span { tau0: tau, tau1: tau + h, h, y0: y, v0: v, lag0: frame.lag(y, tau), y1, v1, n_att, ints };
+                let inside = frame.time(tau) >= t_lo && frame.time(tau + h) <= t_hi;
+                stats.piece(&piece(&span, &frame, anchor_sum, &p, kappa));
+                if inside {
+                    sums.add(&span, &frame, p.v);
                 }
                 if u() < 0.3 {
                     stats.stop();
                     summed.stretch(&sums.take(&p, epoch + (tau + h)));
                 }
                 // The reference: the path on the pieces inside the window.
-                if start.t0 >= t_lo && epoch + (tau + h) <= t_hi {
+                if inside {
                     let f = |s: f64| -p.k * ((tr.at(s).0 - p.v * (tau + s)) + lag_ref);
                     want_f += quad(h, f);
                     want_f2 += quad(h, |s| f(s) * f(s));
