@@ -2,7 +2,10 @@
 //! generators are used (Park–Miller, `rand_pcg::Pcg64`), so a scene and a seed give the
 //! same numbers on every machine and thread count.
 
+mod below;
 pub mod park_miller;
+
+pub use below::below;
 
 pub use park_miller::ParkMiller;
 pub use rand_pcg::Pcg64;

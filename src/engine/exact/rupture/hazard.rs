@@ -6,14 +6,13 @@
 
 use serde::{Deserialize, Serialize};
 
-use rand::RngExt;
 
 use super::contract::{Plan, RuptureModel};
 use super::rate::RuptureRate;
 use crate::engine::exact::core::bags::Attached;
 use crate::engine::exact::core::bags::count;
 use crate::physics::{Bond, ForceLaw};
-use crate::rng::Pcg64;
+use crate::rng::{Pcg64, below};
 
 /// `e^EXPONENT_CAP`: the rate cap relative to `k0`.
 pub const CAP_RATE_FACTOR: f64 = 3.7730203009299397e260;
@@ -57,6 +56,6 @@ impl<L: ForceLaw, B: Bond> RuptureModel for Hazard<L, B> {
         _: &R,
         _: impl FnOnce() -> f64,
     ) -> Option<usize> {
-        Some(rng.random_range(0..att.len()))
+        Some(below(rng, att.len()))
     }
 }

@@ -1,14 +1,13 @@
 //! Strong bonds: every attached junction ruptures at the constant rate `k0`, so the channel
 //! rate is `k0 N_att` and the junction is a uniform pick; each candidate is an event.
 
-use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
 use super::contract::{Plan, RuptureModel};
 use super::rate::RuptureRate;
 use crate::engine::exact::core::bags::{Attached, count};
 use crate::engine::exact::core::pick::Pick;
-use crate::rng::Pcg64;
+use crate::rng::{Pcg64, below};
 
 /// Strong bonds at rate `k0`. `AHEAD`: the uniform picks are drawn [`Pick`]s ahead and their
 /// junctions prefetched (the closed-form stepper, whose events are shorter than a memory
@@ -49,7 +48,7 @@ impl<const AHEAD: bool> RuptureModel for StrongRupture<AHEAD> {
         _: impl FnOnce() -> f64,
     ) -> Option<usize> {
         let n = attached.len();
-        Some(if AHEAD { self.next.take(n, rng) } else { rng.random_range(0..n) })
+        Some(if AHEAD { self.next.take(n, rng) } else { below(rng, n) })
     }
     #[inline(always)]
     fn prefetch(&self, attached: &[Attached]) {

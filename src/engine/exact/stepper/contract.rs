@@ -1,7 +1,6 @@
 //! The plate-stepper contract: [`Stepper`], the hooks the core calls, and what a step
 //! reports ([`Target`], [`Moved`], [`Step`], [`WeakRuptures`]).
 
-use rand::RngExt;
 use serde::{Serialize, de::DeserializeOwned};
 
 use crate::engine::EngineError;
@@ -10,7 +9,7 @@ use crate::engine::exact::core::clocks::ChannelQueue;
 use crate::engine::exact::core::state::Core;
 use crate::engine::exact::rupture::rate::RuptureRate;
 use crate::observe::Observer;
-use crate::rng::Pcg64;
+use crate::rng::{Pcg64, below};
 
 /// Where [`Stepper::step`] moves the plate: local time `tau` (the first of the next candidate
 /// and the stop), and whether the candidate, on channel `ch`, is due by then.
@@ -168,7 +167,7 @@ pub trait Stepper: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send
     /// The detached junction that forms, of `n`.
     #[inline]
     fn formation_slot(&mut self, rng: &mut Pcg64, n: usize) -> usize {
-        rng.random_range(0..n)
+        below(rng, n)
     }
     /// A junction was attached into `slot` with anchor `c` (the stepper's own bookkeeping).
     #[inline]

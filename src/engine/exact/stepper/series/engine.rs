@@ -2,7 +2,6 @@
 //! as a [`SeriesSum`] with its error tracked, the plate stepped by its [`Motion`]; the core
 //! thins weak bonds' rupture candidates over each step ([`WeakRuptures::Steps`]).
 
-use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
 use super::plate::{Motion, StepCtx};
@@ -19,7 +18,7 @@ use crate::engine::exact::rupture::{RuptureModel, TiltedRate};
 use crate::engine::exact::stepper::contract::{Moved, Step, Stepper, Target, WeakRuptures};
 use crate::observe::Observer;
 use crate::physics::{ForceLaw, Tilted};
-use crate::rng::UniformSource;
+use crate::rng::{UniformSource, below};
 use crate::scene::Scene;
 
 /// Fewest junctions for which the next pick's record is prefetched: below it the bags (16
@@ -167,15 +166,15 @@ impl<P: Motion> SeriesStepper<P> {
                 let n = core.bags.n_detached();
                 if n > 0 {
                     let mut rng = core.rng.clone();
-                    prefetch(&core.bags.detached[rng.clone().random_range(0..n)]);
+                    prefetch(&core.bags.detached[below(&mut rng.clone(), n)]);
                     rng.uniform();
-                    prefetch(&core.bags.detached[rng.random_range(0..n)]);
+                    prefetch(&core.bags.detached[below(&mut rng, n)]);
                 }
             }
             _ => {
                 let n = core.bags.n_attached();
                 if n > 0 {
-                    let i = core.rng.clone().random_range(0..n);
+                    let i = below(&mut core.rng.clone(), n);
                     prefetch(&core.bags.attached[i]);
                     prefetch(&self.handles[i]);
                 }
