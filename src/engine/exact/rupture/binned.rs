@@ -397,7 +397,7 @@ impl RuptureModel for BinnedRupture {
     #[inline]
     fn bound(&mut self, y_lo: f64, y_hi: f64) -> f64 {
         self.sum_up();
-        self.h.set_bounds(self.a, y_lo, y_hi);
+        self.h.set_grid_bounds(self.a, y_lo, y_hi);
         let (m, p) = self.h.terms(self.totals());
         self.k0 * (m + p)
     }

@@ -135,9 +135,10 @@ impl Horizon {
     }
     /// Sets bounds at least as wide as `[y_lo, y_hi]`, with the exponents `a y_hi` and
     /// `-a y_lo` rounded up to the grid `1/GRID` (tabulated: no exponential). Every rate
-    /// bound `b_i` stays above `r_i` on `[y_lo, y_hi]`, at most `exp(1/GRID)` looser.
+    /// bound `b_i` stays above `r_i` on `[y_lo, y_hi]`, at most `exp(1/GRID)` looser. Used by
+    /// the plans and by the bound over a plate step alike.
     #[inline]
-    fn set_grid_bounds(&mut self, a: f64, y_lo: f64, y_hi: f64) {
+    pub fn set_grid_bounds(&mut self, a: f64, y_lo: f64, y_hi: f64) {
         self.y_lo = y_lo;
         self.y_hi = y_hi;
         self.e_hi = self.grid.exp_up(a * y_hi);

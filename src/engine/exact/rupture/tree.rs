@@ -71,7 +71,7 @@ impl RuptureModel for TreeRupture {
     }
     #[inline]
     fn bound(&mut self, y_lo: f64, y_hi: f64) -> f64 {
-        self.h.set_bounds(self.a, y_lo, y_hi);
+        self.h.set_grid_bounds(self.a, y_lo, y_hi);
         let (m, p) = self.terms();
         self.k0 * (m + p)
     }
