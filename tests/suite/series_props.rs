@@ -4,8 +4,9 @@
 //! Random laws, anchor clouds (clustered at the plate, spread over tens of `l0`, or far) and
 //! random sequences of add / remove / rebase / shift; after every operation `S`, `dS/dy` and
 //! `int S` at random points within the radius must match the oracle within `error_bound()`,
-//! `stiffness_error_bound()` and `|y1 - y0| error_bound()`. Both modes of the series: bins
-//! (`SeriesSum::new`) and direct (`SeriesSum::direct`, the engine's choice for few junctions).
+//! `stiffness_error_bound()` and `|y1 - y0| error_bound()`. Every mode of the series: wide
+//! bins (`SeriesSum::new`), narrow bins (`SeriesSum::narrow`, the engine's choice for many
+//! junctions) and direct (`SeriesSum::direct`, its choice for few).
 //!
 //! Fast by default (`cargo test --release --test suite series_props::`); more cases with
 //! `PROPTEST_CASES=5000 cargo test --release --test suite series_props:: -- --nocapture`.
@@ -124,21 +125,33 @@ fn check(
     Ok(())
 }
 
-/// An empty series in bins (`direct = false`) or direct mode.
-fn series(law: Tilted, rtol: f64, direct: bool) -> SeriesSum {
-    let s = if direct { SeriesSum::direct(law, rtol) } else { SeriesSum::new(law, rtol) };
-    assert_eq!(s.is_direct(), direct);
+/// The series' modes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Mode {
+    Wide,
+    Narrow,
+    Direct,
+}
+
+/// An empty series in `mode`.
+fn series(law: Tilted, rtol: f64, mode: Mode) -> SeriesSum {
+    let s = match mode {
+        Mode::Wide => SeriesSum::new(law, rtol),
+        Mode::Narrow => SeriesSum::narrow(law, rtol),
+        Mode::Direct => SeriesSum::direct(law, rtol),
+    };
+    assert_eq!(s.is_direct(), mode == Mode::Direct);
     s
 }
 
 /// One random scenario: law, anchor cloud scale, `rtol`, and `ops` operations.
-fn scenario(seed: u64, ops: usize, direct: bool, worst: &mut Worst) -> Result<(), String> {
+fn scenario(seed: u64, ops: usize, mode: Mode, worst: &mut Worst) -> Result<(), String> {
     let mut rng = Pcg64::seed_from_u64(seed);
     let law = Tilted { kappa: 10f64.powf(rng.random_range(-2.0..1.0)), l0: 10f64.powf(rng.random_range(-1.0..1.0)) };
     let rtol = [1e-10, 1e-6, 1e-13, 1e-3][rng.random_range(0..4usize)];
     // Anchor extensions: at the plate (formation), within a few l0, over 50 l0, or far.
     let spread = [0.0, 2.0, 50.0, 1e3][rng.random_range(0..4usize)] * law.l0;
-    let mut s = series(law, rtol, direct);
+    let mut s = series(law, rtol, mode);
     let mut anchors: Vec<(f64, u32)> = Vec::new();
     let mut y = 0.0;
     let r = s.radius();
@@ -189,14 +202,21 @@ proptest! {
     #[test]
     fn series_matches_direct_sum(seed in any::<u64>(), ops in 1usize..300) {
         let mut w = Worst::default();
-        scenario(seed, ops, false, &mut w).map_err(TestCaseError::fail)?;
+        scenario(seed, ops, Mode::Wide, &mut w).map_err(TestCaseError::fail)?;
+    }
+
+    /// The same with narrow bins.
+    #[test]
+    fn narrow_series_matches_direct_sum(seed in any::<u64>(), ops in 1usize..300) {
+        let mut w = Worst::default();
+        scenario(seed, ops, Mode::Narrow, &mut w).map_err(TestCaseError::fail)?;
     }
 
     /// The same in direct mode.
     #[test]
     fn direct_series_matches_direct_sum(seed in any::<u64>(), ops in 1usize..300) {
         let mut w = Worst::default();
-        scenario(seed, ops, true, &mut w).map_err(TestCaseError::fail)?;
+        scenario(seed, ops, Mode::Direct, &mut w).map_err(TestCaseError::fail)?;
     }
 
     /// The coefficient bounds `|phi_k(x)| <= kappa l0 (l0/R)^(k+1) l0^-k` (Legendre +
@@ -272,9 +292,10 @@ fn taylor_matches_power_recurrence() {
 #[test]
 fn bound_is_nearly_attained() {
     let law = Tilted { kappa: 1.0, l0: 1.0 };
-    for rtol in [1e-2, 1e-3, 1e-5] {
-        let mut s = SeriesSum::new(law, rtol);
-        let (w, r) = (0.25 * law.l0, s.radius());
+    for (rtol, mode) in [1e-2, 1e-3, 1e-5].into_iter().flat_map(|r| [(r, Mode::Wide), (r, Mode::Narrow)]) {
+        let mut s = series(law, rtol, mode);
+        // Bins mode: the radius is half the bins' width.
+        let (w, r) = (2.0 * s.radius(), s.radius());
         // Bin 0 is centred at w/2; the base at the centre (x_b = 0), anchors at e = -w/2.
         let c = 1e-12;
         let anchors: Vec<(f64, u32)> = (0..10).map(|_| (c, s.add(c))).collect();
@@ -295,9 +316,9 @@ fn bound_is_nearly_attained() {
 #[test]
 fn residue_bound_is_nearly_attained() {
     let law = Tilted { kappa: 1.0, l0: 1.0 };
-    for rtol in [1e-2, 1e-3, 1e-5] {
-        let mut s = SeriesSum::new(law, rtol);
-        let (w, r) = (0.25 * law.l0, s.radius());
+    for (rtol, mode) in [1e-2, 1e-3, 1e-5].into_iter().flat_map(|r| [(r, Mode::Wide), (r, Mode::Narrow)]) {
+        let mut s = series(law, rtol, mode);
+        let (w, r) = (2.0 * s.radius(), s.radius());
         let c = 1e-12;
         let mut anchors: Vec<(f64, u32)> = (0..1000).map(|_| (c, s.add(c))).collect();
         s.rebase(0.5 * w);
@@ -471,12 +492,12 @@ fn direct_series_without_graded_orders_is_rebuilt() {
 /// bins), then removed in random order interleaved with new ones and with evaluations, then
 /// everything removed (exactly zero). `S`, `S'`, `int S` within the bounds after every
 /// operation.
-fn bulk_scenario(seed: u64, direct: bool, worst: &mut Worst) -> Result<(), String> {
+fn bulk_scenario(seed: u64, mode: Mode, worst: &mut Worst) -> Result<(), String> {
     let mut rng = Pcg64::seed_from_u64(seed);
     let law = Tilted { kappa: 10f64.powf(rng.random_range(-2.0..1.0)), l0: 10f64.powf(rng.random_range(-1.0..1.0)) };
     let rtol = [1e-10, 1e-6, 1e-13, 1e-3][rng.random_range(0..4usize)];
     let spread = [0.0, 0.3, 2.0, 50.0][rng.random_range(0..4usize)] * law.l0;
-    let mut s = series(law, rtol, direct);
+    let mut s = series(law, rtol, mode);
     let r = s.radius();
     let mut anchors: Vec<(f64, u32)> = Vec::new();
     let k = rng.random_range(1..400usize);
@@ -526,14 +547,21 @@ proptest! {
     #[test]
     fn bulk_add_rebase_remove(seed in any::<u64>()) {
         let mut w = Worst::default();
-        bulk_scenario(seed, false, &mut w).map_err(TestCaseError::fail)?;
+        bulk_scenario(seed, Mode::Wide, &mut w).map_err(TestCaseError::fail)?;
+    }
+
+    /// The same with narrow bins.
+    #[test]
+    fn narrow_bulk_add_rebase_remove(seed in any::<u64>()) {
+        let mut w = Worst::default();
+        bulk_scenario(seed, Mode::Narrow, &mut w).map_err(TestCaseError::fail)?;
     }
 
     /// The same in direct mode.
     #[test]
     fn direct_bulk_add_rebase_remove(seed in any::<u64>()) {
         let mut w = Worst::default();
-        bulk_scenario(seed, true, &mut w).map_err(TestCaseError::fail)?;
+        bulk_scenario(seed, Mode::Direct, &mut w).map_err(TestCaseError::fail)?;
     }
 }
 
@@ -541,22 +569,21 @@ proptest! {
 /// asserts only that the bounds hold.
 #[test]
 fn sweep_ratios() {
-    for direct in [false, true] {
-        let mode = if direct { "direct" } else { "bins" };
+    for mode in [Mode::Wide, Mode::Narrow, Mode::Direct] {
         let mut w = Worst::default();
         for seed in 0..40 {
-            scenario(1000 + seed, 400, direct, &mut w).unwrap();
+            scenario(1000 + seed, 400, mode, &mut w).unwrap();
         }
         println!(
-            "{mode}: worst error/bound: force {:.2e}, stiffness {:.2e}, integral {:.2e}",
+            "{mode:?}: worst error/bound: force {:.2e}, stiffness {:.2e}, integral {:.2e}",
             w.force, w.stiffness, w.integral
         );
         let mut w = Worst::default();
         for seed in 0..40 {
-            bulk_scenario(2000 + seed, direct, &mut w).unwrap();
+            bulk_scenario(2000 + seed, mode, &mut w).unwrap();
         }
         println!(
-            "{mode}, bulk: worst error/bound: force {:.2e}, stiffness {:.2e}, integral {:.2e}",
+            "{mode:?}, bulk: worst error/bound: force {:.2e}, stiffness {:.2e}, integral {:.2e}",
             w.force, w.stiffness, w.integral
         );
     }

@@ -6,7 +6,6 @@
 
 use serde::{Deserialize, Serialize};
 
-
 use super::contract::{Plan, RuptureModel};
 use super::rate::RuptureRate;
 use crate::engine::exact::core::bags::Attached;

@@ -4,10 +4,13 @@
 
 use super::coefficients::PMAX;
 
-/// `q = (rho + w/2) / l0`, the convergence ratio of every bin's double expansion.
-pub(super) const Q: f64 = 0.25;
-/// `rho / l0`, the convergence ratio of a junction's own expansion about the base (bins mode).
-pub(super) const Q_DIRECT: f64 = 0.125;
+/// The bins' convergence ratio `q = (rho + w/2) / l0 = w / l0` (`rho = w/2`), wide bins:
+/// `w = l0/4`, `rho = l0/8`, `q = 1/4` (below [`super::NARROW_FROM`] junctions, and a
+/// checkpoint's series that names no ratio).
+pub(super) const Q_WIDE: f64 = 0.25;
+/// The same, narrow bins: `w = l0/8`, `rho = l0/16`, `q = 1/8` (a lower order for the same
+/// tolerance, and twice the re-bases: the choice from [`super::NARROW_FROM`] junctions on).
+pub(super) const Q_NARROW: f64 = 0.125;
 /// `rho / l0` in direct mode, the convergence ratio of every junction's own expansion (no
 /// bins: `rho = l0/4`).
 pub(super) const Q_D: f64 = 0.25;
@@ -27,18 +30,19 @@ pub(super) fn tails_at(q: f64, p: usize) -> (f64, f64) {
     (qp * q / (1.0 - q), p1 * qp / (1.0 - q) + qp * q / ((1.0 - q) * (1.0 - q)))
 }
 
-/// [`tails_at`] of `Q_D`, `Q` and `Q_DIRECT` at every order `p < PMAX`, computed once per
-/// process: the error bound is asked for after most events, and `powi` was half its cost.
-pub(super) fn tails_table() -> &'static [[(f64, f64); 3]; PMAX] {
-    static TABLE: std::sync::OnceLock<[[(f64, f64); 3]; PMAX]> = std::sync::OnceLock::new();
-    TABLE.get_or_init(|| std::array::from_fn(|p| [tails_at(Q_D, p), tails_at(Q, p), tails_at(Q_DIRECT, p)]))
+/// The tails a series keeps for its order `p` (computed once, at construction: the error
+/// bound is asked for after most events, and `powi` was half its cost): [`tails_at`] of
+/// `Q_D` (direct mode), of the bins' ratio `q` and of a junction's own expansion in bins
+/// mode, `rho / l0 = q/2`.
+pub(super) fn tails(q: f64, p: usize) -> [(f64, f64); 3] {
+    [tails_at(Q_D, p), tails_at(q, p), tails_at(0.5 * q, p)]
 }
 
-/// Smallest order `p` whose residue bound (bin plus direct truncation) meets `rtol/4`,
-/// `q^(p+1)/(1-q) + (1/8)^(p+1)/(7/8) <= rtol/4`, capped at `PMAX - 1`.
-pub(super) fn order_for(rtol: f64) -> usize {
+/// Smallest order `p` whose residue bound (bin plus direct truncation) meets `rtol/4` for
+/// bins of ratio `q`, `q^(p+1)/(1-q) + (q/2)^(p+1)/(1-q/2) <= rtol/4`, capped at `PMAX - 1`.
+pub(super) fn order_for(q: f64, rtol: f64) -> usize {
     for p in 1..PMAX - 1 {
-        if tails_at(Q, p).0 + tails_at(Q_DIRECT, p).0 <= 0.25 * rtol {
+        if tails_at(q, p).0 + tails_at(0.5 * q, p).0 <= 0.25 * rtol {
             return p;
         }
     }

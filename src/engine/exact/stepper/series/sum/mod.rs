@@ -4,8 +4,10 @@
 //! construction ([`SeriesSum::for_junctions`]): **bins mode** re-bases in O(bins p^2) from
 //! the anchors' binned moments, independent of the number `N` of junctions; **direct mode**
 //! (`N < DIRECT_MAX = 8000`) keeps the junctions' offsets and re-bases in O(N p) by summing
-//! their own expansions, with twice the radius (section "Direct mode" below). Measured
-//! costs: docs/performance.md, "Tilted law: the bond-force series".
+//! their own expansions, with twice the radius (section "Direct mode" below). Bins mode
+//! has wide bins below `NARROW_FROM = 30000` junctions and narrow ones from there on
+//! ("Choice of `w`, `rho`, `p`"). Measured costs: docs/performance.md, "Tilted law: the
+//! bond-force series".
 //!
 //! **Split.** `f^x(x) = kappa x + phi(x)`, `phi(x) = -kappa l0 x h(x)`,
 //! `h(x) = (x^2 + l0^2)^(-1/2)`. The linear part is kept exactly as
@@ -42,13 +44,13 @@
 //! **Two expansions of one junction** (bins mode; the sections down to "Direct mode" are
 //! about bins mode). With `|d| <= rho`:
 //! - its own (direct) expansion `D_i(d) = sum_(k<=p) phi_k(y0 - c_i) d^k`, truncation error
-//!   `<= kappa l0 T_d`, `T_d = sum_(k>p) (rho/l0)^k = q_d^(p+1)/(1-q_d)`, `q_d = 1/8`;
+//!   `<= kappa l0 T_d`, `T_d = sum_(k>p) (rho/l0)^k = q_d^(p+1)/(1-q_d)`, `q_d = rho/l0 = q/2`;
 //! - the bins' double expansion `B_i(d)`: anchors are grouped on a fixed grid of width `w`
 //!   (bin `j` centred at `c_b = origin + (j + 1/2) w`, `e_i = c_i - c_b`, `|e_i| <= w/2`,
 //!   `x_b = y0 - c_b`), `phi(y - c_i) = sum_j phi_j(x_b) (d - e_i)^j` truncated at total
 //!   degree `j <= p`: `B_i(d) = sum_k d^k sum_(m<=p-k) G_b[m][k] e_i^m`,
 //!   `G_b[m][k] = (-1)^m C(m+k, k) phi_(m+k)(x_b)`. Per junction `|d - e_i| <= rho + w/2 =
-//!   q l0`, so its error is `<= kappa l0 T_b`, `T_b = q^(p+1)/(1-q)`, `q = 1/4`.
+//!   q l0`, so its error is `<= kappa l0 T_b`, `T_b = q^(p+1)/(1-q)`, `q = w/l0`.
 //!
 //! The bins hold the count and the raw moments `M_(b,m) = sum_(i in b) e_i^m` (`m <= p`),
 //! so `sum_(i in b) B_i = sum_k d^k sum_m G_b[m][k] M_(b,m)` costs O(p^2) per bin, not per
@@ -75,11 +77,20 @@
 //! q^p/(1-q) + q^(p+1)/(1-q)^2)`; `error_bound` is this plus the round-off allowance. No near
 //! field is needed because `q < 1` for every bin, near or far.
 //!
-//! **Choice of `w`, `rho`, `p`.** `w/2 = rho = l0/8`, so `q = 1/4`; `p` is the smallest order
-//! with `T_b + T_d <= rtol/4` (capped at `PMAX - 1 = 31`, i.e. `rtol >= ~5e-19`): the
-//! truncation part of `error_bound()` is then `<= (rtol/4) kappa l0 (n + resid)`, at most
-//! `(rtol/2) kappa l0 n` while `resid <= n`, leaving the other half for round-off.
-//! `rtol = 1e-10` gives `p = 17`, as the O(p^2) version (criterion `T_b <= rtol/2`) did.
+//! **Choice of `w`, `rho`, `p`.** `w/2 = rho`, so `q = w/l0` and `q_d = q/2`; `p` is the
+//! smallest order with `T_b + T_d <= rtol/4` (capped at `PMAX - 1 = 31`, i.e. `rtol >=
+//! ~5e-19`): the truncation part of `error_bound()` is then `<= (rtol/4) kappa l0 (n +
+//! resid)`, at most `(rtol/2) kappa l0 n` while `resid <= n`, leaving the other half for
+//! round-off. Two geometries, chosen once from `N` ([`SeriesSum::for_junctions`]):
+//! - *wide bins*, `w = l0/4`, `rho = l0/8`, `q = 1/4`: `p = 17` at `rtol = 1e-10`;
+//! - *narrow bins*, `w = l0/8`, `rho = l0/16`, `q = 1/8`: `p = 11` at `rtol = 1e-10`, so every
+//!   add, remove and evaluation costs about two thirds as much, and the plate re-bases twice
+//!   as often over the same travel, each re-base over twice as many bins at `(12/18)^2` of
+//!   the work per bin. A re-base's cost is independent of `N` while the events per unit of
+//!   travel grow with `N`, so narrow bins win from about `NARROW_FROM = 30000` junctions on
+//!   (measured: docs/performance.md, "Exact engine, tilted law"). Narrower still (`q =
+//!   1/16`, `p = 8`) saves a further 2 % of a run's instructions at `N = 1e6` and costs 41 %
+//!   more at `1e4`.
 //!
 //! **Round-off allowance** (first order in `eps`, not a proof). Norm: `|A|_rho =
 //! sum_k |A_k| rho^k`; every junction's term contributes at most `kappa l0 /(1-q)` to it.
@@ -105,8 +116,8 @@
 //!
 //! **Direct mode** ([`SeriesSum::direct`]). At small `N` the anchors fall into about as many
 //! bins as there are attached junctions, so a bins re-base (O(p^2) per bin) costs more than
-//! rebuilding the series junction by junction would, and the bins' radius `l0/8` (set by
-//! their double expansion, `q = (rho + w/2)/l0 = 1/4`) makes the plate re-base every
+//! rebuilding the series junction by junction would, and the wide bins' radius `l0/8` (set
+//! by their double expansion, `q = (rho + w/2)/l0 = 1/4`) makes the plate re-base every
 //! `l0/16` of travel. Direct mode keeps no bins:
 //! - *State.* The live junctions' offsets `e_i = c_i - origin` (frame-independent like the
 //!   bins' offsets: `shift` moves `origin` and `y0` only) in a dense array, with stable
@@ -123,9 +134,9 @@
 //!   it; bit for bit `phi_taylor`'s values, unit tests `phi_taylor_lanes_is_phi_taylor` and
 //!   `direct_sums_are_the_same_in_every_vector_width`), in `graded.rs`.
 //! - *Radius and order.* Only the junctions' own expansions are left, so `rho = l0/4`
-//!   (`q_d = rho/l0 = 1/4`: twice the bins' radius, half the re-bases) and `p` is the
+//!   (`q_d = rho/l0 = 1/4`: twice the wide bins' radius, half the re-bases) and `p` is the
 //!   smallest order with `T_d = q_d^(p+1)/(1-q_d) <= rtol/4` (`p = 17` at `rtol = 1e-10`,
-//!   as in bins mode; capped at 31). That order is the worst junction's (`x0 = 0`); each
+//!   as with wide bins; capped at 31). That order is the worst junction's (`x0 = 0`); each
 //!   junction keeps its own expansion only to the order its distance from its anchor needs
 //!   for the same tails (*graded orders*, `graded.rs`: at `rtol = 1e-10`, order 10 at
 //!   `|x0| = 2 l0`, 8 at `4 l0`), in `add`, `remove` and the re-base alike.
@@ -186,7 +197,7 @@ mod wire;
 
 use crate::physics::Tilted;
 use bins::{Bin, Dense, NONE, bin_terms};
-use bound::{EPS, OP_ROUNDOFF, Q, Q_D, order_for, order_for_direct, tails_table};
+use bound::{EPS, OP_ROUNDOFF, Q_D, Q_NARROW, Q_WIDE, order_for, order_for_direct, tails};
 use coefficients::{BINOM_SHIFT, PMAX, recentred};
 pub use coefficients::{phi_taylor, tilted_taylor};
 pub use cubic::LocalCubic;
@@ -196,17 +207,25 @@ use graded::{Grades, REBUILD_ROUNDOFF, direct_sums};
 
 /// Direct mode below this many junctions ([`SeriesSum::for_junctions`]); bins mode from it on.
 pub const DIRECT_MAX: usize = 8000;
+/// Narrow bins (`q = 1/8`) from this many junctions on, wide ones (`q = 1/4`) below
+/// ([`SeriesSum::for_junctions`]).
+pub const NARROW_FROM: usize = 30_000;
 
 /// The bond force `S(y) = sum_i f^x(y - c_i)` of a set of junctions under the tilted law,
 /// kept as `kappa (X0 + n d) + sum_(k<=p) A_k d^k`, `d = y - base`, plus anchor bins for
 /// O(bins) re-basing (bins mode) or the junctions' offsets for an O(n) one (direct mode),
 /// chosen at construction (module doc).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(from = "wire::Wire", into = "wire::Wire")]
+#[serde(try_from = "wire::Wire", into = "wire::Wire")]
 pub struct SeriesSum {
     law: Tilted,
     /// Order: coefficients `A_0..=A_p`, bin moments `M_0..=M_p`.
     p: usize,
+    /// The bins' ratio `q = w / l0` (bins mode: the radius is `q l0 / 2`), or `Q_D` (direct
+    /// mode: the radius is `q l0`).
+    q: f64,
+    /// [`tails`] of `q` at order `p`.
+    tails: [(f64, f64); 3],
     /// Base point `y0` in the current frame.
     base: f64,
     /// Grid origin in the current frame.
@@ -241,8 +260,8 @@ pub struct SeriesSum {
 }
 
 impl SeriesSum {
-    /// Empty set of anchors, base point 0, bins of width `w = l0/4`, radius `rho = l0/8`
-    /// (`q = 1/4`) and the smallest order `p` with `q^(p+1)/(1-q) + (1/8)^(p+1)/(7/8) <=
+    /// Empty set of anchors, base point 0, wide bins: width `w = l0/4`, radius `rho = l0/8`
+    /// (`q = 1/4`), and the smallest order `p` with `q^(p+1)/(1-q) + (q/2)^(p+1)/(1-q/2) <=
     /// rtol/4`: the truncation part of `error_bound()` is then at most
     /// `(rtol/4) kappa l0 (len() + removals since the last re-base, capped at the count then)`
     /// (for `rtol >= ~5e-19`; smaller, non-positive or NaN `rtol` give the cap `p = 31`). The
@@ -250,10 +269,24 @@ impl SeriesSum {
     /// the last re-base well below `rtol / eps`. `law.l0 > 0` is assumed (validated by the
     /// scene).
     pub fn new(law: Tilted, rtol: f64) -> SeriesSum {
-        let p = order_for(rtol);
+        SeriesSum::bins(law, rtol, Q_WIDE)
+    }
+
+    /// [`SeriesSum::new`] with narrow bins: `w = l0/8`, `rho = l0/16` (`q = 1/8`), so a lower
+    /// order for the same bound (`p = 11` at `rtol = 1e-10`, against 17) and twice the
+    /// re-bases (module doc, "Choice of `w`, `rho`, `p`").
+    pub fn narrow(law: Tilted, rtol: f64) -> SeriesSum {
+        SeriesSum::bins(law, rtol, Q_NARROW)
+    }
+
+    /// Bins mode with the bins' ratio `q` ([`Q_WIDE`] or [`Q_NARROW`]).
+    fn bins(law: Tilted, rtol: f64, q: f64) -> SeriesSum {
+        let p = order_for(q, rtol);
         SeriesSum {
             law,
             p,
+            q,
+            tails: tails(q, p),
             base: 0.0,
             origin: 0.0,
             base_off: 0.0,
@@ -282,13 +315,26 @@ impl SeriesSum {
     /// there are junctions (module doc, "Direct mode").
     pub fn direct(law: Tilted, rtol: f64) -> SeriesSum {
         let p = order_for_direct(rtol);
-        SeriesSum { p, direct: Some(Direct::new(Grades::new(law.l0, p))), ..SeriesSum::new(law, rtol) }
+        SeriesSum {
+            p,
+            q: Q_D,
+            tails: tails(Q_D, p),
+            direct: Some(Direct::new(Grades::new(law.l0, p))),
+            ..SeriesSum::new(law, rtol)
+        }
     }
 
     /// The series for a run of `n` junctions: direct mode below [`DIRECT_MAX`]
-    /// ([`SeriesSum::direct`]), bins mode from it on ([`SeriesSum::new`]).
+    /// ([`SeriesSum::direct`]), wide bins from it on ([`SeriesSum::new`]), narrow bins from
+    /// [`NARROW_FROM`] on ([`SeriesSum::narrow`]).
     pub fn for_junctions(law: Tilted, rtol: f64, n: usize) -> SeriesSum {
-        if n < DIRECT_MAX { SeriesSum::direct(law, rtol) } else { SeriesSum::new(law, rtol) }
+        if n < DIRECT_MAX {
+            SeriesSum::direct(law, rtol)
+        } else if n < NARROW_FROM {
+            SeriesSum::new(law, rtol)
+        } else {
+            SeriesSum::narrow(law, rtol)
+        }
     }
 
     /// Whether the series is in direct mode (no bins).
@@ -328,17 +374,17 @@ impl SeriesSum {
     }
 
     /// The series is valid (error within `error_bound()`) for `|y - base| <= radius()`;
-    /// `radius = l0/8` (bins mode) or `l0/4` (direct mode). Outside it, nothing is
-    /// guaranteed.
+    /// `radius = q l0 / 2` (bins mode: `l0/8` wide, `l0/16` narrow) or `l0/4` (direct mode).
+    /// Outside it, nothing is guaranteed.
     #[inline]
     pub fn radius(&self) -> f64 {
-        if self.direct.is_some() { Q_D * self.law.l0 } else { 0.125 * self.law.l0 }
+        if self.direct.is_some() { self.q * self.law.l0 } else { 0.5 * self.q * self.law.l0 }
     }
 
-    /// Bin width `w = l0/4`.
+    /// Bin width `w = q l0` (`l0/4` wide, `l0/8` narrow).
     #[inline]
     fn width(&self) -> f64 {
-        0.25 * self.law.l0
+        self.q * self.law.l0
     }
 
     /// `x_b = y0 - c_b` of grid index `j`.
@@ -671,7 +717,7 @@ impl SeriesSum {
     /// (`dS/dy`): every present junction's expansion (the bins' double expansion, which
     /// dominates its own) plus each charged residue (bin expansion minus own expansion).
     fn truncation(&self) -> (f64, f64) {
-        let [t_d, t_b, t_direct] = tails_table()[self.p];
+        let [t_d, t_b, t_direct] = self.tails;
         if self.direct.is_some() {
             // Every present junction's own expansion, `q_d = 1/4`; no residue.
             let (df, ds) = t_d;
@@ -687,7 +733,7 @@ impl SeriesSum {
     /// Round-off allowance on the coefficients, in the norm `sum_k |dA_k| rho^k`.
     fn coeff_roundoff(&self) -> f64 {
         let n = self.n as f64;
-        EPS * self.law.kappa * self.law.l0 / (1.0 - Q) * (self.roff + (2.0 * self.p as f64 + 4.0) * n)
+        EPS * self.law.kappa * self.law.l0 / (1.0 - self.q) * (self.roff + (2.0 * self.p as f64 + 4.0) * n)
     }
 
     /// Round-off allowance of the linear part and of the anchors' offsets against the grid.
@@ -703,7 +749,7 @@ impl SeriesSum {
 
     /// Bound on `|S(y) - S_true(y)|` for `|y - base| <= radius()`: the truncation,
     /// `kappa l0 (len T_b + resid (T_b + T_d))` with `T_b = q^(p+1)/(1-q)`,
-    /// `T_d = (1/8)^(p+1)/(7/8)` (rigorous), plus the first-order round-off allowance of the
+    /// `T_d = (q/2)^(p+1)/(1 - q/2)` (rigorous), plus the first-order round-off allowance of the
     /// module doc (which grows with the operations since the last re-base).
     pub fn error_bound(&self) -> f64 {
         self.law.kappa * self.law.l0 * self.truncation().0 + self.coeff_roundoff() + self.linear_roundoff()

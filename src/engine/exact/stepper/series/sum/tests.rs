@@ -1,5 +1,5 @@
 use super::bins::DENSE_MAX;
-use super::bound::{Q_DIRECT, tails_at};
+use super::bound::{Q_NARROW, Q_WIDE, tails_at};
 use super::coefficients::{LANES, phi_taylor_lanes, recentred_in};
 use super::*;
 use crate::physics::ForceLaw;
@@ -46,8 +46,8 @@ fn phi_oracle(law: &Tilted, x: f64) -> Vec<D> {
 /// double-double value (the absolute error of `P_(k-1) - t P_k`, `|P_k| <= 1`, near
 /// `|t| = 1` where the difference cancels), and the error in the norm
 /// `sum_k |d phi_k| rho^k` of one junction's increment is below `OP_ROUNDOFF / 4` in units
-/// of `eps kappa l0 / (1 - q)`, at the radius of either mode (`rho = l0/8`, bins; `l0/4`,
-/// direct; the worst of each is printed).
+/// of `eps kappa l0 / (1 - q)`, at the radius of either mode (`rho = l0/8`, wide bins, which
+/// covers the narrow bins' `l0/16`; `l0/4`, direct; the worst of each is printed).
 #[test]
 fn direct_coefficients_roundoff() {
     let mut worst_norm: f64 = 0.0;
@@ -79,7 +79,7 @@ fn direct_coefficients_roundoff() {
                 norm += err * rho.powi(k as i32);
                 norm_d += err * rho_d.powi(k as i32);
             }
-            worst_norm = worst_norm.max(norm / (EPS * kappa * l0 / (1.0 - Q)));
+            worst_norm = worst_norm.max(norm / (EPS * kappa * l0 / (1.0 - Q_WIDE)));
             worst_norm_d = worst_norm_d.max(norm_d / (EPS * kappa * l0 / (1.0 - Q_D)));
         }
     }
@@ -356,22 +356,35 @@ fn direct_rebase_matches_the_incremental_series() {
     }
 }
 
-/// `p` is the smallest order whose residue bound meets `rtol/4`; non-finite or
-/// non-positive `rtol` give the cap.
+/// `p` is the smallest order whose residue bound meets `rtol/4`, for wide and narrow bins;
+/// non-finite or non-positive `rtol` give the cap; the radius and width follow the ratio.
 #[test]
 fn order_is_minimal() {
-    assert_eq!(order_for(1e-10), 17);
-    let tail = |p: usize| tails_at(Q, p).0 + tails_at(Q_DIRECT, p).0;
-    for rtol in [1e-1, 1e-4, 1e-10, 1e-13, 1e-18] {
-        let p = order_for(rtol);
-        assert!(tail(p) <= 0.25 * rtol, "rtol {rtol}: p = {p}");
-        assert!(p == 1 || tail(p - 1) > 0.25 * rtol, "rtol {rtol}: p = {p} not minimal");
+    for (q, p_at_1e10) in [(Q_WIDE, 17), (Q_NARROW, 11)] {
+        assert_eq!(order_for(q, 1e-10), p_at_1e10);
+        let tail = |p: usize| tails_at(q, p).0 + tails_at(0.5 * q, p).0;
+        for rtol in [1e-1, 1e-4, 1e-10, 1e-13, 1e-18] {
+            let p = order_for(q, rtol);
+            assert!(tail(p) <= 0.25 * rtol, "q {q}, rtol {rtol}: p = {p}");
+            assert!(p == 1 || tail(p - 1) > 0.25 * rtol, "q {q}, rtol {rtol}: p = {p} not minimal");
+        }
+        for rtol in [0.0, -1.0, f64::NAN, 1e-300] {
+            assert_eq!(order_for(q, rtol), PMAX - 1);
+        }
     }
-    for rtol in [0.0, -1.0, f64::NAN, 1e-300] {
-        assert_eq!(order_for(rtol), PMAX - 1);
-    }
-    let s = SeriesSum::new(Tilted { kappa: 1.0, l0: 2.0 }, 1e-10);
+    let law = Tilted { kappa: 1.0, l0: 2.0 };
+    let s = SeriesSum::new(law, 1e-10);
     assert_eq!((s.order(), s.radius(), s.width()), (17, 0.25, 0.5));
+    let s = SeriesSum::narrow(law, 1e-10);
+    assert_eq!((s.order(), s.radius(), s.width()), (11, 0.125, 0.25));
+    let pick = |n| {
+        let s = SeriesSum::for_junctions(law, 1e-10, n);
+        (s.is_direct(), s.width())
+    };
+    assert!(pick(DIRECT_MAX - 1).0);
+    assert_eq!(pick(DIRECT_MAX), (false, 0.5));
+    assert_eq!(pick(NARROW_FROM - 1), (false, 0.5));
+    assert_eq!(pick(NARROW_FROM), (false, 0.25));
 }
 
 /// An attach/detach pair with the same anchor leaves the series exactly as it was
@@ -452,8 +465,8 @@ fn dense_cache_matches_index() {
 }
 
 /// A series of `n` anchors spread over about `2 l0` (several bins), re-based at `y0`.
-fn cubic_fixture(law: Tilted, n: usize, y0: f64) -> (SeriesSum, Vec<f64>) {
-    let mut s = SeriesSum::new(law, 1e-10);
+fn cubic_fixture(mut s: SeriesSum, n: usize, y0: f64) -> (SeriesSum, Vec<f64>) {
+    let law = s.law;
     let mut state = 99u64;
     let anchors: Vec<f64> = (0..n)
         .map(|_| {
@@ -480,9 +493,10 @@ fn cubic_fixture(law: Tilted, n: usize, y0: f64) -> (SeriesSum, Vec<f64>) {
 #[test]
 fn taylor_at_matches_the_series_and_the_law() {
     let binom = |k: usize, j: usize| (0..j).fold(1.0, |acc, i| acc * (k - i) as f64 / (i + 1) as f64);
-    for &(kappa, l0) in &[(1.0, 1.0), (0.3, 0.07)] {
+    for (&(kappa, l0), narrow) in [(1.0, 1.0), (0.3, 0.07)].iter().flat_map(|c| [(c, false), (c, true)]) {
         let law = Tilted { kappa, l0 };
-        let (s, anchors) = cubic_fixture(law, 300, 0.1 * l0);
+        let s = if narrow { SeriesSum::narrow(law, 1e-10) } else { SeriesSum::new(law, 1e-10) };
+        let (s, anchors) = cubic_fixture(s, 300, 0.1 * l0);
         let (p, rho) = (s.order(), s.radius());
         let n = anchors.len() as f64;
         for frac in [-0.95, -0.5, 0.0, 0.3, 0.99] {
@@ -513,7 +527,7 @@ fn taylor_at_matches_the_series_and_the_law() {
                     tilted_taylor(&law, y - a, &mut buf);
                     law_sum += buf[j];
                 }
-                let trunc: f64 = (p + 1..200).map(|k| binom(k, j) * Q.powi((k - j) as i32)).sum();
+                let trunc: f64 = (p + 1..200).map(|k| binom(k, j) * s.q.powi((k - j) as i32)).sum();
                 let mut tol = n * kappa * l0.powi(1 - j as i32) * trunc
                     + binom(p, j) * rho.powi(-(j as i32)) * s.coeff_roundoff();
                 if j <= 1 {
@@ -534,9 +548,10 @@ fn taylor_at_matches_the_series_and_the_law() {
 #[test]
 fn taylor_at_remainder_bound_holds() {
     let binom = |k: usize, j: usize| (0..j).fold(1.0, |acc, i| acc * (k - i) as f64 / (i + 1) as f64);
-    for &(kappa, l0) in &[(1.0, 1.0), (0.3, 0.07)] {
+    for (&(kappa, l0), narrow) in [(1.0, 1.0), (0.3, 0.07)].iter().flat_map(|c| [(c, false), (c, true)]) {
         let law = Tilted { kappa, l0 };
-        let (s, anchors) = cubic_fixture(law, 300, -0.2 * l0);
+        let s = if narrow { SeriesSum::narrow(law, 1e-10) } else { SeriesSum::new(law, 1e-10) };
+        let (s, anchors) = cubic_fixture(s, 300, -0.2 * l0);
         let rho = s.radius();
         let n = anchors.len() as f64;
         let mut worst: f64 = 0.0;
@@ -563,7 +578,7 @@ fn taylor_at_remainder_bound_holds() {
                     tilted_taylor(&law, z - a, &mut buf);
                     d4 += buf[4];
                 }
-                let trunc: f64 = (s.order() + 1..200).map(|k| binom(k, 4) * Q.powi(k as i32 - 4)).sum();
+                let trunc: f64 = (s.order() + 1..200).map(|k| binom(k, 4) * s.q.powi(k as i32 - 4)).sum();
                 let tol = n * kappa * l0.powi(-3) * trunc + binom(s.order(), 4) * rho.powi(-4) * s.coeff_roundoff();
                 assert!(d4.abs() <= r4 + tol, "z = {z}: |S''''|/24 = {} > r4 = {r4}", d4.abs());
             }
@@ -586,4 +601,27 @@ fn local_cubic_stiffness_is_its_derivative() {
         assert_eq!(f, cubic.force(z));
         assert!((fs - fd).abs() <= 4.0 * h * h + 1e-10, "{fs} vs {fd}");
     }
+}
+
+/// A checkpoint's series reads back as written, narrow bins included; a bins-mode state that
+/// names no ratio has wide bins; a ratio the series does not know is refused.
+#[test]
+fn wire_keeps_the_bins_ratio() {
+    let law = Tilted { kappa: 0.5, l0: 1.0 };
+    for s in [SeriesSum::new(law, 1e-10), SeriesSum::narrow(law, 1e-10), SeriesSum::direct(law, 1e-10)] {
+        let (s, _) = cubic_fixture(s, 50, 0.05);
+        let text = serde_json::to_string(&s).unwrap();
+        let back: SeriesSum = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, s);
+        assert_eq!(text.contains("\"ratio\""), !s.is_direct() && s.width() != 0.25);
+    }
+    let wide = serde_json::to_value(cubic_fixture(SeriesSum::narrow(law, 1e-10), 20, 0.0).0).unwrap();
+    let mut v = wide.clone();
+    v.as_object_mut().unwrap().remove("ratio");
+    let old: SeriesSum = serde_json::from_value(v).unwrap();
+    assert_eq!((old.width(), old.radius()), (0.25, 0.125));
+    let mut v = wide;
+    v["ratio"] = serde_json::json!(0.3);
+    let err = serde_json::from_value::<SeriesSum>(v).unwrap_err().to_string();
+    assert!(err.contains("ratio 0.3"), "{err}");
 }

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::SeriesSum;
 use super::bins::{Bin, Dense};
+use super::bound::{Q_D, Q_NARROW, Q_WIDE, tails};
 use super::coefficients::PMAX;
 use super::direct::{Direct, DirectWire};
 use super::graded::Grades;
@@ -14,8 +15,9 @@ use crate::physics::Tilted;
 /// before the O(p) update: such a state is read as re-based with every present junction
 /// counted through the bins (`n_rb = n`, `resid = 0`), which is what it was. Direct mode
 /// writes `direct` and no `bins`, `free`, `index` (a reader that knows only the bins then
-/// refuses the state instead of misreading it); bins mode writes the same bytes as before
-/// direct mode existed.
+/// refuses the state instead of misreading it). Bins mode names its bins' ratio only for
+/// narrow bins: a state that names none has wide ones (`q = 1/4`); a ratio that is neither
+/// is refused.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub(super) struct Wire {
     law: Tilted,
@@ -45,13 +47,31 @@ pub(super) struct Wire {
     /// from checkpoints written before them, whose series is then rebuilt on reading.
     #[serde(default)]
     graded: bool,
+    /// The bins' ratio `q`, written for narrow bins only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    ratio: Option<f64>,
 }
 
-impl From<Wire> for SeriesSum {
-    fn from(w: Wire) -> SeriesSum {
+/// A checkpoint's series whose bins' ratio is not one the series knows.
+#[derive(Debug, thiserror::Error)]
+#[error("series bins' ratio {0} is not {Q_WIDE} or {Q_NARROW}")]
+pub(super) struct RatioError(f64);
+
+impl TryFrom<Wire> for SeriesSum {
+    type Error = RatioError;
+    fn try_from(w: Wire) -> Result<SeriesSum, RatioError> {
+        let q = match (w.direct.is_some(), w.ratio) {
+            (true, _) => Q_D,
+            (false, None) => Q_WIDE,
+            (false, Some(q)) if q == Q_NARROW || q == Q_WIDE => q,
+            (false, Some(q)) => return Err(RatioError(q)),
+        };
+        let p = w.p.min(PMAX - 1);
         let mut s = SeriesSum {
             law: w.law,
-            p: w.p.min(PMAX - 1),
+            p,
+            q,
+            tails: tails(q, p),
             base: w.base,
             origin: w.origin,
             base_off: w.base_off,
@@ -79,7 +99,7 @@ impl From<Wire> for SeriesSum {
             s.dense.set(j, slot, &index);
             s.index = index;
         }
-        s
+        Ok(s)
     }
 }
 
@@ -105,6 +125,7 @@ impl From<SeriesSum> for Wire {
             resid: s.resid,
             direct: s.direct.map(|d| DirectWire { e: d.e, handle: d.handle, free: d.free }),
             graded: !bins_mode,
+            ratio: (bins_mode && s.q != Q_WIDE).then_some(s.q),
         }
     }
 }
