@@ -243,24 +243,83 @@ pub(super) const BINOM_SHIFT: [[f64; RECENTRED_MAX]; PMAX + 3] = {
     t
 };
 
+/// [`BINOM_SHIFT`] transposed, `C(m + j, j)` at `[j][m]`: the four chains of
+/// [`recentred_in`] read four consecutive `m` of one `j`.
+const BINOM_SHIFT_T: [[f64; PMAX + 3]; RECENTRED_MAX] = {
+    let mut t = [[0.0; PMAX + 3]; RECENTRED_MAX];
+    let mut j = 0;
+    while j < RECENTRED_MAX {
+        let mut m = 0;
+        while m < PMAX + 3 {
+            t[j][m] = BINOM_SHIFT[m][j];
+            m += 1;
+        }
+        j += 1;
+    }
+    t
+};
+
 /// [`recentred`]: `out[j] = sum_m C(m + j, j) A_(m+j) t0^m` (`A_k = a_k + al_k`, zero above
-/// `p`), all `j` side by side: a polynomial in `t0` with vector coefficients `B_m = (C(m +
-/// j, j) A_(m+j))_j`, so a multiply and an add per coefficient and lane with no lane
-/// crossing. It is evaluated as four Horner chains in `t0^4` (`m = 4i + r`, combined as `(c0
-/// + t0 c1) + t0^2 (c2 + t0 c3)`), independent of one another, for a quarter of one chain's
-/// latency. A term of degree `m` carries a relative rounding of about `(5m/4 + 6) eps`
-/// (`t0^4` itself two or three roundings, two per chain step, the product and the
-/// combination), within the `(2p + 4) eps` of a Horner evaluation that the round-off
-/// allowance charges (module doc) for `p >= 3`. O(p M).
+/// `p`), all `j` side by side: polynomials in `t0` with coefficients `C(m + j, j) A_(m+j)`,
+/// a multiply and an add per coefficient. Each is evaluated as four Horner chains in `t0^4`
+/// (`m = 4i + r`, combined as `(c0 + t0 c1) + t0^2 (c2 + t0 c3)`), independent of one
+/// another, for a quarter of one chain's latency: below 8 outputs by [`by_output`], from 8
+/// on by [`by_chain`] (the same operations in another order of the loops, so the same
+/// values bit for bit; each the faster for its sizes). A term of degree `m` carries a
+/// relative rounding of about `(5m/4 + 6) eps` (`t0^4` itself two or three roundings, two
+/// per chain step, the product and the combination), within the `(2p + 4) eps` of a Horner
+/// evaluation that the round-off allowance charges (module doc) for `p >= 3`. O(p M).
 #[inline(always)]
 pub(super) fn recentred_in<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: usize, t0: f64) -> [f64; M] {
     const { assert!(M <= RECENTRED_MAX) };
-    // Whole arrays (vector operations): the series keeps `a_k = al_k = 0` above `p`.
+    let sum = sums(a, al, p);
+    if M >= 8 { by_chain::<M>(&sum, p, t0) } else { by_output::<M>(&sum, p, t0) }
+}
+
+/// `A_k = a_k + al_k`, zero from `PMAX` on (the chains read up to `RECENTRED_MAX + 2` past `p`).
+pub(super) type Sums = [f64; PMAX + 3 + RECENTRED_MAX];
+
+/// The sums [`recentred_in`] re-centres, as whole arrays (vector operations): the series
+/// keeps `a_k = al_k = 0` above `p`.
+#[inline(always)]
+pub(super) fn sums(a: &[f64; PMAX], al: &[f64; PMAX], p: usize) -> Sums {
     debug_assert!(a.iter().zip(al).skip(p + 1).all(|(h, l)| *h == 0.0 && *l == 0.0));
     let mut sum = [0.0; PMAX + 3 + RECENTRED_MAX];
     for k in 0..PMAX {
         sum[k] = a[k] + al[k];
     }
+    sum
+}
+
+/// [`recentred_in`] with the four chains of one output `j` stepping together, one operation
+/// on four lanes (consecutive `m`, read from consecutive entries of the sums and of
+/// [`BINOM_SHIFT_T`]): `c[j][r]`.
+#[inline(always)]
+pub(super) fn by_output<const M: usize>(sum: &Sums, p: usize, t0: f64) -> [f64; M] {
+    let t2 = t0 * t0;
+    let t4 = t2 * t2;
+    let mut c = [[0.0; 4]; M];
+    for i in (0..=p.min(PMAX - 1) / 4).rev() {
+        let m = 4 * i;
+        for (j, cj) in c.iter_mut().enumerate() {
+            let row: &[f64; 4] = BINOM_SHIFT_T[j][m..m + 4].try_into().expect("m + 3 < PMAX + 3");
+            let coef: &[f64; 4] = sum[m + j..m + j + 4].try_into().expect("m + j + 3 < the sums' length");
+            for r in 0..4 {
+                cj[r] = cj[r] * t4 + row[r] * coef[r];
+            }
+        }
+    }
+    let mut out = [0.0; M];
+    for j in 0..M {
+        out[j] = (c[j][0] + t0 * c[j][1]) + t2 * (c[j][2] + t0 * c[j][3]);
+    }
+    out
+}
+
+/// [`recentred_in`] with one chain `r` stepping every output at once, whole vectors of
+/// outputs: `c[r][j]`.
+#[inline(always)]
+pub(super) fn by_chain<const M: usize>(sum: &Sums, p: usize, t0: f64) -> [f64; M] {
     let t2 = t0 * t0;
     let t4 = t2 * t2;
     let mut c = [[0.0; M]; 4];
