@@ -26,8 +26,8 @@ pub fn below<R: Rng + ?Sized>(rng: &mut R, n: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::pcg;
-    use rand::RngExt;
+    use rand::{RngExt, SeedableRng};
+    use rand_pcg::Pcg64;
 
     /// The same indices and the same generator state as `random_range(0..n)`, for small,
     /// large and near-`2^32` sizes (where the second draw is taken often).
@@ -35,7 +35,7 @@ mod tests {
     fn below_is_random_range_bit_for_bit() {
         let sizes = [1usize, 2, 3, 7, 300, 1 << 20, 1_000_003, (1 << 31) + 1, u32::MAX as usize - 1, u32::MAX as usize];
         for (s, &n) in sizes.iter().enumerate() {
-            let (mut a, mut b) = (pcg(s as u64), pcg(s as u64));
+            let (mut a, mut b) = (Pcg64::seed_from_u64(s as u64), Pcg64::seed_from_u64(s as u64));
             for _ in 0..20_000 {
                 assert_eq!(below(&mut a, n), b.random_range(0..n), "n = {n}");
             }
