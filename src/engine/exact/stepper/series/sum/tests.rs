@@ -123,21 +123,24 @@ fn recentring_is_within_its_rounding_allowance() {
     }
 }
 
+/// A fixed series of order `p`, high and low parts of mixed signs and magnitudes, zero above
+/// `p` as the series keeps them (what the re-centring reads).
+fn series_of_order(p: usize) -> ([f64; PMAX], [f64; PMAX]) {
+    let mut a = [0.0; PMAX];
+    let mut al = [0.0; PMAX];
+    for k in 0..=p {
+        a[k] = (1.7f64).powi(-(k as i32)) * if k % 3 == 1 { -1.3 } else { 0.9 + 0.01 * k as f64 };
+        al[k] = a[k] * 1e-17 * (k as f64 - 7.5);
+    }
+    (a, al)
+}
+
 /// The re-centring in 256-bit vectors (where the processor has AVX2) is the baseline
 /// build's bit for bit, for every size the plate asks for.
 #[test]
 fn recentring_is_the_same_in_every_vector_width() {
-    let mut a = [0.0; PMAX];
-    let mut al = [0.0; PMAX];
-    for k in 0..PMAX {
-        a[k] = (1.7f64).powi(-(k as i32)) * if k % 3 == 1 { -1.3 } else { 0.9 + 0.01 * k as f64 };
-        al[k] = a[k] * 1e-17 * (k as f64 - 7.5);
-    }
     for p in [0, 3, 17, PMAX - 1] {
-        // The series keeps its coefficients above `p` at zero (what `recentred` reads).
-        let (mut a, mut al) = (a, al);
-        a[p + 1..].fill(0.0);
-        al[p + 1..].fill(0.0);
+        let (a, al) = series_of_order(p);
         for t0 in [0.0, -0.2, 0.123456789, 0.25] {
             assert_eq!(
                 recentred::<5>(&a, &al, p, t0).map(f64::to_bits),
@@ -159,16 +162,8 @@ fn recentring_is_the_same_in_every_vector_width() {
 /// size either serves and every order.
 #[test]
 fn recentring_orders_agree_bit_for_bit() {
-    let mut a = [0.0; PMAX];
-    let mut al = [0.0; PMAX];
-    for k in 0..PMAX {
-        a[k] = (1.7f64).powi(-(k as i32)) * if k % 3 == 1 { -1.3 } else { 0.9 + 0.01 * k as f64 };
-        al[k] = a[k] * 1e-17 * (k as f64 - 7.5);
-    }
     for p in 0..PMAX {
-        let (mut a, mut al) = (a, al);
-        a[p + 1..].fill(0.0);
-        al[p + 1..].fill(0.0);
+        let (a, al) = series_of_order(p);
         let sum = sums(&a, &al, p);
         for t0 in [0.0, -0.2, 0.123456789, 0.25] {
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
