@@ -37,7 +37,9 @@ const LEGENDRE2: [[f64; 3]; PMAX] = {
 /// `phi_k = -kappa l0 R^-k (P_(k-1)(t) - t P_k(t))`, `R = sqrt(x^2 + l0^2)`, `t = -x/R`,
 /// `P_k` by the Legendre recurrence (`LEGENDRE2`: even `P_k` and odd `P_k / t` as two
 /// independent chains in `s = t^2 = x^2/R^2`, half the latency of one). O(1) per coefficient.
-#[inline]
+/// Always inlined: where `out`'s length is a constant ([`COMPILED_ORDERS`]) its loops unroll and
+/// the recurrence stays in registers.
+#[inline(always)]
 pub fn phi_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
     let n = out.len();
     if n == 0 {
@@ -201,9 +203,24 @@ pub fn tilted_taylor(law: &Tilted, x: f64, out: &mut [f64]) {
     }
 }
 
+/// Series orders compiled as constants (`ORDER = p` in [`recentred_at`] and the series'
+/// updates): the narrow bins' and the wide bins' (and direct mode's) at `rtol = 1e-10`, the
+/// engine's default. At a constant order the loops over `0..=p` unroll and lose their bounds
+/// checks; the operations and their order are those of the run-time order (`ORDER = 0`), so
+/// the values are the same bit for bit.
+pub(super) const COMPILED_ORDERS: [usize; 2] = [11, 17];
+
+/// `p` itself, or the compiled `ORDER` when it is not 0 (which must then equal `p`).
+#[inline(always)]
+pub(super) fn order_of<const ORDER: usize>(p: usize) -> usize {
+    debug_assert!(ORDER == 0 || ORDER == p, "compiled order {ORDER}, series order {p}");
+    if ORDER == 0 { p } else { ORDER }
+}
+
 /// The first `M` coefficients of `sum_(k<=p) (a_k + al_k) z^k` re-centred at `z = t0`, all
-/// side by side as polynomials in `t0` ([`recentred_in`]), in 256-bit vectors where the
-/// processor has AVX2 (the same operations, so the same values bit for bit; [`direct_sums`](super::graded::direct_sums)).
+/// side by side as polynomials in `t0` ([`recentred_at`], at a constant order where
+/// [`COMPILED_ORDERS`] has one), in 256-bit vectors where the processor has AVX2 (the same
+/// operations, so the same values bit for bit; [`direct_sums`](super::graded::direct_sums)).
 #[inline]
 pub(super) fn recentred<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: usize, t0: f64) -> [f64; M] {
     #[cfg(target_arch = "x86_64")]
@@ -211,14 +228,26 @@ pub(super) fn recentred<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: us
         // SAFETY: the processor has AVX2, checked just above.
         return unsafe { recentred_avx2::<M>(a, al, p, t0) };
     }
-    recentred_in::<M>(a, al, p, t0)
+    recentred_compiled::<M>(a, al, p, t0)
 }
 
-/// [`recentred_in`] compiled for AVX2.
+/// [`recentred_compiled`] compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn recentred_avx2<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: usize, t0: f64) -> [f64; M] {
-    recentred_in::<M>(a, al, p, t0)
+    recentred_compiled::<M>(a, al, p, t0)
+}
+
+/// [`recentred_at`] at the compiled order equal to `p`, if there is one.
+#[inline(always)]
+fn recentred_compiled<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: usize, t0: f64) -> [f64; M] {
+    const P0: usize = COMPILED_ORDERS[0];
+    const P1: usize = COMPILED_ORDERS[1];
+    match p {
+        P0 => recentred_at::<M, P0>(a, al, p, t0),
+        P1 => recentred_at::<M, P1>(a, al, p, t0),
+        _ => recentred_in::<M>(a, al, p, t0),
+    }
 }
 
 /// Widest re-centring asked for ([`recentred`]'s `M`).
@@ -271,7 +300,19 @@ const BINOM_SHIFT_T: [[f64; PMAX + 3]; RECENTRED_MAX] = {
 /// evaluation that the round-off allowance charges (module doc) for `p >= 3`. O(p M).
 #[inline(always)]
 pub(super) fn recentred_in<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: usize, t0: f64) -> [f64; M] {
+    recentred_at::<M, 0>(a, al, p, t0)
+}
+
+/// [`recentred_in`] at order `p`, compiled for that order when `ORDER = p` ([`order_of`]).
+#[inline(always)]
+pub(super) fn recentred_at<const M: usize, const ORDER: usize>(
+    a: &[f64; PMAX],
+    al: &[f64; PMAX],
+    p: usize,
+    t0: f64,
+) -> [f64; M] {
     const { assert!(M <= RECENTRED_MAX) };
+    let p = order_of::<ORDER>(p);
     let sum = sums(a, al, p);
     if M >= 8 { by_chain::<M>(&sum, p, t0) } else { by_output::<M>(&sum, p, t0) }
 }

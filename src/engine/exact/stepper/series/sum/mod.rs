@@ -198,7 +198,7 @@ mod wire;
 use crate::physics::Tilted;
 use bins::{Bin, Dense, NONE, bin_terms};
 use bound::{EPS, OP_ROUNDOFF, Q_D, Q_NARROW, Q_WIDE, order_for, order_for_direct, tails};
-use coefficients::{BINOM_SHIFT, PMAX, recentred};
+use coefficients::{BINOM_SHIFT, COMPILED_ORDERS, PMAX, order_of, recentred};
 pub use coefficients::{phi_taylor, tilted_taylor};
 pub use cubic::LocalCubic;
 use dd::{dd_add, dd_add_all, dd_add_all_signed, two_product_err};
@@ -439,21 +439,35 @@ impl SeriesSum {
             // SAFETY: the processor has AVX2, checked just above.
             return unsafe { self.apply_avx2(slot, e, sign) };
         }
-        self.apply_in(slot, e, sign)
+        self.apply_compiled(slot, e, sign)
     }
 
     /// [`SeriesSum::apply_in`] compiled for AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn apply_avx2(&mut self, slot: usize, e: f64, sign: f64) {
-        self.apply_in(slot, e, sign)
+        self.apply_compiled(slot, e, sign)
+    }
+
+    /// [`SeriesSum::apply_in`] at the compiled order equal to the series', if there is one
+    /// ([`COMPILED_ORDERS`]).
+    #[inline(always)]
+    fn apply_compiled(&mut self, slot: usize, e: f64, sign: f64) {
+        const P0: usize = COMPILED_ORDERS[0];
+        const P1: usize = COMPILED_ORDERS[1];
+        match self.p {
+            P0 => self.apply_in::<P0>(slot, e, sign),
+            P1 => self.apply_in::<P1>(slot, e, sign),
+            _ => self.apply_in::<0>(slot, e, sign),
+        }
     }
 
     /// Adds `sign * (junction with offset e in slot)`: `+- e^m` to the bin's moments and
-    /// `+- phi_k(x_b - e)` (its own Taylor coefficients about the base) to the series. O(p).
+    /// `+- phi_k(x_b - e)` (its own Taylor coefficients about the base) to the series, at the
+    /// series' order, compiled for it when `ORDER` is not 0 ([`order_of`]). O(p).
     #[inline(always)]
-    fn apply_in(&mut self, slot: usize, e: f64, sign: f64) {
-        let p = self.p;
+    fn apply_in<const ORDER: usize>(&mut self, slot: usize, e: f64, sign: f64) {
+        let p = order_of::<ORDER>(self.p);
         let x = self.x_of(self.bins[slot].j) - e;
         let mut c = [0.0; PMAX];
         phi_taylor(&self.law, x, &mut c[..=p]);

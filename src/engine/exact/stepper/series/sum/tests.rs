@@ -1,6 +1,6 @@
 use super::bins::DENSE_MAX;
 use super::bound::{Q_NARROW, Q_WIDE, tails_at};
-use super::coefficients::{LANES, by_chain, by_output, phi_taylor_lanes, recentred_in, sums};
+use super::coefficients::{COMPILED_ORDERS, LANES, by_chain, by_output, phi_taylor_lanes, recentred_in, sums};
 use super::*;
 use crate::physics::ForceLaw;
 use twofloat::TwoFloat as D;
@@ -135,11 +135,12 @@ fn series_of_order(p: usize) -> ([f64; PMAX], [f64; PMAX]) {
     (a, al)
 }
 
-/// The re-centring in 256-bit vectors (where the processor has AVX2) is the baseline
-/// build's bit for bit, for every size the plate asks for.
+/// The re-centring in 256-bit vectors (where the processor has AVX2), at a compiled order
+/// where `COMPILED_ORDERS` has one, is the baseline build's at a run-time order bit for
+/// bit, for every size the plate asks for.
 #[test]
 fn recentring_is_the_same_in_every_vector_width() {
-    for p in [0, 3, 17, PMAX - 1] {
+    for p in [0, 3, 11, 17, PMAX - 1] {
         let (a, al) = series_of_order(p);
         for t0 in [0.0, -0.2, 0.123456789, 0.25] {
             assert_eq!(
@@ -202,27 +203,36 @@ fn direct_updates_are_the_same_in_every_vector_width() {
     }
 }
 
-/// A bins-mode update in 256-bit vectors (where the processor has AVX2) leaves the
-/// series and the bin's moments exactly as the baseline build's does.
+/// A bins-mode update in 256-bit vectors (where the processor has AVX2) and at a
+/// compiled order (`COMPILED_ORDERS`) leaves the series and the bin's moments exactly as the
+/// baseline build's does at a run-time order: wide bins (`p = 17`), narrow bins (`p = 11`)
+/// and an order not compiled as a constant (`rtol = 1e-4`).
 #[test]
 fn bin_updates_are_the_same_in_every_vector_width() {
     let law = Tilted { kappa: 0.4, l0: 1.0 };
-    let mut s = SeriesSum::new(law, 1e-10);
-    for i in 0..200 {
-        s.add(0.0137 * i as f64 - 1.1);
-    }
-    s.rebase(0.3);
-    let slot = s.add(0.25) as usize;
-    for (e, sign) in [(0.01, 1.0), (-0.0234, -1.0), (0.1, 1.0), (1e-9, -1.0)] {
-        let (mut a, mut b) = (s.clone(), s.clone());
-        a.apply(slot, e, sign);
-        b.apply_in(slot, e, sign);
-        let bits = |t: &SeriesSum| {
-            let bin = &t.bins[slot];
-            let v: Vec<u64> = t.a.iter().chain(&t.al).chain(&bin.m).chain(&bin.ml).map(|v| v.to_bits()).collect();
-            v
-        };
-        assert_eq!(bits(&a), bits(&b), "e {e}");
+    let orders: Vec<usize> = [SeriesSum::new(law, 1e-10), SeriesSum::narrow(law, 1e-10), SeriesSum::new(law, 1e-4)]
+        .iter()
+        .map(SeriesSum::order)
+        .collect();
+    assert_eq!(orders[..2], [17, 11]);
+    assert!(!COMPILED_ORDERS.contains(&orders[2]), "{orders:?}");
+    for mut s in [SeriesSum::new(law, 1e-10), SeriesSum::narrow(law, 1e-10), SeriesSum::new(law, 1e-4)] {
+        for i in 0..200 {
+            s.add(0.0137 * i as f64 - 1.1);
+        }
+        s.rebase(0.3);
+        let slot = s.add(0.25) as usize;
+        for (e, sign) in [(0.01, 1.0), (-0.0234, -1.0), (0.1, 1.0), (1e-9, -1.0)] {
+            let (mut a, mut b) = (s.clone(), s.clone());
+            a.apply(slot, e, sign);
+            b.apply_in::<0>(slot, e, sign);
+            let bits = |t: &SeriesSum| {
+                let bin = &t.bins[slot];
+                let v: Vec<u64> = t.a.iter().chain(&t.al).chain(&bin.m).chain(&bin.ml).map(|v| v.to_bits()).collect();
+                v
+            };
+            assert_eq!(bits(&a), bits(&b), "p {} e {e}", s.p);
+        }
     }
 }
 
