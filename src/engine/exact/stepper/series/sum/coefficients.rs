@@ -297,7 +297,9 @@ const BINOM_SHIFT_T: [[f64; PMAX + 3]; RECENTRED_MAX] = {
 /// values bit for bit; each the faster for its sizes). A term of degree `m` carries a
 /// relative rounding of about `(5m/4 + 6) eps` (`t0^4` itself two or three roundings, two
 /// per chain step, the product and the combination), within the `(2p + 4) eps` of a Horner
-/// evaluation that the round-off allowance charges (module doc) for `p >= 3`. O(p M).
+/// evaluation that the round-off allowance charges (module doc) for `p >= 3`. The steps
+/// that would only add the zeros above `p` to a chain still at `+0` are skipped, which
+/// leaves every value as it was (for a finite `t0`). O(p M).
 #[inline(always)]
 pub(super) fn recentred_in<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: usize, t0: f64) -> [f64; M] {
     recentred_at::<M, 0>(a, al, p, t0)
@@ -343,6 +345,11 @@ pub(super) fn by_output<const M: usize>(sum: &Sums, p: usize, t0: f64) -> [f64; 
     for i in (0..=p.min(PMAX - 1) / 4).rev() {
         let m = 4 * i;
         for (j, cj) in c.iter_mut().enumerate() {
+            // All four terms are zero (`A_k = 0` for `k > p`), and so is the chain so far
+            // (a higher `m` had the same): `+0 t4 + C +0` would leave it `+0`.
+            if m + j > p {
+                continue;
+            }
             let row: &[f64; 4] = BINOM_SHIFT_T[j][m..m + 4].try_into().expect("m + 3 < PMAX + 3");
             let coef: &[f64; 4] = sum[m + j..m + j + 4].try_into().expect("m + j + 3 < the sums' length");
             for r in 0..4 {
@@ -367,10 +374,21 @@ pub(super) fn by_chain<const M: usize>(sum: &Sums, p: usize, t0: f64) -> [f64; M
     for i in (0..=p.min(PMAX - 1) / 4).rev() {
         for (r, cr) in c.iter_mut().enumerate() {
             let m = 4 * i + r;
+            if m > p {
+                continue;
+            }
             let row = &BINOM_SHIFT[m];
             let coef: &[f64; M] = sum[m..m + M].try_into().expect("M <= RECENTRED_MAX");
-            for j in 0..M {
-                cr[j] = cr[j] * t4 + row[j] * coef[j];
+            // Outputs `j > p - m` take zeros (`A_k = 0` for `k > p`) into chains that are
+            // still `+0` (a higher `m` had the same), which would leave them `+0`: only the
+            // others are stepped, in vectors of four outputs (fixed lengths).
+            for q in 0..M.div_ceil(4) {
+                if m + 4 * q > p {
+                    break;
+                }
+                for j in 4 * q..(4 * q + 4).min(M) {
+                    cr[j] = cr[j] * t4 + row[j] * coef[j];
+                }
             }
         }
     }
