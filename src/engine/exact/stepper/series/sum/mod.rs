@@ -177,6 +177,14 @@
 //! matrices `G_b` are not stored at all (a re-base forms them bin by bin). Direct mode
 //! writes its offsets and handles instead of the bins (`Wire`).
 //!
+//! **Compiled orders.** The work of every event, a bins-mode update (`apply`) and the
+//! re-centring at a plate step's start (`derivatives_at`), is compiled for the orders of the
+//! default `rtol = 1e-10` (`coefficients::COMPILED_ORDERS`: 11 for narrow bins, 17 for wide
+//! bins and direct mode), and a direct-mode update for each junction order from 3 to 17:
+//! at a constant order the loops unroll and lose their bounds checks. Other orders run the
+//! same loops with the order read at run time. The operations and their order are the same
+//! either way, so the values are the same bit for bit (unit tests compare the two forms).
+//!
 //! **Local cubic** (`taylor_at`, `LocalCubic`): `[S, S', S''/2, S'''/6]` at a point in one
 //! Horner pass, with `r4 = sum_(k>=4) C(k,4) |A_k| rho^(k-4)` bounding `|S''''|/24` (so the
 //! cubic's remainder by `r4 e^4`) against the series; the plate's steps evaluate it instead
