@@ -288,17 +288,28 @@ const TAYLOR_STIFFNESS: f64 = 4.0;
 fn force_terms(series: &SeriesSum, y0: f64, degree: usize, force: &mut [f64; ORDER + 1]) -> usize {
     match degree {
         0..=4 => {
-            force[..5].copy_from_slice(&series.derivatives_at::<5>(y0));
+            put(force, series.derivatives_at::<5>(y0));
             4
         }
         5..=7 => {
-            force[..8].copy_from_slice(&series.derivatives_at::<8>(y0));
+            put(force, series.derivatives_at::<8>(y0));
             7
         }
         _ => {
-            force[..ORDER - 1].copy_from_slice(&series.derivatives_at::<{ ORDER - 1 }>(y0));
+            put(force, series.derivatives_at::<{ ORDER - 1 }>(y0));
             ORDER - 2
         }
+    }
+}
+
+/// `force[..M] = d`, element by element: register moves, where `copy_from_slice` was a call
+/// to the C library's `memcpy` at every plate step in the README's `release` build.
+#[inline(always)]
+#[allow(clippy::manual_memcpy)] // the suggested `copy_from_slice` is the call this avoids
+fn put<const M: usize>(force: &mut [f64; ORDER + 1], d: [f64; M]) {
+    const { assert!(M <= ORDER + 1) };
+    for i in 0..M {
+        force[i] = d[i];
     }
 }
 /// How far (in radii) the plate may stray from the series' base before a Taylor step
