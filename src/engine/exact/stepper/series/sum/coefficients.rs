@@ -217,6 +217,32 @@ pub(super) fn order_of<const ORDER: usize>(p: usize) -> usize {
     if ORDER == 0 { p } else { ORDER }
 }
 
+/// `$body` with `$order` a `const usize`: the entry of [`COMPILED_ORDERS`] equal to the
+/// series order `$p`, or 0 (the order read at run time, [`order_of`]) when none is. Each arm
+/// is its own copy of `$body`, compiled for its order.
+macro_rules! at_compiled_order {
+    ($p:expr, $order:ident => $body:expr) => {{
+        use $crate::engine::exact::stepper::series::sum::coefficients::COMPILED_ORDERS;
+        const P0: usize = COMPILED_ORDERS[0];
+        const P1: usize = COMPILED_ORDERS[1];
+        match $p {
+            P0 => {
+                const $order: usize = P0;
+                $body
+            }
+            P1 => {
+                const $order: usize = P1;
+                $body
+            }
+            _ => {
+                const $order: usize = 0;
+                $body
+            }
+        }
+    }};
+}
+pub(super) use at_compiled_order;
+
 /// The first `M` coefficients of `sum_(k<=p) (a_k + al_k) z^k` re-centred at `z = t0`, all
 /// side by side as polynomials in `t0` ([`recentred_at`], at a constant order where
 /// [`COMPILED_ORDERS`] has one), in 256-bit vectors where the processor has AVX2 (the same
@@ -241,19 +267,13 @@ unsafe fn recentred_avx2<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: u
 /// [`recentred_at`] at the compiled order equal to `p`, if there is one.
 #[inline(always)]
 fn recentred_compiled<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: usize, t0: f64) -> [f64; M] {
-    const P0: usize = COMPILED_ORDERS[0];
-    const P1: usize = COMPILED_ORDERS[1];
-    match p {
-        P0 => recentred_at::<M, P0>(a, al, p, t0),
-        P1 => recentred_at::<M, P1>(a, al, p, t0),
-        _ => recentred_in::<M>(a, al, p, t0),
-    }
+    at_compiled_order!(p, ORDER => recentred_at::<M, ORDER>(a, al, p, t0))
 }
 
 /// Widest re-centring asked for ([`recentred`]'s `M`).
 const RECENTRED_MAX: usize = 12;
 
-/// `C(m + j, j)` at `[m][j]` (`m < PMAX + 3`: [`recentred_in`]'s chains read up to three
+/// `C(m + j, j)` at `[m][j]` (`m < PMAX + 3`: [`recentred_at`]'s chains read up to three
 /// rows past `p`; `j < RECENTRED_MAX`; exact in `f64`).
 pub(super) const BINOM_SHIFT: [[f64; RECENTRED_MAX]; PMAX + 3] = {
     let mut t = [[0.0; RECENTRED_MAX]; PMAX + 3];
@@ -273,7 +293,7 @@ pub(super) const BINOM_SHIFT: [[f64; RECENTRED_MAX]; PMAX + 3] = {
 };
 
 /// [`BINOM_SHIFT`] transposed, `C(m + j, j)` at `[j][m]`: the four chains of
-/// [`recentred_in`] read four consecutive `m` of one `j`.
+/// [`recentred_at`] read four consecutive `m` of one `j`.
 const BINOM_SHIFT_T: [[f64; PMAX + 3]; RECENTRED_MAX] = {
     let mut t = [[0.0; PMAX + 3]; RECENTRED_MAX];
     let mut j = 0;
@@ -299,13 +319,8 @@ const BINOM_SHIFT_T: [[f64; PMAX + 3]; RECENTRED_MAX] = {
 /// per chain step, the product and the combination), within the `(2p + 4) eps` of a Horner
 /// evaluation that the round-off allowance charges (module doc) for `p >= 3`. The steps
 /// that would only add the zeros above `p` to a chain still at `+0` are skipped, which
-/// leaves every value as it was (for a finite `t0`). O(p M).
-#[inline(always)]
-pub(super) fn recentred_in<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: usize, t0: f64) -> [f64; M] {
-    recentred_at::<M, 0>(a, al, p, t0)
-}
-
-/// [`recentred_in`] at order `p`, compiled for that order when `ORDER = p` ([`order_of`]).
+/// leaves every value as it was (for a finite `t0`). O(p M). Compiled for the order when
+/// `ORDER = p`, with the order read at run time when `ORDER = 0` ([`order_of`]).
 #[inline(always)]
 pub(super) fn recentred_at<const M: usize, const ORDER: usize>(
     a: &[f64; PMAX],
@@ -322,7 +337,7 @@ pub(super) fn recentred_at<const M: usize, const ORDER: usize>(
 /// `A_k = a_k + al_k`, zero from `PMAX` on (the chains read up to `RECENTRED_MAX + 2` past `p`).
 pub(super) type Sums = [f64; PMAX + 3 + RECENTRED_MAX];
 
-/// The sums [`recentred_in`] re-centres, as whole arrays (vector operations): the series
+/// The sums [`recentred_at`] re-centres, as whole arrays (vector operations): the series
 /// keeps `a_k = al_k = 0` above `p`.
 #[inline(always)]
 pub(super) fn sums(a: &[f64; PMAX], al: &[f64; PMAX], p: usize) -> Sums {
@@ -334,7 +349,7 @@ pub(super) fn sums(a: &[f64; PMAX], al: &[f64; PMAX], p: usize) -> Sums {
     sum
 }
 
-/// [`recentred_in`] with the four chains of one output `j` stepping together, one operation
+/// [`recentred_at`] with the four chains of one output `j` stepping together, one operation
 /// on four lanes (consecutive `m`, read from consecutive entries of the sums and of
 /// [`BINOM_SHIFT_T`]): `c[j][r]`.
 #[inline(always)]
@@ -345,10 +360,10 @@ pub(super) fn by_output<const M: usize>(sum: &Sums, p: usize, t0: f64) -> [f64; 
     for i in (0..=p.min(PMAX - 1) / 4).rev() {
         let m = 4 * i;
         for (j, cj) in c.iter_mut().enumerate() {
-            // All four terms are zero (`A_k = 0` for `k > p`), and so is the chain so far
-            // (a higher `m` had the same): `+0 t4 + C +0` would leave it `+0`.
+            // From here on all four terms are zero (`A_k = 0` for `k > p`), and so are the
+            // chains so far (a higher `m` had the same): `+0 t4 + C +0` would leave them `+0`.
             if m + j > p {
-                continue;
+                break;
             }
             let row: &[f64; 4] = BINOM_SHIFT_T[j][m..m + 4].try_into().expect("m + 3 < PMAX + 3");
             let coef: &[f64; 4] = sum[m + j..m + j + 4].try_into().expect("m + j + 3 < the sums' length");
@@ -364,7 +379,7 @@ pub(super) fn by_output<const M: usize>(sum: &Sums, p: usize, t0: f64) -> [f64; 
     out
 }
 
-/// [`recentred_in`] with one chain `r` stepping every output at once, whole vectors of
+/// [`recentred_at`] with one chain `r` stepping every output at once, whole vectors of
 /// outputs: `c[r][j]`.
 #[inline(always)]
 pub(super) fn by_chain<const M: usize>(sum: &Sums, p: usize, t0: f64) -> [f64; M] {
@@ -374,9 +389,6 @@ pub(super) fn by_chain<const M: usize>(sum: &Sums, p: usize, t0: f64) -> [f64; M
     for i in (0..=p.min(PMAX - 1) / 4).rev() {
         for (r, cr) in c.iter_mut().enumerate() {
             let m = 4 * i + r;
-            if m > p {
-                continue;
-            }
             let row = &BINOM_SHIFT[m];
             let coef: &[f64; M] = sum[m..m + M].try_into().expect("M <= RECENTRED_MAX");
             // Outputs `j > p - m` take zeros (`A_k = 0` for `k > p`) into chains that are

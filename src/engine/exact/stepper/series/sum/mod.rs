@@ -206,7 +206,7 @@ mod wire;
 use crate::physics::Tilted;
 use bins::{Bin, Dense, NONE, bin_terms};
 use bound::{EPS, OP_ROUNDOFF, Q_D, Q_NARROW, Q_WIDE, order_for, order_for_direct, tails};
-use coefficients::{BINOM_SHIFT, COMPILED_ORDERS, PMAX, order_of, recentred};
+use coefficients::{BINOM_SHIFT, PMAX, at_compiled_order, order_of, recentred};
 pub use coefficients::{phi_taylor, tilted_taylor};
 pub use cubic::LocalCubic;
 use dd::{dd_add, dd_add_all, dd_add_all_signed, two_product_err};
@@ -461,13 +461,7 @@ impl SeriesSum {
     /// ([`COMPILED_ORDERS`]).
     #[inline(always)]
     fn apply_compiled(&mut self, slot: usize, e: f64, sign: f64) {
-        const P0: usize = COMPILED_ORDERS[0];
-        const P1: usize = COMPILED_ORDERS[1];
-        match self.p {
-            P0 => self.apply_in::<P0>(slot, e, sign),
-            P1 => self.apply_in::<P1>(slot, e, sign),
-            _ => self.apply_in::<0>(slot, e, sign),
-        }
+        at_compiled_order!(self.p, ORDER => self.apply_in::<ORDER>(slot, e, sign))
     }
 
     /// Adds `sign * (junction with offset e in slot)`: `+- e^m` to the bin's moments and

@@ -1,6 +1,6 @@
 use super::bins::DENSE_MAX;
 use super::bound::{Q_NARROW, Q_WIDE, tails_at};
-use super::coefficients::{COMPILED_ORDERS, LANES, by_chain, by_output, phi_taylor_lanes, recentred_in, sums};
+use super::coefficients::{COMPILED_ORDERS, LANES, by_chain, by_output, phi_taylor_lanes, recentred_at, sums};
 use super::*;
 use crate::physics::ForceLaw;
 use twofloat::TwoFloat as D;
@@ -121,6 +121,11 @@ fn recentring_is_within_its_rounding_allowance() {
             assert!(err <= allowance, "p {p}, j {j}, t0 {t0}: off by {err}, allowance {allowance}");
         }
     }
+}
+
+/// The re-centring at an order read at run time (`recentred_at` with `ORDER = 0`).
+fn recentred_in<const M: usize>(a: &[f64; PMAX], al: &[f64; PMAX], p: usize, t0: f64) -> [f64; M] {
+    recentred_at::<M, 0>(a, al, p, t0)
 }
 
 /// A fixed series of order `p`, high and low parts of mixed signs and magnitudes, zero above
