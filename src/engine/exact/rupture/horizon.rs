@@ -55,7 +55,7 @@ impl ExpGrid {
     /// `exp(x)` rounded up to the grid: `exp(g / GRID)` with the smallest integer `g >= GRID x`
     /// (at least `exp(x)`, up to the exponential's own round-off, as `exp(x)` itself).
     /// Always inlined, its table built out of line ([`ExpGrid::build`]): in the `release`
-    /// build it was a call per bound.
+    /// build an out-of-line version would be a call per bound.
     #[inline(always)]
     fn exp_up(&mut self, x: f64) -> f64 {
         let t = x * GRID;

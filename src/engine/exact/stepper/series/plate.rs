@@ -302,8 +302,8 @@ fn force_terms(series: &SeriesSum, y0: f64, degree: usize, force: &mut [f64; ORD
     }
 }
 
-/// `force[..M] = d`, element by element: register moves, where `copy_from_slice` was a call
-/// to the C library's `memcpy` at every plate step in the README's `release` build.
+/// `force[..M] = d`, element by element: register moves (in the README's `release` build
+/// `copy_from_slice` compiles to a call to the C library's `memcpy`, once per plate step).
 #[inline(always)]
 #[allow(clippy::manual_memcpy)] // the suggested `copy_from_slice` is the call this avoids
 fn put<const M: usize>(force: &mut [f64; ORDER + 1], d: [f64; M]) {

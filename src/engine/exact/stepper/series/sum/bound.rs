@@ -31,7 +31,7 @@ pub(super) fn tails_at(q: f64, p: usize) -> (f64, f64) {
 }
 
 /// The tails a series keeps for its order `p` (computed once, at construction: the error
-/// bound is asked for after most events, and `powi` was half its cost): [`tails_at`] of
+/// bound is asked for after most events, and `powi` would be half its cost): [`tails_at`] of
 /// `Q_D` (direct mode), of the bins' ratio `q` and of a junction's own expansion in bins
 /// mode, `rho / l0 = q/2`.
 pub(super) fn tails(q: f64, p: usize) -> [(f64, f64); 3] {
