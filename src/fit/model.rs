@@ -175,7 +175,7 @@ pub struct Objective<'a> {
     stop: Option<&'a StopFlag>,
     max: usize,
     /// Called after each new evaluation with (evaluations so far, best score so far, the
-    /// fit's stage).
+    /// fit's stage), one call at a time and in the order of the count.
     pub on_new: Option<OnNew<'a>>,
     stage: std::sync::atomic::AtomicU8,
 }
@@ -293,11 +293,12 @@ impl<'a> Objective<'a> {
         c.list.push(e.clone());
         c.asked.push(true);
         c.new += 1;
-        let best = c.best;
-        drop(c);
+        // Reported with the state still held, so that the calls come in the order of the
+        // count even when several searches evaluate at once (the profiles' sides).
         if let Some(f) = &self.on_new {
-            f(n + 1, best, self.stage());
+            f(n + 1, c.best, self.stage());
         }
+        drop(c);
         Ok(e)
     }
 
