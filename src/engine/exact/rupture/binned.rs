@@ -12,6 +12,12 @@
 //! [`super::TreeRupture`]; the bins' bound is at most `exp(h)` looser, so
 //! a candidate is accepted a little less often.
 //!
+//! A bin whose anchors all lie below `y_lo` keeps term 0 alone, and one whose anchors all
+//! lie above `y_hi` term 1 alone ([`Sides`]): its members are stretched one way over the
+//! whole horizon, where `exp(a |y - c|)` is that term, so `b_j` drops the other one. Only
+//! the bins between the bounds (one or two over a short horizon) keep both, where a member
+//! near the plate is accepted about half the time.
+//!
 //! What this buys: the member is a uniform pick from a bag, like a strong bond's, so a
 //! candidate's uniforms are drawn a few candidates ahead ([`Ticket`]) and the memory it will
 //! read is requested while earlier candidates run: its member, then the member's record in
@@ -125,10 +131,13 @@ pub struct BinnedRupture {
     /// The occupied bins lie in `lo..hi` (indices).
     lo: usize,
     hi: usize,
-    /// Running sums `sum_{lo <= i <= j} n_i Uk_i` over `lo..hi`, recomputed from the counts
-    /// by [`BinnedRupture::plan`] after every event (never accumulated across events); their
-    /// last entry is `[W0, W1]`.
+    /// Running sums `sum_{lo <= i <= j} n_i Uk_i` over `lo..hi`, of the bins where term `k`
+    /// is in force ([`Sides`]), recomputed from the counts by [`BinnedRupture::plan`] and
+    /// [`RuptureModel::bound`] (never accumulated across events); their last entry is `[W0, W1]`.
     cumulative: Vec<[f64; 2]>,
+    /// The bins where each term is in force over the current bounds.
+    #[serde(default)]
+    sides: Sides,
     /// The next [`AHEAD`] candidates' tickets; `head` is the next one's.
     tickets: [Ticket; AHEAD],
     head: u8,
@@ -156,6 +165,7 @@ impl BinnedRupture {
             lo: HALF,
             hi: HALF,
             cumulative: Vec::new(),
+            sides: Sides::default(),
             tickets,
             head: 0,
             spare: Spares { buffers: Vec::new(), limit: n },
@@ -186,15 +196,24 @@ impl BinnedRupture {
         }
         (j + HALF as i64) as usize
     }
-    /// Recomputes the running sums over the occupied bins from their counts.
-    fn sum_up(&mut self) {
-        self.cumulative.clear();
-        let mut acc = [0.0f64; 2];
-        for bin in &self.bins[self.lo..self.hi] {
-            let (n, u) = (count(bin.members.len()), bin.bound);
-            acc = [acc[0] + n * u[0], acc[1] + n * u[1]];
-            self.cumulative.push(acc);
-        }
+    /// The terms in force for the plate within `[y_lo, y_hi]` ([`Sides::over`]), and the
+    /// running sums over the occupied bins from their counts.
+    fn sum_up(&mut self, y_lo: f64, y_hi: f64) {
+        self.sides = Sides::over(self.scale, y_lo, y_hi);
+        sum_up(&self.bins[self.lo..self.hi], self.lo, self.sides, &mut self.cumulative);
+    }
+    /// Bin `j`'s bound `b_j / k0`: the sum of its terms in force under the factors `e_hi`,
+    /// `e_lo`.
+    #[inline(always)]
+    fn bin_bound(&self, j: usize, e_hi: f64, e_lo: f64) -> f64 {
+        self.bin_bound_with(self.sides, j, e_hi, e_lo)
+    }
+    /// The same under the sides `sides`.
+    #[inline(always)]
+    fn bin_bound_with(&self, sides: Sides, j: usize, e_hi: f64, e_lo: f64) -> f64 {
+        let [u0, u1] = self.bins[j].bound;
+        let [t0, t1] = sides.terms(j);
+        (if t0 { e_hi * u0 } else { 0.0 }) + (if t1 { e_lo * u1 } else { 0.0 })
     }
     /// `[W0, W1]`, the bins' bound sums.
     #[inline]
@@ -387,16 +406,20 @@ impl RuptureModel for BinnedRupture {
             }
         }
     }
+    /// The bins' sums are recomputed over the horizon's bounds once they are chosen.
     fn plan(&mut self, bounds: impl FnMut(f64) -> (f64, f64), n_att: usize) -> Plan {
-        self.sum_up();
-        let w = self.totals();
-        self.h.plan(bounds, n_att, self.k0, self.a, w)
+        let BinnedRupture { h, bins, lo, hi, cumulative, sides, scale, k0, a, .. } = self;
+        h.plan_with(bounds, n_att, *k0, *a, |y_lo, y_hi| {
+            *sides = Sides::over(*scale, y_lo, y_hi);
+            sum_up(&bins[*lo..*hi], *lo, *sides, cumulative);
+            cumulative.last().copied().unwrap_or([0.0; 2])
+        })
     }
     /// The bins' sums are recomputed here (the attached junctions may have changed since the
     /// last step).
     #[inline]
     fn bound(&mut self, y_lo: f64, y_hi: f64) -> f64 {
-        self.sum_up();
+        self.sum_up(y_lo, y_hi);
         self.h.set_grid_bounds(self.a, y_lo, y_hi);
         let (m, p) = self.h.terms(self.totals());
         self.k0 * (m + p)
@@ -420,9 +443,9 @@ impl RuptureModel for BinnedRupture {
         let bin = &self.bins[j];
         let m = bin.members[index(t.pick, bin.members.len())];
         let (e_hi, e_lo) = (self.h.e_hi, self.h.e_lo);
-        let u = bin.bound;
+        let b = self.bin_bound(j, e_hi, e_lo);
         self.request(attached);
-        let ub = rng.uniform() * (e_hi * u[0] + e_lo * u[1]);
+        let ub = rng.uniform() * b;
         let slot = m.slot as usize;
         law.accept(ub, [1.0 / m.e, m.e], e_hi, e_lo, self.a, y, || attached[slot].c).then_some(slot)
     }
@@ -477,6 +500,70 @@ impl RuptureModel for BinnedRupture {
     /// candidate is no event).
     #[inline(always)]
     fn prefetch(&self, _attached: &[Attached]) {}
+}
+
+/// Where each term of the bins' bound is in force: for the plate within `[y_lo, y_hi]`,
+/// every member of a bin below `from` has its anchor below `y_lo` (`x = y - c > 0`, rate
+/// `e^{a x} <= e^{a y_hi} U0`: term 0 alone), and every member of a bin at or above `upto`
+/// has its anchor above `y_hi` (`x < 0`: term 1 alone); the bins between (one or two when
+/// the bounds are close) keep both. Bins are compared by the same rounded `floor(c a / h)`
+/// as their members' anchors, which is monotone in `c`, so the sides are exact.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+struct Sides {
+    /// Term 0 (`e^{a y_hi} U0`) in force in bins `..upto`, term 1 (`e^{-a y_lo} U1`) in
+    /// bins `from..` (table indices).
+    upto: usize,
+    from: usize,
+}
+
+impl Default for Sides {
+    /// Both terms in every bin.
+    fn default() -> Sides {
+        Sides { upto: usize::MAX, from: 0 }
+    }
+}
+
+impl Sides {
+    /// The sides for the plate within `[y_lo, y_hi]` under the bins' `scale = a / h`; both
+    /// terms everywhere for bounds that are not numbers.
+    #[inline]
+    fn over(scale: f64, y_lo: f64, y_hi: f64) -> Sides {
+        let (lo, hi) = (y_lo * scale, y_hi * scale);
+        if lo.is_nan() || hi.is_nan() {
+            return Sides::default();
+        }
+        Sides { upto: table_index(hi) + 1, from: table_index(lo) }
+    }
+    /// Whether terms 0 and 1 are in force in bin `j`.
+    #[inline(always)]
+    fn terms(&self, j: usize) -> [bool; 2] {
+        [j < self.upto, j >= self.from]
+    }
+}
+
+/// The table index `floor(t) + HALF` of a scaled position `t` (not NaN), clamped to the
+/// table (`0 ..= 2 HALF`), as [`BinnedRupture::bin_of`] computes a member's.
+#[inline]
+fn table_index(t: f64) -> usize {
+    let t = t.clamp(-(HALF as f64), HALF as f64);
+    let mut j = t as i64;
+    if (j as f64) > t {
+        j -= 1;
+    }
+    (j + HALF as i64) as usize
+}
+
+/// Running sums over `bins` (table indices from `first`) of each term where it is in force.
+#[inline]
+fn sum_up(bins: &[Bin], first: usize, sides: Sides, cumulative: &mut Vec<[f64; 2]>) {
+    cumulative.clear();
+    let mut acc = [0.0f64; 2];
+    for (i, bin) in bins.iter().enumerate() {
+        let (n, u) = (count(bin.members.len()), bin.bound);
+        let [t0, t1] = sides.terms(first + i);
+        acc = [acc[0] + if t0 { n * u[0] } else { 0.0 }, acc[1] + if t1 { n * u[1] } else { 0.0 }];
+        cumulative.push(acc);
+    }
 }
 
 impl BinnedRupture {
@@ -579,6 +666,48 @@ mod tests {
         assert!(r.spare.buffers.iter().map(Vec::capacity).sum::<usize>() <= 64);
     }
 
+    /// Over plate bounds `[y_lo, y_hi]` (equal, close, across bin edges, far apart), every
+    /// member's rate `exp(a |y - c|)` at every `y` within stays under its bin's bound from
+    /// the terms in force; the bins outside the bounds keep one term only.
+    #[test]
+    fn one_sided_bins_bound_their_members_over_the_plate_range() {
+        let mut rng = pcg(4);
+        let mut one_sided = 0;
+        for a in [1e-3, 0.1, 1.0, 37.0] {
+            let r = BinnedRupture::try_new(1.0, a, 64, &mut rng).unwrap();
+            let edge = |j: f64| j * H / a;
+            for _ in 0..400 {
+                let y_lo = match rng.next_u64() % 3 {
+                    0 => edge((rng.next_u64() % 40) as f64 - 20.0),
+                    1 => edge((rng.next_u64() % 40) as f64 - 20.0).next_down(),
+                    _ => (rng.uniform() - 0.5) * 40.0 * H / a,
+                };
+                let y_hi = y_lo + [0.0, 1e-9, 0.3, 3.0][(rng.next_u64() % 4) as usize] * H / a;
+                let sides = Sides::over(r.scale, y_lo, y_hi);
+                let (e_hi, e_lo) = ((a * y_hi).exp(), (-a * y_lo).exp());
+                for j in -24i32..24 {
+                    for c in [
+                        edge(j as f64),
+                        edge(j as f64).next_up(),
+                        edge(j as f64 + 0.5),
+                        edge(j as f64 + 1.0).next_down(),
+                    ] {
+                        let b = r.bin_bound_with(sides, r.bin_of(c), e_hi, e_lo);
+                        for k in 0..=8 {
+                            let y = if k == 8 { y_hi } else { y_lo + (y_hi - y_lo) * k as f64 / 8.0 };
+                            let rate = (a * (y - c).abs()).exp();
+                            assert!(rate <= b * (1.0 + 1e-12), "a {a} [{y_lo}, {y_hi}] y {y} c {c}: {rate} > {b}");
+                        }
+                        let [t0, t1] = sides.terms(r.bin_of(c));
+                        assert!(t0 || t1);
+                        one_sided += usize::from(!(t0 && t1));
+                    }
+                }
+            }
+        }
+        assert!(one_sided > 100_000, "{one_sided} one-sided bins");
+    }
+
     /// With the plate held at `y`, the accepted candidates pick junction `i` with probability
     /// `r_i / sum r` (`r_i = exp(a |y - c_i|)`): chi-square over the junctions; and the
     /// accepted fraction is `sum r / B` (a binomial proportion, 4.4 standard errors).
@@ -619,5 +748,51 @@ mod tests {
         let got = accepted as f64 / draws as f64;
         assert!((got - p).abs() < 4.4 * se, "accepted {got}, expected {p} +- {se}");
         assert!(p > 0.5, "the bins' bound is loose: acceptance {p}");
+    }
+
+    /// Over a plate step with bounds `[y_lo, y_hi]` across a bin edge ([`RuptureModel::bound`]),
+    /// with the plate at `y` inside: the accepted candidates pick junction `i` with
+    /// probability `r_i / sum r` (chi-square over the junctions), and the accepted fraction
+    /// is `sum r / B` (4.4 standard errors); anchors on both sides of the bounds and inside.
+    #[test]
+    fn candidates_over_a_step_pick_junctions_in_proportion_to_their_rates() {
+        let mut rng = pcg(5);
+        let a = 1.3;
+        let (y_lo, y_hi) = (3.0 * H / a - 0.05, 3.0 * H / a + 0.08);
+        let anchors = [-2.0, -0.3, 0.1, 0.2, 0.35, 0.45, 0.5, 0.6, 0.9, 1.5, 2.2];
+        let mut r = BinnedRupture::try_new(1.0, a, 64, &mut rng).unwrap();
+        let mut attached: Vec<Attached> = anchors.iter().enumerate().map(|(i, &c)| record(c, i as u32)).collect();
+        for (slot, &c) in anchors.iter().enumerate() {
+            assert!(r.attached(&mut attached, slot, c, y_lo));
+        }
+        let rate_bound = r.bound(y_lo, y_hi);
+        let [t0, t1] = [r.sides.terms(r.bin_of(-2.0)), r.sides.terms(r.bin_of(2.2))];
+        assert!(t0 == [true, false] && t1 == [false, true], "sides {:?}", r.sides);
+        for y in [y_lo, 0.5 * (y_lo + y_hi), y_hi] {
+            let rates: Vec<f64> = anchors.iter().map(|&c| (a * (y - c).abs()).exp()).collect();
+            let total: f64 = rates.iter().sum();
+            let draws = 300_000;
+            let mut counts = vec![0u64; anchors.len()];
+            for _ in 0..draws {
+                if let Some(slot) = r.pick(&mut rng, &attached, &LinearRate, || y) {
+                    counts[slot] += 1;
+                }
+            }
+            let accepted: u64 = counts.iter().sum();
+            let chi2: f64 = counts
+                .iter()
+                .zip(&rates)
+                .map(|(&n, &ri)| {
+                    let expected = accepted as f64 * ri / total;
+                    (n as f64 - expected).powi(2) / expected
+                })
+                .sum();
+            // 10 degrees of freedom: 29.59 is the 0.999 quantile.
+            assert!(chi2 < 29.59, "y {y}: chi2 {chi2}, counts {counts:?}");
+            let p = total / rate_bound;
+            let se = (p * (1.0 - p) / draws as f64).sqrt();
+            let got = accepted as f64 / draws as f64;
+            assert!((got - p).abs() < 4.4 * se, "y {y}: accepted {got}, expected {p} +- {se}");
+        }
     }
 }

@@ -150,17 +150,24 @@ impl Horizon {
         (self.e_hi * w[0], self.e_lo * w[1])
     }
     /// The candidate rate `B = k0 (exp(a y_hi) W0 + exp(-a y_lo) W1)` over the plate's path
-    /// from now (`bounds(h)`: its proven bounds over the next `h`), for `n_att` attached junctions whose weights sum to `w`, and its
-    /// horizon: the longest (within a factor 2) whose spread `a (y_hi - y_lo)` is at most
-    /// [`SPREAD`] and that covers about [`CANDIDATES_PER_HORIZON`] candidates at the last rate.
+    /// from now (`bounds(h)`: its proven bounds over the next `h`), for `n_att` attached
+    /// junctions whose weights sum to `w`, and its horizon: the longest (within a factor 2)
+    /// whose spread `a (y_hi - y_lo)` is at most [`SPREAD`] and that covers about
+    /// [`CANDIDATES_PER_HORIZON`] candidates at the last rate.
     #[inline(always)]
-    pub fn plan(
+    pub fn plan(&mut self, bounds: impl FnMut(f64) -> (f64, f64), n_att: usize, k0: f64, a: f64, w: [f64; 2]) -> Plan {
+        self.plan_with(bounds, n_att, k0, a, |_, _| w)
+    }
+    /// [`Horizon::plan`] with weight sums that depend on the final bounds: `w(y_lo, y_hi)`,
+    /// asked once (the bins' terms in force, [`super::BinnedRupture`]).
+    #[inline(always)]
+    pub fn plan_with(
         &mut self,
         mut bounds: impl FnMut(f64) -> (f64, f64),
         n_att: usize,
         k0: f64,
         a: f64,
-        w: [f64; 2],
+        w: impl FnOnce(f64, f64) -> [f64; 2],
     ) -> Plan {
         self.immediate = false;
         self.bounding = false;
@@ -171,7 +178,7 @@ impl Horizon {
             // Constant rate k0: the bound is exact up to the factor of its two terms (2 with
             // the tree's weights, about 2.2 with the bins' bounds).
             self.set_bounds(a, 0.0, 0.0);
-            let (m, p) = self.terms(w);
+            let (m, p) = self.terms(w(0.0, 0.0));
             return Plan { rate: k0 * (m + p), horizon: f64::INFINITY };
         }
         let cap =
@@ -195,7 +202,7 @@ impl Horizon {
         self.horizon = h;
         self.set_grid_bounds(a, b.0, b.1);
         self.bounding = true;
-        let (m, p) = self.terms(w);
+        let (m, p) = self.terms(w(b.0, b.1));
         let rate = k0 * (m + p);
         if a * (b.1 - b.0) > SPREAD || !rate.is_finite() {
             // Not even HORIZON_MIN resolves the rates (the plate crosses more than 1/a in
