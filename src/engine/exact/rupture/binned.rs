@@ -188,13 +188,7 @@ impl BinnedRupture {
     /// The bin index of anchor `c` (`|a c| <= EXPONENT_CAP`).
     #[inline]
     fn bin_of(&self, c: f64) -> usize {
-        let t = c * self.scale;
-        // floor(t) by truncation, for t of either sign.
-        let mut j = t as i64;
-        if (j as f64) > t {
-            j -= 1;
-        }
-        (j + HALF as i64) as usize
+        floor_index(c * self.scale)
     }
     /// The terms in force for the plate within `[y_lo, y_hi]` ([`Sides::over`]), and the
     /// running sums over the occupied bins from their counts.
@@ -206,13 +200,8 @@ impl BinnedRupture {
     /// `e_lo`.
     #[inline(always)]
     fn bin_bound(&self, j: usize, e_hi: f64, e_lo: f64) -> f64 {
-        self.bin_bound_with(self.sides, j, e_hi, e_lo)
-    }
-    /// The same under the sides `sides`.
-    #[inline(always)]
-    fn bin_bound_with(&self, sides: Sides, j: usize, e_hi: f64, e_lo: f64) -> f64 {
         let [u0, u1] = self.bins[j].bound;
-        let [t0, t1] = sides.terms(j);
+        let [t0, t1] = self.sides.terms(j);
         (if t0 { e_hi * u0 } else { 0.0 }) + (if t1 { e_lo * u1 } else { 0.0 })
     }
     /// `[W0, W1]`, the bins' bound sums.
@@ -542,10 +531,17 @@ impl Sides {
 }
 
 /// The table index `floor(t) + HALF` of a scaled position `t` (not NaN), clamped to the
-/// table (`0 ..= 2 HALF`), as [`BinnedRupture::bin_of`] computes a member's.
+/// table (`0 ..= 2 HALF`): the plate bounds' ([`Sides::over`]), by the rounding that places a
+/// member ([`floor_index`]), so the two compare exactly.
 #[inline]
 fn table_index(t: f64) -> usize {
-    let t = t.clamp(-(HALF as f64), HALF as f64);
+    floor_index(t.clamp(-(HALF as f64), HALF as f64))
+}
+
+/// `floor(t) + HALF` for `|t| <= HALF`: a member's bin ([`BinnedRupture::bin_of`]).
+#[inline(always)]
+fn floor_index(t: f64) -> usize {
+    // floor(t) by truncation, for t of either sign.
     let mut j = t as i64;
     if (j as f64) > t {
         j -= 1;
@@ -674,7 +670,7 @@ mod tests {
         let mut rng = pcg(4);
         let mut one_sided = 0;
         for a in [1e-3, 0.1, 1.0, 37.0] {
-            let r = BinnedRupture::try_new(1.0, a, 64, &mut rng).unwrap();
+            let mut r = BinnedRupture::try_new(1.0, a, 64, &mut rng).unwrap();
             let edge = |j: f64| j * H / a;
             for _ in 0..400 {
                 let y_lo = match rng.next_u64() % 3 {
@@ -683,7 +679,7 @@ mod tests {
                     _ => (rng.uniform() - 0.5) * 40.0 * H / a,
                 };
                 let y_hi = y_lo + [0.0, 1e-9, 0.3, 3.0][(rng.next_u64() % 4) as usize] * H / a;
-                let sides = Sides::over(r.scale, y_lo, y_hi);
+                r.sides = Sides::over(r.scale, y_lo, y_hi);
                 let (e_hi, e_lo) = ((a * y_hi).exp(), (-a * y_lo).exp());
                 for j in -24i32..24 {
                     for c in [
@@ -692,13 +688,13 @@ mod tests {
                         edge(j as f64 + 0.5),
                         edge(j as f64 + 1.0).next_down(),
                     ] {
-                        let b = r.bin_bound_with(sides, r.bin_of(c), e_hi, e_lo);
+                        let b = r.bin_bound(r.bin_of(c), e_hi, e_lo);
                         for k in 0..=8 {
                             let y = if k == 8 { y_hi } else { y_lo + (y_hi - y_lo) * k as f64 / 8.0 };
                             let rate = (a * (y - c).abs()).exp();
                             assert!(rate <= b * (1.0 + 1e-12), "a {a} [{y_lo}, {y_hi}] y {y} c {c}: {rate} > {b}");
                         }
-                        let [t0, t1] = sides.terms(r.bin_of(c));
+                        let [t0, t1] = r.sides.terms(r.bin_of(c));
                         assert!(t0 || t1);
                         one_sided += usize::from(!(t0 && t1));
                     }
@@ -706,6 +702,39 @@ mod tests {
             }
         }
         assert!(one_sided > 100_000, "{one_sided} one-sided bins");
+    }
+
+    /// `draws` candidates of `r` with the plate at `y`: the accepted junctions' counts, their
+    /// chi-square against `r_i / sum r` (`r_i = exp(a |y - c_i|)`), and the accepted
+    /// fraction with its expected value `sum r / b` and standard error.
+    fn picks(r: &mut BinnedRupture, rng: &mut Pcg64, attached: &[Attached], y: f64, b: f64, draws: u64) -> Picks {
+        let rates: Vec<f64> = attached.iter().map(|j| (r.a * (y - j.c).abs()).exp()).collect();
+        let total: f64 = rates.iter().sum();
+        let mut counts = vec![0u64; attached.len()];
+        for _ in 0..draws {
+            if let Some(slot) = r.pick(rng, attached, &LinearRate, || y) {
+                counts[slot] += 1;
+            }
+        }
+        let accepted: u64 = counts.iter().sum();
+        let chi2 = counts
+            .iter()
+            .zip(&rates)
+            .map(|(&n, &ri)| {
+                let expected = accepted as f64 * ri / total;
+                (n as f64 - expected).powi(2) / expected
+            })
+            .sum();
+        let p = total / b;
+        Picks { counts, chi2, got: accepted as f64 / draws as f64, p, se: (p * (1.0 - p) / draws as f64).sqrt() }
+    }
+
+    struct Picks {
+        counts: Vec<u64>,
+        chi2: f64,
+        got: f64,
+        p: f64,
+        se: f64,
     }
 
     /// With the plate held at `y`, the accepted candidates pick junction `i` with probability
@@ -723,29 +752,10 @@ mod tests {
         }
         let drive = Drive { y0: y, v: 0.0 };
         let plan = r.plan(|h| drive.bounds(h), anchors.len());
-        let rates: Vec<f64> = anchors.iter().map(|&c| (a * (y - c).abs()).exp()).collect();
-        let total: f64 = rates.iter().sum();
-        let draws = 400_000;
-        let mut counts = vec![0u64; anchors.len()];
-        for _ in 0..draws {
-            if let Some(slot) = r.pick(&mut rng, &attached, &LinearRate, || drive.position(0.0)) {
-                counts[slot] += 1;
-            }
-        }
-        let accepted: u64 = counts.iter().sum();
-        let chi2: f64 = counts
-            .iter()
-            .zip(&rates)
-            .map(|(&n, &ri)| {
-                let expected = accepted as f64 * ri / total;
-                (n as f64 - expected).powi(2) / expected
-            })
-            .sum();
+        let Picks { counts, chi2, got, p, se } =
+            picks(&mut r, &mut rng, &attached, drive.position(0.0), plan.rate, 400_000);
         // 11 degrees of freedom: 31.26 is the 0.999 quantile.
         assert!(chi2 < 31.26, "chi2 {chi2}, counts {counts:?}");
-        let p = total / plan.rate;
-        let se = (p * (1.0 - p) / draws as f64).sqrt();
-        let got = accepted as f64 / draws as f64;
         assert!((got - p).abs() < 4.4 * se, "accepted {got}, expected {p} +- {se}");
         assert!(p > 0.5, "the bins' bound is loose: acceptance {p}");
     }
@@ -769,29 +779,9 @@ mod tests {
         let [t0, t1] = [r.sides.terms(r.bin_of(-2.0)), r.sides.terms(r.bin_of(2.2))];
         assert!(t0 == [true, false] && t1 == [false, true], "sides {:?}", r.sides);
         for y in [y_lo, 0.5 * (y_lo + y_hi), y_hi] {
-            let rates: Vec<f64> = anchors.iter().map(|&c| (a * (y - c).abs()).exp()).collect();
-            let total: f64 = rates.iter().sum();
-            let draws = 300_000;
-            let mut counts = vec![0u64; anchors.len()];
-            for _ in 0..draws {
-                if let Some(slot) = r.pick(&mut rng, &attached, &LinearRate, || y) {
-                    counts[slot] += 1;
-                }
-            }
-            let accepted: u64 = counts.iter().sum();
-            let chi2: f64 = counts
-                .iter()
-                .zip(&rates)
-                .map(|(&n, &ri)| {
-                    let expected = accepted as f64 * ri / total;
-                    (n as f64 - expected).powi(2) / expected
-                })
-                .sum();
+            let Picks { counts, chi2, got, p, se } = picks(&mut r, &mut rng, &attached, y, rate_bound, 300_000);
             // 10 degrees of freedom: 29.59 is the 0.999 quantile.
             assert!(chi2 < 29.59, "y {y}: chi2 {chi2}, counts {counts:?}");
-            let p = total / rate_bound;
-            let se = (p * (1.0 - p) / draws as f64).sqrt();
-            let got = accepted as f64 / draws as f64;
             assert!((got - p).abs() < 4.4 * se, "y {y}: accepted {got}, expected {p} +- {se}");
         }
     }
