@@ -22,22 +22,39 @@ const EVERY: &str = "0.05";
 /// first `t_end` to try (doubled while the run ends before it can be killed).
 struct Case {
     name: &'static str,
+    /// Overrides shared by several cases, applied before `sets`.
+    base: &'static [&'static str],
     sets: &'static [&'static str],
     t_end: f64,
 }
 
+/// The letter's Fig. 1 scaled to `N = 1e5` (`K = N/2`, `M = eta = N/4`, stationary start),
+/// where weak bonds draw their rupture candidates from bins (`BINNED_FROM`).
+const SCALED_1E5: &[&str] = &[
+    "junctions.bond=weak",
+    "junctions.n=100000",
+    "plate.k=50000",
+    "plate.mass=25000",
+    "plate.eta=25000",
+    "junctions.initial=stationary",
+    "run.t_warmup=1",
+];
+
 const FIXED: Case = Case {
     name: "fixed (tilted law, weak bonds, Park-Miller)",
+    base: &[],
     sets: &["junctions.bond=weak", "fixed.dt=0.2", "output.events=false"],
     t_end: 20000.0,
 };
 const LINEAR_STRONG: Case = Case {
     name: "exact, linear law, strong bonds, events.csv",
+    base: &[],
     sets: &["run.engine=exact", "junctions.force_law=linear", "output.events=true", "run.t_warmup=100"],
     t_end: 4000.0,
 };
 const LINEAR_WEAK: Case = Case {
     name: "exact, linear law, weak bonds",
+    base: &[],
     sets: &["run.engine=exact", "junctions.force_law=linear", "junctions.bond=weak", "run.t_warmup=100"],
     t_end: 20000.0,
 };
@@ -46,32 +63,34 @@ const LINEAR_WEAK: Case = Case {
 /// checkpoint.
 const LINEAR_WEAK_BINS: Case = Case {
     name: "exact, linear law, weak bonds, N = 1e5 (bins)",
-    sets: &[
-        "run.engine=exact",
-        "junctions.force_law=linear",
-        "junctions.bond=weak",
-        "junctions.n=100000",
-        "plate.k=50000",
-        "plate.mass=25000",
-        "plate.eta=25000",
-        "junctions.initial=stationary",
-        "run.t_warmup=1",
-    ],
+    base: SCALED_1E5,
+    sets: &["run.engine=exact", "junctions.force_law=linear"],
     t_end: 20.0,
 };
 const TILTED: Case = Case {
     name: "exact, tilted law, weak bonds, events.csv",
+    base: &[],
     sets: &["run.engine=exact", "junctions.bond=weak", "output.events=true", "run.t_warmup=10"],
     t_end: 300.0,
 };
+/// Weak bonds with the tilted law at `N = 1e5`: rupture candidates from bins (`BINNED_FROM`)
+/// and formations' picks drawn ahead (`PREFETCH_MIN_N`), both through the checkpoint.
+const TILTED_WEAK_LARGE: Case = Case {
+    name: "exact, tilted law, weak bonds, N = 1e5 (bins, formations drawn ahead)",
+    base: SCALED_1E5,
+    sets: &["run.engine=exact"],
+    t_end: 20.0,
+};
 const TILTED_KINEMATIC: Case = Case {
     name: "exact, tilted law (series), kinematic plate, weak bonds, events.csv",
+    base: &[],
     sets: &["run.engine=exact", "junctions.bond=weak", "plate.kinematic=true", "output.events=true", "run.t_warmup=10"],
     t_end: 2000.0,
 };
 
 const KINEMATIC_EXACT: Case = Case {
     name: "exact, linear law, weak bonds, kinematic plate, events.csv",
+    base: &[],
     sets: &[
         "run.engine=exact",
         "junctions.force_law=linear",
@@ -84,6 +103,7 @@ const KINEMATIC_EXACT: Case = Case {
 };
 const KINEMATIC_FIXED: Case = Case {
     name: "fixed (tilted law, weak bonds), kinematic plate",
+    base: &[],
     sets: &["junctions.bond=weak", "plate.kinematic=true", "fixed.dt=0.2", "output.events=false"],
     t_end: 20000.0,
 };
@@ -91,6 +111,7 @@ const KINEMATIC_FIXED: Case = Case {
 /// the values in force and the reference values, and the resumed run goes on with them.
 const THERMAL: Case = Case {
     name: "exact, linear law, weak bonds, thermally activated at T = 1.4",
+    base: &[],
     sets: &[
         "run.engine=exact",
         "junctions.force_law=linear",
@@ -112,7 +133,7 @@ fn scene_args(dir: &Path, case: &Case, t_end: f64) -> Vec<String> {
         std::fs::write(&scene, FIG1).unwrap();
     }
     let mut a = vec![scene.to_str().unwrap().to_string()];
-    for s in case.sets.iter().map(|s| s.to_string()).chain([format!("run.t_end={t_end}")]) {
+    for s in case.base.iter().chain(case.sets).map(|s| s.to_string()).chain([format!("run.t_end={t_end}")]) {
         a.push("--set".into());
         a.push(s);
     }
@@ -366,6 +387,13 @@ fn killed_and_resumed_thermal() {
 #[test]
 fn killed_and_resumed_exact_tilted() {
     kill_and_resume(&TILTED, 1);
+}
+
+#[test]
+fn killed_and_resumed_exact_tilted_weak_in_bins() {
+    const { assert!(stickslip::engine::exact::BINNED_FROM <= 100_000) };
+    const { assert!(stickslip::engine::exact::stepper::series::PREFETCH_MIN_N <= 100_000) };
+    kill_and_resume(&TILTED_WEAK_LARGE, 1);
 }
 
 #[test]

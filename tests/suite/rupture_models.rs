@@ -5,7 +5,8 @@
 //! - `Scan` (the worked example) samples the same process as the crate's sum tree on the
 //!   closed-form stepper (linear law) and on the series stepper (tilted law, kinematic plate);
 //! - the tilted law's weak bonds, on a dynamic plate: the bins and the sum tree sample the
-//!   same process.
+//!   same process; and from `PREFETCH_MIN_N` junctions on, the formations' picks drawn
+//!   ahead and drawn at use sample the same process.
 //!
 //! Each comparison is a two-sample Kolmogorov–Smirnov test (level [`ALPHA`], critical value
 //! from the KS distribution) of the mean rupture tension of independent runs, one per seed,
@@ -14,7 +15,7 @@
 use crate::common::{ALPHA, ks_two_sample, ks_two_sample_critical};
 use stickslip::Scene;
 use stickslip::engine::Engine;
-use stickslip::engine::exact::stepper::series::{DrivenPlate, ExactSeries, RosenbrockPlate};
+use stickslip::engine::exact::stepper::series::{DrivenPlate, ExactSeries, PREFETCH_MIN_N, RosenbrockPlate};
 use stickslip::engine::exact::{BinnedRupture, DefaultQueue, ExactLinear, TreeRupture};
 use stickslip::observe::{EventKind, Nothing, Recorder};
 use stickslip::physics::{Linear, Plate, Tilted};
@@ -130,4 +131,31 @@ fn tilted_weak_bonds_bins_against_the_tree() {
         }
     };
     same_law("tilted law, dynamic plate, bins against tree", |s| run(s, true), |s| run(s, false));
+}
+
+/// The tilted law's weak bonds from `PREFETCH_MIN_N` junctions on draw their formations'
+/// picks ahead of use (so that the detached record is prefetched): against the picks drawn
+/// from the generator at each formation, on the same scene (the letter's Fig. 1 scaled to
+/// `N = PREFETCH_MIN_N`: `K = N/2`, `M = eta = N/4`, stationary start).
+#[test]
+fn tilted_weak_bonds_formations_drawn_ahead_against_drawn_at_use() {
+    let n = PREFETCH_MIN_N;
+    let sets = [
+        format!("junctions.n={n}"),
+        format!("plate.k={}", n / 2),
+        format!("plate.mass={}", n / 4),
+        format!("plate.eta={}", n / 4),
+        "junctions.initial=stationary".to_string(),
+    ];
+    let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
+    let run = |seed: u64, ahead: bool| {
+        let s = scene("tilted", seed, &sets);
+        let (k0, a, law) = (s.junctions.k0, a_of(&s), Tilted::from_scene(&s));
+        let bdx = s.junctions.beta_dx();
+        let rate = n as f64 * k0.max(s.junctions.kon0);
+        let plate = RosenbrockPlate::new(Plate::from_scene(&s), law.kappa * n as f64, 1e-10, 1e-12, rate).unwrap();
+        let e = ExactSeries::new(&s, law, bdx, |_: &mut _| TreeRupture::try_new(k0, a, n), plate).unwrap();
+        mean_rupture_tension(if ahead { e } else { e.with_formations_drawn_at_use() })
+    };
+    same_law("tilted law, formations drawn ahead against at use", |s| run(s, true), |s| run(s, false));
 }

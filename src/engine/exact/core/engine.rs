@@ -75,7 +75,7 @@ impl<S: Stepper, R: RuptureModel> Engine for Exact<S, R> {
                 } else {
                     None
                 };
-                moved = s.finish(core, &step, hit, to)?;
+                moved = s.finish(core, &step, hit, r.upcoming(), to)?;
             }
             match moved {
                 Moved::There | Moved::Stepped(_) => {}

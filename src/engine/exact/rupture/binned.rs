@@ -141,6 +141,10 @@ pub struct BinnedRupture {
     /// The next [`AHEAD`] candidates' tickets; `head` is the next one's.
     tickets: [Ticket; AHEAD],
     head: u8,
+    /// The slot of the member the second ticket would pick ([`RuptureModel::upcoming`]; a
+    /// prefetch hint, not state).
+    #[serde(skip)]
+    upcoming: u32,
     /// Emptied buffers for reuse (capacity only: no state), at most `n` members together.
     spare: Spares,
     /// The current horizon's bounds and their factors.
@@ -168,6 +172,7 @@ impl BinnedRupture {
             sides: Sides::default(),
             tickets,
             head: 0,
+            upcoming: 0,
             spare: Spares { buffers: Vec::new(), limit: n },
             h: Horizon::default(),
         })
@@ -489,6 +494,10 @@ impl RuptureModel for BinnedRupture {
     /// candidate is no event).
     #[inline(always)]
     fn prefetch(&self, _attached: &[Attached]) {}
+    #[inline(always)]
+    fn upcoming(&self) -> usize {
+        self.upcoming as usize
+    }
 }
 
 /// Where each term of the bins' bound is in force: for the plate within `[y_lo, y_hi]`,
@@ -568,8 +577,8 @@ impl BinnedRupture {
     /// would choose now, at the bin's sizes `n - DRIFT ..= n + DRIFT` (both ends and the
     /// middle of the range: a line or two); and the attached record of the member the
     /// second ticket would pick in the bin it chose then (its member, requested two
-    /// candidates ago, is read now). The addresses need not be valid (a prefetch never
-    /// faults).
+    /// candidates ago, is read now), whose slot is kept as [`RuptureModel::upcoming`]. The
+    /// addresses need not be valid (a prefetch never faults).
     #[inline(always)]
     fn request(&mut self, attached: &[Attached]) {
         let b = (self.head as usize + AHEAD - 1) & (AHEAD - 1);
@@ -588,6 +597,7 @@ impl BinnedRupture {
         if let Some(bin) = self.bins.get(second.hint as usize) {
             if let Some(m) = bin.members.get(index(second.pick, bin.members.len())) {
                 prefetch_ptr(attached.as_ptr().wrapping_add(m.slot as usize));
+                self.upcoming = m.slot;
             }
         }
     }

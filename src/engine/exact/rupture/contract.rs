@@ -58,4 +58,10 @@ pub trait RuptureModel: Clone + std::fmt::Debug + Serialize + DeserializeOwned +
     /// Prefetches the memory the next pick will touch.
     #[inline]
     fn prefetch(&self, _attached: &[Attached]) {}
+    /// The slot a later candidate is likely to pick, as far as the model knows it ahead
+    /// (`usize::MAX`: not known): a hint for prefetching what a stepper keeps by slot.
+    #[inline]
+    fn upcoming(&self) -> usize {
+        usize::MAX
+    }
 }

@@ -115,13 +115,18 @@ pub trait Stepper: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send
         Ok(Moved::There)
     }
     /// Ends the step just taken ([`Moved::Stepped`]) at the rupture `hit` inside it, or at its
-    /// end: what [`Stepper::step`] would have returned.
+    /// end: what [`Stepper::step`] would have returned. `upcoming` is the rupture model's
+    /// hint of a slot a later candidate will likely pick ([`RuptureModel::upcoming`]), for
+    /// prefetching what the stepper keeps by slot.
+    ///
+    /// [`RuptureModel::upcoming`]: crate::engine::exact::rupture::RuptureModel::upcoming
     #[inline]
     fn finish(
         &mut self,
         _core: &mut Core<Self::Queue>,
         _step: &Step,
         _hit: Option<(f64, usize)>,
+        _upcoming: usize,
         _to: Target,
     ) -> Result<Moved, EngineError> {
         Ok(Moved::There)

@@ -11,14 +11,14 @@ use crate::engine::alloc::{self, AllocError};
 use crate::engine::exact::core::bags::Attached;
 use crate::engine::exact::core::clocks::ArrayQueue;
 use crate::engine::exact::core::engine::Exact;
-use crate::engine::exact::core::pick::prefetch;
+use crate::engine::exact::core::pick::{Pick, prefetch};
 use crate::engine::exact::core::state::{Core, FORMATION};
 use crate::engine::exact::rupture::horizon::SPREAD;
 use crate::engine::exact::rupture::{RuptureModel, TiltedRate};
 use crate::engine::exact::stepper::contract::{Moved, Step, Stepper, Target, WeakRuptures};
 use crate::observe::Observer;
 use crate::physics::{ForceLaw, Tilted};
-use crate::rng::{UniformSource, below};
+use crate::rng::{Pcg64, UniformSource, below};
 use crate::scene::Scene;
 
 /// Fewest junctions for which the next pick's record is prefetched: below it the bags (16
@@ -44,6 +44,12 @@ pub struct SeriesStepper<P: Motion> {
     series: SeriesSum,
     /// Each attached junction's handle in `series`, by slot of the attached bag.
     handles: Vec<u32>,
+    /// Weak bonds with at least [`PREFETCH_MIN_N`] junctions: the formations' picks, drawn
+    /// ahead so that the detached record is prefetched events before it is read (the
+    /// thinning's draws make a pick from the generator unknown until the step ends). `None`:
+    /// drawn from the generator at the formation.
+    #[serde(default)]
+    formations: Option<Pick>,
     motion: P,
     /// Weak bonds: their candidates are thinned over each plate step, which keeps its
     /// excursion within `max_spread` (`+inf` for strong bonds).
@@ -91,6 +97,7 @@ impl<R: RuptureModel, P: Motion> ExactSeries<R, P> {
             core.counters.ode_rejected = Some(0);
         }
         let rupture = rupture(&mut core.rng)?;
+        let formations = (R::IS_WEAK && scene.junctions.n >= PREFETCH_MIN_N).then(|| Pick::draw(&mut core.rng));
         let a = beta_dx * law.kappa;
         // Beyond A_RESOLVABLE no plate step can keep the spread (rates change by e over less
         // than 1e-12 lengths): no limit, and the bound overflows into immediate ruptures.
@@ -100,6 +107,7 @@ impl<R: RuptureModel, P: Motion> ExactSeries<R, P> {
             rate: TiltedRate::new(law, beta_dx),
             series: SeriesSum::for_junctions(law, scene.exact.rtol, scene.junctions.n),
             handles: alloc::with_capacity(scene.junctions.n, "the series handles")?,
+            formations,
             motion,
             weak: R::IS_WEAK,
             max_spread: if R::IS_WEAK && resolvable { SPREAD / a } else { f64::INFINITY },
@@ -110,6 +118,14 @@ impl<R: RuptureModel, P: Motion> ExactSeries<R, P> {
             last_rel: 0.0,
         };
         Ok(Exact::start(core, stepper, rupture))
+    }
+
+    /// The engine with its formations' picks drawn from the generator at each formation, as
+    /// below [`PREFETCH_MIN_N`] junctions or with strong bonds (the same law as the picks
+    /// drawn ahead, another stream: the tests compare the two).
+    pub fn with_formations_drawn_at_use(mut self) -> Self {
+        self.stepper.formations = None;
+        self
     }
 }
 
@@ -152,13 +168,12 @@ impl<P: Motion> SeriesStepper<P> {
         *core.counters.series_rebases.get_or_insert(0) += 1;
     }
 
-    /// Strong bonds (with at least [`PREFETCH_MIN_N`] junctions): the plate step draws no random numbers, so the junction the due event
-    /// on channel `ch` will pick is already known (weak bonds: once the step's thinning is
-    /// done, for a formation); asking for its record now lets the memory
-    /// access (a random one among millions at large N) overlap the step. The picks are
-    /// drawn on a copy of the generator, exactly as the event will draw them (formation:
-    /// after the thinning's uniform when `g < 1`, so both candidates), and the run's
-    /// stream is untouched.
+    /// Strong bonds (with at least [`PREFETCH_MIN_N`] junctions): the plate step draws no
+    /// random numbers, so the junction the due event on channel `ch` will pick is already
+    /// known; asking for its record now lets the memory access (a random one among millions
+    /// at large N) overlap the step. The picks are drawn on a copy of the generator, exactly
+    /// as the event will draw them (formation: after the thinning's uniform when `g < 1`, so
+    /// both candidates), and the run's stream is untouched.
     #[inline]
     fn prefetch_pick(&self, core: &Core<ArrayQueue>, ch: usize) {
         match ch {
@@ -261,23 +276,25 @@ impl<P: Motion> Stepper for SeriesStepper<P> {
     }
 
     /// Ends the step at the rupture `hit` inside it, or at its end; records the series' error
-    /// bound over it. Weak bonds: once the thinning has drawn its numbers, the formation due
-    /// at the step's end picks from the generator as it is now, so its junction is asked for
-    /// while the step is finished.
+    /// bound over it. Weak bonds: the handle the rupture model's next candidates will likely
+    /// read (`upcoming`) is asked for, and a hit's own.
     #[inline]
     fn finish(
         &mut self,
         core: &mut Core<ArrayQueue>,
         step: &Step,
         hit: Option<(f64, usize)>,
+        upcoming: usize,
         to: Target,
     ) -> Result<Moved, EngineError> {
         if self.weak && core.n >= PREFETCH_MIN_N {
-            match hit {
-                // The rupture reads the junction's handle: asked for while the step ends.
-                Some((_, slot)) => prefetch(&self.handles[slot]),
-                None if to.due && to.ch == FORMATION && step.s1 >= to.tau => self.prefetch_pick(core, FORMATION),
-                None => {}
+            // The handle a later candidate will likely read, asked for an event ahead.
+            if let Some(h) = self.handles.get(upcoming) {
+                prefetch(h);
+            }
+            // The rupture reads the junction's handle: asked for while the step ends.
+            if let Some((_, slot)) = hit {
+                prefetch(&self.handles[slot]);
             }
         }
         let end = hit.map_or(step.s1, |(s, _)| s);
@@ -344,6 +361,24 @@ impl<P: Motion> Stepper for SeriesStepper<P> {
             self.refresh_series(core);
         }
         self.error_stale = true;
+    }
+
+    /// Weak bonds at large N: the next formation's pick, drawn ahead ([`Pick`]); otherwise
+    /// from the generator now.
+    #[inline]
+    fn formation_slot(&mut self, rng: &mut Pcg64, n: usize) -> usize {
+        match &mut self.formations {
+            Some(p) => p.take(n, rng),
+            None => below(rng, n),
+        }
+    }
+
+    /// Weak bonds at large N: the records the next formations can pick.
+    #[inline]
+    fn prefetch(&self, core: &Core<ArrayQueue>) {
+        if let Some(p) = &self.formations {
+            p.prefetch(&core.bags.detached);
+        }
     }
 }
 

@@ -21,7 +21,7 @@ pub mod plate;
 pub mod sum;
 pub mod taylor;
 
-pub use engine::{ExactSeries, SeriesStepper};
+pub use engine::{ExactSeries, PREFETCH_MIN_N, SeriesStepper};
 pub use plate::{DrivenPlate, Motion, RosenbrockPlate};
 pub use sum::{DIRECT_MAX, LocalCubic, SeriesSum, tilted_taylor};
 
