@@ -49,7 +49,7 @@ pub struct SeriesStepper<P: Motion> {
     /// thinning's draws make a pick from the generator unknown until the step ends). `None`:
     /// drawn from the generator at the formation.
     #[serde(default)]
-    formations: Option<Pick>,
+    next_formation: Option<Pick>,
     motion: P,
     /// Weak bonds: their candidates are thinned over each plate step, which keeps its
     /// excursion within `max_spread` (`+inf` for strong bonds).
@@ -97,7 +97,7 @@ impl<R: RuptureModel, P: Motion> ExactSeries<R, P> {
             core.counters.ode_rejected = Some(0);
         }
         let rupture = rupture(&mut core.rng)?;
-        let formations = (R::IS_WEAK && scene.junctions.n >= PREFETCH_MIN_N).then(|| Pick::draw(&mut core.rng));
+        let next_formation = (R::IS_WEAK && scene.junctions.n >= PREFETCH_MIN_N).then(|| Pick::draw(&mut core.rng));
         let a = beta_dx * law.kappa;
         // Beyond A_RESOLVABLE no plate step can keep the spread (rates change by e over less
         // than 1e-12 lengths): no limit, and the bound overflows into immediate ruptures.
@@ -107,7 +107,7 @@ impl<R: RuptureModel, P: Motion> ExactSeries<R, P> {
             rate: TiltedRate::new(law, beta_dx),
             series: SeriesSum::for_junctions(law, scene.exact.rtol, scene.junctions.n),
             handles: alloc::with_capacity(scene.junctions.n, "the series handles")?,
-            formations,
+            next_formation,
             motion,
             weak: R::IS_WEAK,
             max_spread: if R::IS_WEAK && resolvable { SPREAD / a } else { f64::INFINITY },
@@ -124,7 +124,7 @@ impl<R: RuptureModel, P: Motion> ExactSeries<R, P> {
     /// below [`PREFETCH_MIN_N`] junctions or with strong bonds (the same law as the picks
     /// drawn ahead, another stream: the tests compare the two).
     pub fn with_formations_drawn_at_use(mut self) -> Self {
-        self.stepper.formations = None;
+        self.stepper.next_formation = None;
         self
     }
 }
@@ -367,7 +367,7 @@ impl<P: Motion> Stepper for SeriesStepper<P> {
     /// from the generator now.
     #[inline]
     fn formation_slot(&mut self, rng: &mut Pcg64, n: usize) -> usize {
-        match &mut self.formations {
+        match &mut self.next_formation {
             Some(p) => p.take(n, rng),
             None => below(rng, n),
         }
@@ -376,7 +376,7 @@ impl<P: Motion> Stepper for SeriesStepper<P> {
     /// Weak bonds at large N: the records the next formations can pick.
     #[inline]
     fn prefetch(&self, core: &Core<ArrayQueue>) {
-        if let Some(p) = &self.formations {
+        if let Some(p) = &self.next_formation {
             p.prefetch(&core.bags.detached);
         }
     }
