@@ -35,7 +35,7 @@ use crate::engine::exact::core::pick::Pick;
 use crate::engine::exact::core::state::Core;
 use crate::engine::exact::rupture::{LinearRate, RuptureModel};
 use crate::engine::exact::stepper::contract::{Stepper, WeakRuptures};
-use crate::engine::exact::stepper::linear::propagator::{Integrals, LinearPlate, Trajectory};
+use crate::engine::exact::stepper::linear::propagator::{LinearPlate, Terms, Trajectory};
 use crate::engine::exact::stepper::linear::report;
 use crate::observe::{Observer, Segment};
 use crate::physics::{LinearLaw, Plate};
@@ -191,7 +191,7 @@ impl<R: RuptureModel, Q: ChannelQueue, M: PlateMotion> ExactLinear<R, Q, M> {
 }
 
 impl<Q: ChannelQueue, M: PlateMotion> LinearStepper<Q, M> {
-    /// Reports `[piece.tau0, tau1]` given the state and integrals at `tau1` as raw integrals
+    /// Reports `[piece.tau0, tau1]` given the state and integrals' terms at `tau1` as raw integrals
     /// ([`report::piece`]: no division), or sums it for an observer that takes stretches
     /// ([`Observer::STRETCHES`]: inside the observers' [`report::Window`]; nothing before),
     /// and moves there.
@@ -202,7 +202,7 @@ impl<Q: ChannelQueue, M: PlateMotion> LinearStepper<Q, M> {
         tau1: f64,
         y1: f64,
         v1: f64,
-        ints: Integrals,
+        terms: Terms,
         obs: &mut O,
     ) {
         let pc = &self.piece;
@@ -219,7 +219,7 @@ impl<Q: ChannelQueue, M: PlateMotion> LinearStepper<Q, M> {
                 y1,
                 v1,
                 n_att: core.bags.n_attached(),
-                ints,
+                terms,
             };
             if O::STRETCHES && O::SEGMENTS && self.window.sums(pc.tau0, tau1) {
                 self.sums.add(&span, &core.frame, core.plate.v);
@@ -337,9 +337,9 @@ impl<Q: ChannelQueue, M: PlateMotion> Stepper for LinearStepper<Q, M> {
             return Ok(true);
         }
         let h = t - self.piece.tau0;
-        let (y, v, ints) = self.piece.traj.current().at_maybe_integrals(h, core.plate.v, self.integrals::<O>(t));
+        let (y, v, terms) = self.piece.traj.current().at_maybe_terms(h, core.plate.v, self.integrals::<O>(t));
         if core.accepts_formation(v) {
-            self.report_piece(core, t, y, v, ints, obs);
+            self.report_piece(core, t, y, v, terms, obs);
             self.check(core)?;
             return Ok(true);
         }
@@ -354,8 +354,8 @@ impl<Q: ChannelQueue, M: PlateMotion> Stepper for LinearStepper<Q, M> {
             self.close_kinematic(core, t, obs);
         } else {
             let h = (t - self.piece.tau0).max(0.0);
-            let (y1, v1, ints) = self.piece.traj.current().at_maybe_integrals(h, core.plate.v, self.integrals::<O>(t));
-            self.report_piece(core, t, y1, v1, ints, obs);
+            let (y1, v1, terms) = self.piece.traj.current().at_maybe_terms(h, core.plate.v, self.integrals::<O>(t));
+            self.report_piece(core, t, y1, v1, terms, obs);
         }
         self.check(core)
     }

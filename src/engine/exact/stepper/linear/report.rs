@@ -15,17 +15,20 @@
 //! `h d + int w` and `h d^2 + 2 d int w + int w^2`: multiply-adds alone), the time and the
 //! attached count's integral; the friction's sums are `-K` and `K^2` times the lag's, and
 //! the bond and viscous forces' integrals follow from the plate's state at the stretch's
-//! two ends ([`Stretch`]).
+//! two ends ([`Stretch`]). A piece on the short path is kept with its polynomial's
+//! coefficients ([`Terms::Short`]) and summed in batches ([`BATCH`]), whose integrals are
+//! computed four pieces at a time ([`integrals_in_lanes`]): the same bits, added in the same
+//! order, as one piece at a time.
 
 use crate::engine::exact::core::frame::Frame;
-use crate::engine::exact::stepper::linear::propagator::Integrals;
+use crate::engine::exact::stepper::linear::propagator::{SHORT_LEN, Terms, integrals_in_lanes};
 use crate::observe::shifted::ShiftedSums;
 use crate::observe::{Piece, Stretch};
 use crate::physics::Plate;
 
 /// A finished piece `[tau0, tau1]` (local times, length `h`): the plate's state `(y0, v0)`
 /// and lag `lag0` at its start, its state `(y1, v1)` at its end, the attached count (constant
-/// on the piece) and the propagator's integrals over it.
+/// on the piece) and the propagator's integrals over it, or the terms to compute them from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Span {
     pub tau0: f64,
@@ -37,14 +40,14 @@ pub(super) struct Span {
     pub y1: f64,
     pub v1: f64,
     pub n_att: usize,
-    pub ints: Integrals,
+    pub terms: Terms,
 }
 
 /// The span `s` in `frame` as a [`Piece`] of raw integrals, for the anchors' sum `C`
 /// (`anchor_sum`, constant on the piece), drift `V` of the plate `p` and the law's slope `kappa`.
 #[inline(always)]
 pub(super) fn piece(s: &Span, frame: &Frame, anchor_sum: f64, p: &Plate, kappa: f64) -> Piece {
-    let (h, ints) = (s.h, s.ints);
+    let (h, ints) = (s.h, s.terms.integrals(s.h, p.v));
     let w1 = ints.i1 - 0.5 * p.v * h * h;
     let n = s.n_att as f64;
     Piece {
@@ -106,10 +109,41 @@ impl Window {
     }
 }
 
-/// The pieces summed since the last report (lag units, local positions): empty when
-/// `weight = 0`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// Pieces on the short path kept for [`Sums`] before their integrals are computed: a
+/// multiple of the lanes.
+const BATCH: usize = 64;
+/// Pieces whose integrals are computed side by side.
+const LANES: usize = 4;
+const _: () = assert!(BATCH % LANES == 0 && BATCH.is_power_of_two());
+
+/// Short-path pieces not yet summed, by field: the coefficients `c_1 .. c_7` (row 0
+/// unused), the length, the lag at the start, the attached count.
+#[derive(Clone, Debug, PartialEq)]
+struct Batch {
+    len: usize,
+    c: [[f64; BATCH]; SHORT_LEN],
+    h: [f64; BATCH],
+    lag0: [f64; BATCH],
+    n_att: [f64; BATCH],
+}
+
+impl Default for Batch {
+    fn default() -> Batch {
+        Batch { len: 0, c: [[0.0; BATCH]; SHORT_LEN], h: [0.0; BATCH], lag0: [0.0; BATCH], n_att: [0.0; BATCH] }
+    }
+}
+
+/// The pieces summed since the last report: the sums, and the short-path pieces not yet in
+/// them.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub(super) struct Sums {
+    acc: Acc,
+    batch: Batch,
+}
+
+/// The sums (lag units, local positions): empty when `weight = 0`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Acc {
     /// Absolute start time and the lag `r` at it.
     t0: f64,
     lag_ref: f64,
@@ -129,39 +163,101 @@ pub(super) struct Sums {
 }
 
 impl Sums {
-    /// Adds the span `p` in `frame`, with drift `v`.
+    /// Adds the span `p` in `frame`, with drift `v`: to the batch if it is on the short path
+    /// (summed when the batch is full), else summed now, after the batch.
     #[inline(always)]
     pub(super) fn add(&mut self, p: &Span, frame: &Frame, v: f64) {
-        if self.weight == 0.0 {
-            self.t0 = frame.time(p.tau0);
-            self.lag_ref = p.lag0;
-            self.y0 = p.y0;
-            self.v0 = p.v0;
+        if self.batch.len == 0 && self.acc.weight == 0.0 {
+            self.acc.t0 = frame.time(p.tau0);
+            self.acc.lag_ref = p.lag0;
+            self.acc.y0 = p.y0;
+            self.acc.v0 = p.v0;
         }
-        let h = p.h;
-        let d = p.lag0 - self.lag_ref;
-        let w1 = p.ints.i1 - 0.5 * v * h * h;
-        let hd = h * d;
-        self.weight += h;
-        self.s1 += hd + w1;
-        self.s2 += hd * d + (2.0 * d * w1 + p.ints.i2);
-        self.attached += h * p.n_att as f64;
-        self.t1 = frame.time(p.tau1);
-        self.y1 = p.y1;
-        self.v1 = p.v1;
+        self.acc.t1 = frame.time(p.tau1);
+        self.acc.y1 = p.y1;
+        self.acc.v1 = p.v1;
+        if let Terms::Short(c) = p.terms {
+            let b = &mut self.batch;
+            let i = b.len % BATCH;
+            #[allow(clippy::needless_range_loop)] // unrolled; the iterator form is not
+            for n in 1..SHORT_LEN {
+                b.c[n][i] = c[n];
+            }
+            (b.h[i], b.lag0[i], b.n_att[i]) = (p.h, p.lag0, p.n_att as f64);
+            b.len = i + 1;
+            if b.len == BATCH {
+                self.flush(v);
+            }
+        } else {
+            let ints = p.terms.integrals(p.h, v);
+            self.flush(v);
+            self.sum([p.h], [p.lag0], [p.n_att as f64], [ints.i1], [ints.i2], v, 1);
+        }
+    }
+
+    /// Sums the batch's pieces, [`LANES`] at a time, and empties it.
+    #[inline(never)]
+    fn flush(&mut self, v: f64) {
+        let len = self.batch.len;
+        for j in 0..BATCH / LANES {
+            let k = j * LANES;
+            if k >= len {
+                break;
+            }
+            let b = &self.batch;
+            let lanes =
+                |row: &[f64; BATCH]| -> [f64; LANES] { row[k..k + LANES].try_into().expect("within the batch") };
+            let (h, lag0, n_att) = (lanes(&b.h), lanes(&b.lag0), lanes(&b.n_att));
+            let (i1, i2) = integrals_in_lanes(&b.c.each_ref().map(lanes), &h, v);
+            self.sum(h, lag0, n_att, i1, i2, v, len - k);
+        }
+        self.batch.len = 0;
+    }
+
+    /// Adds the first `used` (all if more) of `L` pieces of lengths `h`, starting lags `lag0`, attached
+    /// counts `n_att` and integrals `i1`, `i2`, in order. `d = lag0 - r`, `w1 = i1 - V h^2/2`;
+    /// each piece adds `h d + w1` to `S1` and `h d^2 + 2 d w1 + i2` to `S2`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn sum<const L: usize>(
+        &mut self,
+        h: [f64; L],
+        lag0: [f64; L],
+        n_att: [f64; L],
+        i1: [f64; L],
+        i2: [f64; L],
+        v: f64,
+        used: usize,
+    ) {
+        let (mut e1, mut e2, mut e3) = ([0.0; L], [0.0; L], [0.0; L]);
+        for l in 0..L {
+            let d = lag0[l] - self.acc.lag_ref;
+            let w1 = i1[l] - 0.5 * v * h[l] * h[l];
+            let hd = h[l] * d;
+            e1[l] = hd + w1;
+            e2[l] = hd * d + (2.0 * d * w1 + i2[l]);
+            e3[l] = h[l] * n_att[l];
+        }
+        for l in 0..L.min(used) {
+            self.acc.weight += h[l];
+            self.acc.s1 += e1[l];
+            self.acc.s2 += e2[l];
+            self.acc.attached += e3[l];
+        }
     }
 
     /// The local origin moved by `dy` in position.
     #[inline]
     pub(super) fn shifted(&mut self, dy: f64) {
-        self.y0 -= dy;
-        self.y1 -= dy;
+        self.acc.y0 -= dy;
+        self.acc.y1 -= dy;
     }
 
     /// The stretch summed (empty, at `now`, if nothing was), for plate `p`; `self` empties.
     #[inline]
     pub(super) fn take(&mut self, p: &Plate, now: f64) -> Stretch {
-        let s = std::mem::take(self);
+        self.flush(p.v);
+        let s = std::mem::take(&mut self.acc);
         if s.weight == 0.0 {
             return Stretch { t0: now, t1: now, ..Stretch::default() };
         }
@@ -208,6 +304,46 @@ mod tests {
                 GL5.iter().map(|&(x, wt)| wt * g(mid + 0.5 * w * x)).sum::<f64>() * 0.5 * w
             })
             .sum()
+    }
+
+    /// Chains of pieces of random lengths up to the short path's limit (so that some lanes
+    /// keep the square's higher terms), some off the short path, over several batches and
+    /// part of one: summed through the batch, they give the same stretch bit for bit as
+    /// the same pieces summed one at a time from their integrals.
+    #[test]
+    fn batched_pieces_sum_to_the_bits_of_one_at_a_time() {
+        let mut rng = pcg(39);
+        let mut u = || rng.uniform();
+        let (mut batched, mut off_short) = (0, 0);
+        for case in 0..40 {
+            let p = Plate { mass: 0.1 + 5.0 * u(), eta: 0.01 + 3.0 * u(), k: 0.5 + 10.0 * u(), v: 0.5 * u() };
+            let frame = Frame { epoch: u(), x_ref: 0.0, lag_ref: u() - 0.5, v: p.v };
+            let (mut one, mut many) = (Sums::default(), Sums::default());
+            let (mut tau, mut y, mut v) = (0.0, u() - 0.5, u() - 0.5);
+            for _ in 0..(case * 7) % 200 + 1 {
+                let n_att = (u() * 40.0) as usize;
+                let plate = LinearPlate::new(p.mass, p.eta, p.k + 0.3 * n_att as f64);
+                let tr = plate.trajectory(y, v, p.k * (p.v * tau - frame.lag_ref) + u(), p.k * p.v);
+                // Up to four times the short path's longest step (2^-8 / rho).
+                let h = 2f64.powf(-8.0 - 20.0 * u() + 2.0) / plate.rho();
+                let (y1, v1, terms) = tr.at_maybe_terms(h, p.v, true);
+                let ints = terms.integrals(h, p.v);
+                match terms {
+                    Terms::Short(_) => batched += 1,
+                    Terms::Integrals(_) => off_short += 1,
+                }
+                let span =
+                    Span { tau0: tau, tau1: tau + h, h, y0: y, v0: v, lag0: frame.lag(y, tau), y1, v1, n_att, terms };
+                many.add(&span, &frame, p.v);
+                one.add(&Span { terms: Terms::Integrals(ints), ..span }, &frame, p.v);
+                assert_eq!(one.batch.len, 0);
+                (tau, y, v) = (tau + h, y1, v1);
+            }
+            let (a, b) = (one.take(&p, tau), many.take(&p, tau));
+            assert_eq!(a, b, "case {case}");
+            assert!(a.t1 > a.t0 && a.friction.weight > 0.0, "case {case}: {a:?}");
+        }
+        assert!(batched > 1000 && off_short > 100, "{batched} pieces batched, {off_short} off the short path");
     }
 
     /// The window in local time: a piece that starts where the window opens (the runner's
@@ -270,9 +406,9 @@ mod tests {
                 // M y'' + eta y' + k_eff y = K (V (tau + s) - lag_ref) + kappa C.
                 let a = p.k * (p.v * tau - lag_ref) + kappa * anchor_sum;
                 let tr = LinearPlate::new(p.mass, p.eta, k_eff).trajectory(y, v, a, p.k * p.v);
-                let (y1, v1, ints) = tr.at_with_integrals(h, p.v);
+                let (y1, v1, terms) = tr.at_maybe_terms(h, p.v, true);
                 let span =
-                    Span { tau0: tau, tau1: tau + h, h, y0: y, v0: v, lag0: frame.lag(y, tau), y1, v1, n_att, ints };
+                    Span { tau0: tau, tau1: tau + h, h, y0: y, v0: v, lag0: frame.lag(y, tau), y1, v1, n_att, terms };
                 let inside = frame.time(tau) >= t_lo && frame.time(tau + h) <= t_hi;
                 stats.piece(&piece(&span, &frame, anchor_sum, &p, kappa));
                 if inside {

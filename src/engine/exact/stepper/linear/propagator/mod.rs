@@ -48,6 +48,7 @@ mod terms;
 use serde::{Deserialize, Serialize};
 
 use short::Short;
+pub(crate) use short::{LEN as SHORT_LEN, integrals_in_lanes};
 pub use terms::Integrals;
 use terms::{NT, RECIP, TAIL, hilbert_fixed, hilbert_square, hilbert_tail};
 
@@ -412,6 +413,25 @@ impl Series {
     }
 }
 
+/// A piece's integrals ([`Integrals`]), or the short path's polynomial `c_0 .. c_7` to
+/// compute them from when they are read ([`Trajectory::at_maybe_terms`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Terms {
+    Integrals(Integrals),
+    Short([f64; SHORT_LEN]),
+}
+
+impl Terms {
+    /// The integrals over `[0, h]` with drift `s` (`h`, `s` those the terms were made with).
+    #[inline(always)]
+    pub fn integrals(&self, h: f64, s: f64) -> Integrals {
+        match self {
+            Terms::Integrals(i) => *i,
+            Terms::Short(c) => Short::integrals(c, h, s),
+        }
+    }
+}
+
 impl Trajectory {
     /// The plate this trajectory belongs to.
     pub fn plate(&self) -> &LinearPlate {
@@ -639,12 +659,27 @@ impl Trajectory {
     /// nothing of the integrals computed for a caller that does not read them.
     #[inline(always)]
     pub fn at_maybe_integrals(&self, h: f64, s: f64, integrals: bool) -> (f64, f64, Integrals) {
-        if integrals {
-            self.at_with_integrals(h, s)
-        } else {
+        let (y, v, terms) = self.at_maybe_terms(h, s, integrals);
+        (y, v, terms.integrals(h, s))
+    }
+
+    /// [`Trajectory::at_maybe_integrals`] with the integrals left as [`Terms`]: on the short
+    /// path its polynomial's coefficients, from which [`Terms::integrals`] (or
+    /// [`integrals_in_lanes`], several pieces at once) gives the same bits later.
+    #[inline(always)]
+    pub fn at_maybe_terms(&self, h: f64, s: f64, integrals: bool) -> (f64, f64, Terms) {
+        if !integrals {
             let (y, v) = self.at(h);
-            (y, v, Integrals { i1: 0.0, i2: 0.0 })
+            return (y, v, Terms::Integrals(Integrals { i1: 0.0, i2: 0.0 }));
         }
+        if h > 0.0
+            && let Some(c) = self.short(h)
+        {
+            let (u, du) = Short::state(&c, h);
+            return (self.y0 + u, du, Terms::Short(c));
+        }
+        let (y, v, ints) = self.at_with_integrals(h, s);
+        (y, v, Terms::Integrals(ints))
     }
 
     /// Integrals over `[0, h]` used for exact time averages:

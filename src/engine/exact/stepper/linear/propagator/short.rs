@@ -37,7 +37,7 @@ use super::terms::{Integrals, RECIP, TAIL, hilbert_fixed};
 /// margin of about `1e10`, at `N = 1e5` (`rho tau ~ 1e-4`) with about `1e4`.
 pub(super) const DEGREE: usize = 7;
 /// Coefficients `c_0 .. c_D`.
-pub(super) const LEN: usize = DEGREE + 1;
+pub(crate) const LEN: usize = DEGREE + 1;
 const _: () = assert!(DEGREE == 7, "Short::state sums seven coefficients (estrin6)");
 /// Largest `rho tau` tried: beyond it `(rho tau)^(D-1)` alone exceeds `2^-56` by far.
 pub(super) const RHO_TAU_MAX: f64 = 1.0 / 256.0;
@@ -128,22 +128,47 @@ impl Short {
 
     /// The integrals over `[0, h]` of the polynomial ([`Integrals`]): `i1 = h sum t_n/(n+1)`
     /// and `i2 = h sum_{i,j>=1} a_i a_j/(i+j+1)`, `t_n = c_n h^n`, `a_1 = t_1 - s h`,
-    /// `a_n = t_n` (the Taylor path's forms).
+    /// `a_n = t_n` (the Taylor path's forms); [`integrals_in_lanes`] with one lane.
     #[inline(always)]
     pub(super) fn integrals(c: &[f64; LEN], h: f64, s: f64) -> Integrals {
-        let mut t = [0.0; LEN];
-        let mut hn = h;
-        let mut i1 = 0.0;
-        let mut n = 1;
-        while n < LEN {
-            t[n] = c[n] * hn;
-            i1 += t[n] * RECIP[n + 1];
-            hn *= h;
-            n += 1;
-        }
-        t[1] -= s * h;
-        Integrals { i1: i1 * h, i2: square_integral(&t, h) }
+        let ([i1], [i2]) = integrals_in_lanes(&c.map(|x| [x]), &[h], s);
+        Integrals { i1, i2 }
     }
+}
+
+/// [`Short::integrals`] of `L` pieces side by side: piece `l` has the coefficients `c[n][l]`
+/// and the length `h[l]`. Every lane runs the same operations in the same order, so each
+/// piece's integrals are the same bits as alone, and the compiler can run the lanes as one
+/// vector. Returns `(i1, i2)` by lane. The square's short form ([`square_integral`]) is
+/// computed in every lane; a lane whose higher terms it may not drop is recomputed in full.
+#[inline(always)]
+pub(crate) fn integrals_in_lanes<const L: usize>(c: &[[f64; L]; LEN], h: &[f64; L], s: f64) -> ([f64; L], [f64; L]) {
+    let mut t = [[0.0; L]; LEN];
+    let (mut hn, mut i1) = (*h, [0.0; L]);
+    let mut n = 1;
+    while n < LEN {
+        for l in 0..L {
+            t[n][l] = c[n][l] * hn[l];
+            i1[l] += t[n][l] * RECIP[n + 1];
+            hn[l] *= h[l];
+        }
+        n += 1;
+    }
+    let (mut i2, mut full) = ([0.0; L], false);
+    for l in 0..L {
+        t[1][l] -= s * h[l];
+        i1[l] *= h[l];
+        let (a, dropped) = square_low(&[t[1][l], t[2][l], t[3][l], t[4][l], t[5][l], t[6][l], t[7][l]]);
+        i2[l] = (a * h[l]).max(0.0);
+        full |= !dropped;
+    }
+    if full {
+        for l in 0..L {
+            let tl: [f64; LEN] = std::array::from_fn(|n| t[n][l]);
+            i2[l] = square_integral(&tl, h[l]);
+        }
+    }
+    (i1, i2)
 }
 
 /// Largest `T6 / S` for which [`square_integral`] drops the terms above degree 5.
@@ -158,19 +183,25 @@ pub(super) const HIGH_NEGLIGIBLE: f64 = 1.0 / 18_014_398_509_481_984.0; // 2^-54
 /// steps at large N (`rho h ~ 1e-5`, `|t_6| / |t_2| ~ (rho h)^4 / 360`) the test holds by far.
 #[inline(always)]
 pub(super) fn square_integral(t: &[f64; LEN], h: f64) -> f64 {
-    let high = t[6].abs() + t[7].abs();
-    let low = (t[1].abs() + t[2].abs()) + (t[3].abs() + t[4].abs()) + t[5].abs();
-    if high <= HIGH_NEGLIGIBLE * low {
-        let [_, a1, a2, a3, a4, a5, ..] = *t;
-        let r = &RECIP;
-        let acc = a1 * (a1 * r[3] + 2.0 * ((a2 * r[4] + a3 * r[5]) + (a4 * r[6] + a5 * r[7])))
-            + a2 * (a2 * r[5] + 2.0 * (a3 * r[6] + (a4 * r[7] + a5 * r[8])))
-            + (a3 * (a3 * r[7] + 2.0 * (a4 * r[8] + a5 * r[9])) + a4 * (a4 * r[9] + 2.0 * a5 * r[10]))
-            + a5 * a5 * r[11];
-        (acc * h).max(0.0)
-    } else {
-        hilbert_fixed::<LEN>(t, h)
+    match square_low(&[t[1], t[2], t[3], t[4], t[5], t[6], t[7]]) {
+        (acc, true) => (acc * h).max(0.0),
+        _ => hilbert_fixed::<LEN>(t, h),
     }
+}
+
+/// `(sum_{i,j=1..5} a_i a_j / (i + j + 1), whether that is the whole square to rounding)`
+/// for `a = [t_1, ..., t_7]` ([`square_integral`]'s test).
+#[inline(always)]
+fn square_low(a: &[f64; DEGREE]) -> (f64, bool) {
+    let [a1, a2, a3, a4, a5, a6, a7] = *a;
+    let high = a6.abs() + a7.abs();
+    let low = (a1.abs() + a2.abs()) + (a3.abs() + a4.abs()) + a5.abs();
+    let r = &RECIP;
+    let acc = a1 * (a1 * r[3] + 2.0 * ((a2 * r[4] + a3 * r[5]) + (a4 * r[6] + a5 * r[7])))
+        + a2 * (a2 * r[5] + 2.0 * (a3 * r[6] + (a4 * r[7] + a5 * r[8])))
+        + (a3 * (a3 * r[7] + 2.0 * (a4 * r[8] + a5 * r[9])) + a4 * (a4 * r[9] + 2.0 * a5 * r[10]))
+        + a5 * a5 * r[11];
+    (acc, high <= HIGH_NEGLIGIBLE * low)
 }
 
 /// `sum_{j=0}^{6} a_j x^j` in Estrin's order.

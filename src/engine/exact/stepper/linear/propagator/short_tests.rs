@@ -1,7 +1,7 @@
 //! Tests of the short path ([`super::short`]) against the plate's Taylor loop.
 
 use super::short::*;
-use super::terms::hilbert_fixed;
+use super::terms::{Integrals, RECIP, hilbert_fixed};
 use super::{LinearPlate, Trajectory};
 use crate::rng::{UniformSource, pcg};
 
@@ -122,4 +122,50 @@ fn survives_serialization() {
     let p = LinearPlate::new(2.5e5, 2.5e5, 5.5e5);
     let back: LinearPlate = serde_json::from_str(&serde_json::to_string(&p).unwrap()).unwrap();
     assert_eq!(p, back);
+}
+
+/// Four pieces' integrals side by side are each the bits of the piece alone, whether the
+/// lanes all drop the square's higher terms or some keep them; and the one-lane
+/// form is the scalar sum written out (`t_n = c_n h^n`, [`square_integral`]).
+#[test]
+fn lanes_give_the_bits_of_each_piece_alone() {
+    let mut rng = pcg(13);
+    let mut r = |lo: f64, hi: f64| lo + (hi - lo) * rng.uniform();
+    let (mut mixed, mut kept) = (0, 0);
+    for _ in 0..2000 {
+        let (mut c, mut h) = ([[0.0; 4]; LEN], [0.0; 4]);
+        let s = r(-1.0, 1.0);
+        let mut high = [false; 4];
+        for l in 0..4 {
+            let p = LinearPlate::new(10f64.powf(r(-3.0, 6.0)), 10f64.powf(r(-3.0, 6.0)), 10f64.powf(r(-3.0, 7.0)));
+            let tr = p.trajectory(r(-1e3, 1e3), r(-2.0, 2.0), r(-1e3, 1e3) * p.coefficients().2, r(-1.0, 1.0));
+            let (coef, tau) = loop {
+                let tau = 10f64.powf(r(-9.0, -2.4)) / p.rho();
+                if let Some(coef) = tr.short(tau) {
+                    break (coef, tau);
+                }
+            };
+            h[l] = tau;
+            let (mut t, mut hn, mut i1) = ([0.0; LEN], tau, 0.0);
+            for n in 1..LEN {
+                c[n][l] = coef[n];
+                t[n] = coef[n] * hn;
+                i1 += t[n] * RECIP[n + 1];
+                hn *= tau;
+            }
+            t[1] -= s * tau;
+            let want = Integrals { i1: i1 * tau, i2: square_integral(&t, tau) };
+            assert_eq!(Short::integrals(&coef, tau, s), want);
+            let low: f64 = t[1..6].iter().map(|x| x.abs()).sum();
+            high[l] = t[6].abs() + t[7].abs() > HIGH_NEGLIGIBLE * low;
+        }
+        let (i1, i2) = integrals_in_lanes(&c, &h, s);
+        for l in 0..4 {
+            let alone = Short::integrals(&c.map(|row| row[l]), h[l], s);
+            assert_eq!((i1[l].to_bits(), i2[l].to_bits()), (alone.i1.to_bits(), alone.i2.to_bits()), "lane {l}");
+        }
+        kept += high.iter().filter(|&&k| k).count();
+        mixed += usize::from(high.iter().any(|&k| k) && !high.iter().all(|&k| k));
+    }
+    assert!(mixed > 100 && kept > 300, "{mixed} mixed batches, {kept} lanes keeping the higher terms");
 }
