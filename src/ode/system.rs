@@ -21,7 +21,7 @@ impl<F: FnMut(f64, &[f64], &mut [f64])> OdeSystem for F {
 /// Work counters of an integrator since its construction.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct OdeStats {
-    /// Accepted steps (including fixed steps taken with [`Dop853::step_fixed`]).
+    /// Accepted steps (including fixed steps taken with [`Dop853::step_fixed`](crate::ode::Dop853::step_fixed)).
     pub accepted: u64,
     /// Rejected step attempts: error test failed or non-finite values met.
     pub rejected: u64,
@@ -30,13 +30,13 @@ pub struct OdeStats {
     /// Evaluations of the right-hand side.
     pub rhs_evals: u64,
     /// Evaluations of `f(t, y)` at the start of a step because the FSAL derivative was not
-    /// available: the first step, after [`Dop853::reset`], or when `t`/`y` were changed
+    /// available: the first step, after [`Dop853::reset`](crate::ode::Dop853::reset), or when `t`/`y` were changed
     /// between steps. Each costs one RHS evaluation (included in `rhs_evals`).
     pub restarts: u64,
 }
 
 /// Why the integrator could not do what it was asked. It never panics and never returns a
-/// non-finite state: on error, `t` and `y` passed to [`Dop853::step`] are left unchanged.
+/// non-finite state: on error, `t` and `y` passed to [`Dop853::step`](crate::ode::Dop853::step) are left unchanged.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum OdeError {
     /// A configuration value is out of its domain.
@@ -64,7 +64,7 @@ pub enum OdeError {
     #[error("ODE step size underflow at t = {t}: h = {h}")]
     StepSizeUnderflow { t: f64, h: f64 },
     /// Too many consecutive rejected attempts within one step (see
-    /// [`Dop853Config::max_consecutive_rejections`]).
+    /// [`Dop853Config::max_consecutive_rejections`](crate::ode::Dop853Config::max_consecutive_rejections)).
     #[error("ODE step rejected {rejections} times in a row at t = {t} (last h = {h})")]
     TooManyRejections { t: f64, h: f64, rejections: u32 },
     /// Dense output was asked for before any step was accepted.

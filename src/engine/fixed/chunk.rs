@@ -7,7 +7,7 @@
 //! ([`UniformSource::skip`]): so the chunks may run in any order, on any thread, and give
 //! the same numbers. `F_b` is summed in that order too: each chunk's terms one by one in
 //! index order from `+0.0`, then the chunk sums one by one in chunk order from `+0.0`
-//! ([`total`]). A scene with `N <= CHUNK` has one chunk, whose sum is the plain index-order
+//! (`total`). A scene with `N <= CHUNK` has one chunk, whose sum is the plain index-order
 //! sum.
 
 use super::flip::Flip;

@@ -7,7 +7,7 @@
 //! bit for bit those of the eager scheme; every read of `x_i` between steps
 //! ([`FixedEngine::extension`], [`Engine::sample`]) applies the pending update on the fly.
 //!
-//! The pass goes chunk by chunk ([`super::chunk`]); with a [`Team`] of threads
+//! The pass goes chunk by chunk ([`super::chunk`]); with a `Team` of threads
 //! ([`Engine::set_threads`]) the chunks are shared between them, with the same results.
 
 use std::marker::PhantomData;
@@ -368,7 +368,7 @@ where
         }
     }
 
-    /// A [`Team`] of `threads` threads shares each step's pass (and velocity Verlet's second
+    /// A `Team` of `threads` threads shares each step's pass (and velocity Verlet's second
     /// sum of `F_b`) from now on, when `N` is large enough to gain from it
     /// ([`super::team::PARALLEL_MIN`]); a run that logs events keeps its pass on one thread.
     fn set_threads(&mut self, threads: usize) {

@@ -1,4 +1,4 @@
-//! The threads that share a step's pass over the junctions ([`Team`]).
+//! The threads that share a step's pass over the junctions (`Team`).
 //!
 //! A run's results do not depend on the team: the work is cut into items (the chunks of
 //! [`super::chunk`]) whose results depend on the item alone, and they are handed back in

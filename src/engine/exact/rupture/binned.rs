@@ -7,19 +7,19 @@
 //! so candidates arrive at `B = k0 (exp(a y_hi) sum_j n_j U0_j + exp(-a y_lo) sum_j n_j U1_j)`
 //! (`n_j` the bin's count); a candidate picks a term, then a bin `j` with probability
 //! `n_j Uk_j / sum`, then a *uniform* member of the bin, and is accepted with probability
-//! `r_i / b_j` (the test of [`accept`], from the member's own weights). The accepted
+//! `r_i / b_j` (the test of `accept`, from the member's own weights). The accepted
 //! candidates are exactly the ruptures (Lewis & Shedler 1979), as with the sum tree of
 //! [`super::TreeRupture`]; the bins' bound is at most `exp(h)` looser, so
 //! a candidate is accepted a little less often.
 //!
 //! A bin whose anchors all lie below `y_lo` keeps term 0 alone, and one whose anchors all
-//! lie above `y_hi` term 1 alone ([`Sides`]): its members are stretched one way over the
+//! lie above `y_hi` term 1 alone (`Sides`): its members are stretched one way over the
 //! whole horizon, where `exp(a |y - c|)` is that term, so `b_j` drops the other one. Only
 //! the bins between the bounds (one or two over a short horizon) keep both, where a member
 //! near the plate is accepted about half the time.
 //!
 //! What this buys: the member is a uniform pick from a bag, like a strong bond's, so a
-//! candidate's uniforms are drawn a few candidates ahead ([`Ticket`]) and the memory it will
+//! candidate's uniforms are drawn a few candidates ahead (`Ticket`) and the memory it will
 //! read is requested while earlier candidates run: its member, then the member's record in
 //! the attached bag. A candidate touches one random memory location (the member) instead of
 //! a descent of `log4 N` lines, and the bins' sums are recomputed from their integer counts
@@ -31,7 +31,7 @@
 //! stores its position in its bin ([`Attached::bin`]), so a rupture, which has read the
 //! record, finds and removes the member in O(1); the bin is a function of `c`. The bins'
 //! buffers grow by doubling and shrink by half when a quarter full, and emptied ones are
-//! kept for reuse ([`SPARES`]): about a member's bytes per junction in runs
+//! kept for reuse (`SPARES`): about a member's bytes per junction in runs
 //! ([`BinnedRupture::bytes_for`]).
 
 use rand::Rng;
@@ -132,7 +132,7 @@ pub struct BinnedRupture {
     lo: usize,
     hi: usize,
     /// Running sums `sum_{lo <= i <= j} n_i Uk_i` over `lo..hi`, of the bins where term `k`
-    /// is in force ([`Sides`]), recomputed from the counts by [`BinnedRupture::plan`] and
+    /// is in force (`Sides`), recomputed from the counts by [`BinnedRupture::plan`] and
     /// [`RuptureModel::bound`] (never accumulated across events); their last entry is `[W0, W1]`.
     cumulative: Vec<[f64; 2]>,
     /// The bins where each term is in force over the current bounds.

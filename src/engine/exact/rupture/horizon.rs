@@ -98,7 +98,7 @@ pub struct Horizon {
     /// Last candidate rate: the horizon need not cover many more candidates than
     /// [`CANDIDATES_PER_HORIZON`], because the bound is renewed at every event anyway.
     last_rate: f64,
-    /// The rates cannot be bounded over even the shortest horizon ([`HORIZON_MIN`]): every
+    /// The rates cannot be bounded over even the shortest horizon (`HORIZON_MIN`): every
     /// attached junction ruptures at once, one candidate each, all accepted.
     pub immediate: bool,
     /// The last plan bounded attached junctions (its horizon is meaningful).
@@ -153,7 +153,7 @@ impl Horizon {
     /// from now (`bounds(h)`: its proven bounds over the next `h`), for `n_att` attached
     /// junctions whose weights sum to `w`, and its horizon: the longest (within a factor 2)
     /// whose spread `a (y_hi - y_lo)` is at most [`SPREAD`] and that covers about
-    /// [`CANDIDATES_PER_HORIZON`] candidates at the last rate.
+    /// `CANDIDATES_PER_HORIZON` candidates at the last rate.
     #[inline(always)]
     pub fn plan(&mut self, bounds: impl FnMut(f64) -> (f64, f64), n_att: usize, k0: f64, a: f64, w: [f64; 2]) -> Plan {
         self.plan_with(bounds, n_att, k0, a, |_, _| w)

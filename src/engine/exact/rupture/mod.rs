@@ -15,13 +15,13 @@
 //!   ([`RuptureRate`], what the law supplies). Accepted candidates are exactly the rupture
 //!   events of the time-dependent rates (Lewis & Shedler 1979; Ogata 1981). The bounds come
 //!   from a closed-form plate over a thinning horizon (`horizon`, candidates on a channel) or
-//!   from each step of a stepped plate ([`thin`]). The tree draws the junction from a sum
+//!   from each step of a stepped plate ([`thin()`]). The tree draws the junction from a sum
 //!   tree of the weights (`sumtree`); the bins a uniform member of a bin of anchors.
 //! - [`Hazard`] (`hazard`): weak bonds whose stepper integrates the total rupture rate and
 //!   finds the ruptures itself (the direct stepper).
 //!
 //! The acceptance `r_i / b_i` is first squeezed between bounds read from the junction's
-//! weights ([`Bracket::squeeze`]), which decides most candidates without the plate's
+//! weights ([`accept::squeeze`]), which decides most candidates without the plate's
 //! position or an exponential.
 
 pub mod accept;

@@ -57,7 +57,7 @@ pub enum WeakRuptures {
     /// Closed form: candidates on the rupture channel at the model's rate over a thinning
     /// horizon ([`HORIZON`](crate::engine::exact::core::state::HORIZON)), bounded by [`Stepper::bounds`].
     Horizon,
-    /// Candidates thinned over each plate step ([`Moved::Stepped`], [`crate::engine::exact::rupture::thin`]).
+    /// Candidates thinned over each plate step ([`Moved::Stepped`], [`crate::engine::exact::rupture::thin()`]).
     Steps,
     /// The stepper finds them itself ([`Moved::Ruptured`]).
     Own,

@@ -6,7 +6,7 @@
 //! rigorous remainder bound). Between events the plate moves by the L-stable
 //! [`Rosenbrock`](crate::ode::Rosenbrock) method ([`RosenbrockPlate`]) or exactly as `y = V tau` ([`DrivenPlate`]); strong
 //! bonds rupture on a channel clock, weak bonds by thinning over each plate step against
-//! the envelope of slope `kappa` (any weak-bond rupture model, [`crate::engine::exact::rupture::thin`];
+//! the envelope of slope `kappa` (any weak-bond rupture model, [`crate::engine::exact::rupture::thin()`];
 //! the tilted law's acceptance is [`TiltedRate`](crate::engine::exact::rupture::TiltedRate)). The series remainder and the integrator's
 //! tolerance are the engine's approximations; both are reported in `summary.json`
 //! (docs/engines.md, "Plate between events (tilted law): a series, Taylor steps and a stiff integrator").

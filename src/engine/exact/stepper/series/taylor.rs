@@ -1,5 +1,5 @@
 //! The plate over one step as a Taylor series in time, for scenes that are not stiff
-//! ([`super::motion::RosenbrockPlate`] chooses it once per run; docs/engines.md, "Plate
+//! ([`super::plate::RosenbrockPlate`] chooses it once per run; docs/engines.md, "Plate
 //! between events (tilted law): a series, Taylor steps and a stiff integrator").
 //!
 //! With the lag `u = X - V t`, the step's local time `s` and the bond force's Taylor

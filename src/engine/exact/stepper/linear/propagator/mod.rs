@@ -665,7 +665,7 @@ impl Trajectory {
 
     /// [`Trajectory::at_maybe_integrals`] with the integrals left as [`Terms`]: on the short
     /// path its polynomial's coefficients, from which [`Terms::integrals`] (or
-    /// [`integrals_in_lanes`], several pieces at once) gives the same bits later.
+    /// `integrals_in_lanes`, several pieces at once) gives the same bits later.
     #[inline(always)]
     pub fn at_maybe_terms(&self, h: f64, s: f64, integrals: bool) -> (f64, f64, Terms) {
         if !integrals {

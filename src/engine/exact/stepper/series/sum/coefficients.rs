@@ -37,7 +37,7 @@ const LEGENDRE2: [[f64; 3]; PMAX] = {
 /// `phi_k = -kappa l0 R^-k (P_(k-1)(t) - t P_k(t))`, `R = sqrt(x^2 + l0^2)`, `t = -x/R`,
 /// `P_k` by the Legendre recurrence (`LEGENDRE2`: even `P_k` and odd `P_k / t` as two
 /// independent chains in `s = t^2 = x^2/R^2`, half the latency of one). O(1) per coefficient.
-/// Always inlined: where `out`'s length is a constant ([`COMPILED_ORDERS`]) its loops unroll and
+/// Always inlined: where `out`'s length is a constant (`COMPILED_ORDERS`) its loops unroll and
 /// the recurrence stays in registers.
 #[inline(always)]
 pub fn phi_taylor(law: &Tilted, x: f64, out: &mut [f64]) {

@@ -834,7 +834,7 @@ impl SeriesSum {
 
 impl SeriesSum {
     /// The series' normalised derivatives at `y`, `S^(j)(y) / j!` for `j < M`: the
-    /// polynomial re-centred at `t0 = y - base` ([`recentred`]), `out[j] =
+    /// polynomial re-centred at `t0 = y - base` (`recentred`), `out[j] =
     /// sum_k C(k, j) A_k t0^(k-j)` (as [`SeriesSum::taylor_at`], to any order; 0 above `p`),
     /// O(p M) flops in whole-array steps. The linear part adds `kappa (X0 + n t0)` and
     /// `kappa n` to the first two. Within `radius()` of the base the values of the
