@@ -208,7 +208,13 @@ impl Sums {
             let lanes =
                 |row: &[f64; BATCH]| -> [f64; LANES] { row[k..k + LANES].try_into().expect("within the batch") };
             let (h, lag0, n_att) = (lanes(&b.h), lanes(&b.lag0), lanes(&b.n_att));
-            let (i1, i2) = integrals_in_lanes(&b.c.each_ref().map(lanes), &h, v);
+            // Indexed loops: `array::map` and `Zip::new` are out-of-line calls in `release`.
+            let mut c = [[0.0; LANES]; SHORT_LEN];
+            #[allow(clippy::needless_range_loop)]
+            for n in 1..SHORT_LEN {
+                c[n] = lanes(&b.c[n]);
+            }
+            let (i1, i2) = integrals_in_lanes(&c, &h, v);
             self.sum(h, lag0, n_att, i1, i2, v, len - k);
         }
         self.batch.len = 0;

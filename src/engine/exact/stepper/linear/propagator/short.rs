@@ -131,7 +131,11 @@ impl Short {
     /// `a_n = t_n` (the Taylor path's forms); [`integrals_in_lanes`] with one lane.
     #[inline(always)]
     pub(super) fn integrals(c: &[f64; LEN], h: f64, s: f64) -> Integrals {
-        let ([i1], [i2]) = integrals_in_lanes(&c.map(|x| [x]), &[h], s);
+        let mut lane = [[0.0]; LEN];
+        for n in 1..LEN {
+            lane[n] = [c[n]];
+        }
+        let ([i1], [i2]) = integrals_in_lanes(&lane, &[h], s);
         Integrals { i1, i2 }
     }
 }
@@ -164,7 +168,10 @@ pub(crate) fn integrals_in_lanes<const L: usize>(c: &[[f64; L]; LEN], h: &[f64; 
     }
     if full {
         for l in 0..L {
-            let tl: [f64; LEN] = std::array::from_fn(|n| t[n][l]);
+            let mut tl = [0.0; LEN];
+            for n in 1..LEN {
+                tl[n] = t[n][l];
+            }
             i2[l] = square_integral(&tl, h[l]);
         }
     }
