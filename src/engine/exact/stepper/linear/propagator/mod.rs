@@ -639,18 +639,8 @@ impl Trajectory {
     /// compute them.
     #[inline(always)]
     pub fn at_with_integrals(&self, h: f64, s: f64) -> (f64, f64, Integrals) {
-        if h > 0.0
-            && let Some(c) = self.short(h)
-        {
-            let (u, du) = Short::state(&c, h);
-            return (self.y0 + u, du, Short::integrals(&c, h, s));
-        }
-        if h > 0.0 && self.use_taylor(h) {
-            let (u, du, ints) = self.taylor_with_integrals(h, s);
-            return (self.y0 + u, du, ints);
-        }
-        let (y, v) = self.at(h);
-        (y, v, self.integrals(h, s))
+        let (y, v, terms) = self.at_maybe_terms(h, s, true);
+        (y, v, terms.integrals(h, s))
     }
 
     /// [`Trajectory::at_with_integrals`] when `integrals` (a constant at the call site, or a
@@ -678,8 +668,12 @@ impl Trajectory {
             let (u, du) = Short::state(&c, h);
             return (self.y0 + u, du, Terms::Short(c));
         }
-        let (y, v, ints) = self.at_with_integrals(h, s);
-        (y, v, Terms::Integrals(ints))
+        if h > 0.0 && self.use_taylor(h) {
+            let (u, du, ints) = self.taylor_with_integrals(h, s);
+            return (self.y0 + u, du, Terms::Integrals(ints));
+        }
+        let (y, v) = self.at(h);
+        (y, v, Terms::Integrals(self.integrals(h, s)))
     }
 
     /// Integrals over `[0, h]` used for exact time averages:
