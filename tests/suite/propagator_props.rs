@@ -769,3 +769,56 @@ fn long_horizons_match_reference() {
         }
     }
 }
+
+/// `Trajectory::response` bounds how far a junction attached or detached at `tau = 0` moves
+/// the plate: the new path (plate `k + s kappa`, forcing `a + s kappa c`, `s = +-1`) starts
+/// from the old one's state, and `|y_new - y_old| <= response(h) kappa sup |y_old - c|` over
+/// `[0, h]` (the sup bounded by the old path's `bounds(h)`), checked at 200 points of each of
+/// random plates of every branch, states, anchors and horizons, with the evaluations'
+/// rounding allowed for; and the bound is not loose by more than a few times where the
+/// response is a push of one sign. A horizon with `k c2 > 1/2` has no finite response.
+#[test]
+fn response_bounds_the_plate_after_a_junction_changes() {
+    let mut rng = stickslip::rng::pcg(11);
+    let mut u = || stickslip::rng::UniformSource::uniform(&mut rng);
+    let (mut checked, mut tight) = (0, 0);
+    for case in 0..4000 {
+        let m = if case % 5 == 0 { 0.0 } else { 10f64.powf(4.0 * u() - 2.0) };
+        let eta = if case % 7 == 0 && m > 0.0 { 0.0 } else { 10f64.powf(4.0 * u() - 2.0) };
+        let k = if case % 11 == 0 { 0.0 } else { 10f64.powf(4.0 * u() - 2.0) };
+        let kappa = k.max(1e-3) * u() * 0.5;
+        let sign = if case % 2 == 0 { 1.0 } else { -1.0 };
+        if sign < 0.0 && kappa > k {
+            continue;
+        }
+        let (y0, v0, b) = (4.0 * u() - 2.0, 4.0 * u() - 2.0, 2.0 * u() - 1.0);
+        let a = k * y0 + 4.0 * u() - 2.0;
+        let c = y0 + 6.0 * u() - 3.0;
+        let old = LinearPlate::new(m, eta, k).trajectory(y0, v0, a, b);
+        let v_new = if m == 0.0 { v0 } else { old.at(0.0).1 };
+        let new = LinearPlate::new(m, eta, k + sign * kappa).trajectory(y0, v_new, a + sign * kappa * c, b);
+        let h = 10f64.powf(6.0 * u() - 5.0);
+        let r = new.response(h);
+        if !r.is_finite() {
+            continue;
+        }
+        let (lo, hi) = old.bounds(h);
+        let g = kappa * (hi - c).abs().max((lo - c).abs());
+        let mut worst: f64 = 0.0;
+        for j in 0..=200 {
+            let tau = h * j as f64 / 200.0;
+            let (yo, yn) = (old.at(tau).0, new.at(tau).0);
+            let slack = 1e-12 * (yo.abs() + yn.abs() + g * r);
+            assert!(
+                (yn - yo).abs() <= r * g + slack,
+                "case {case}: M {m} eta {eta} k {k} h {h}: |{yn} - {yo}| > {r} {g}"
+            );
+            worst = worst.max((yn - yo).abs());
+        }
+        checked += 1;
+        tight += usize::from(worst > 0.2 * r * g);
+    }
+    assert!(checked > 2000 && tight > checked / 10, "{checked} cases, {tight} within 5x of the bound");
+    let p = LinearPlate::new(1.0, 1.0, 10.0).trajectory(0.0, 0.0, 0.0, 0.0);
+    assert!(p.response(1.0).is_infinite() && p.response(0.1).is_finite() && p.response(f64::NAN).is_infinite());
+}

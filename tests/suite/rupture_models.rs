@@ -3,7 +3,9 @@
 //!
 //! - the worked example's file is `rupture_models/scan.rs` word for word;
 //! - `Scan` (the worked example) samples the same process as the crate's sum tree on the
-//!   closed-form stepper (linear law) and on the series stepper (tilted law, kinematic plate);
+//!   closed-form stepper (linear law) and on the series stepper (tilted law, kinematic plate),
+//!   and as the bins on the closed-form stepper (which, like the tree there, keep a
+//!   horizon's plan across events where `Scan` plans anew);
 //! - the tilted law's weak bonds, on a dynamic plate: the bins and the sum tree sample the
 //!   same process; and from `PREFETCH_MIN_N` junctions on, the formations' picks drawn
 //!   ahead and drawn at use sample the same process.
@@ -43,10 +45,15 @@ fn scene(law: &str, seed: u64, extra: &[&str]) -> Scene {
 }
 
 /// The mean tension of the ruptures in `[T_WARM, T_END]`.
-fn mean_rupture_tension<E: Engine>(mut e: E) -> f64 {
-    e.advance(T_WARM, &mut Nothing).unwrap();
+fn mean_rupture_tension<E: Engine>(e: E) -> f64 {
+    mean_rupture_tension_over(e, T_WARM, T_END)
+}
+
+/// The mean tension of the ruptures in `[t_warm, t_end]`.
+fn mean_rupture_tension_over<E: Engine>(mut e: E, t_warm: f64, t_end: f64) -> f64 {
+    e.advance(t_warm, &mut Nothing).unwrap();
     let mut rec = Recorder::default();
-    e.advance(T_END, &mut rec).unwrap();
+    e.advance(t_end, &mut rec).unwrap();
     let t: Vec<f64> = rec.events.iter().filter(|e| e.kind == EventKind::Rupture).map(|e| e.tension).collect();
     assert!(t.len() > 100, "too few ruptures to test anything: {}", t.len());
     t.iter().sum::<f64>() / t.len() as f64
@@ -93,6 +100,62 @@ fn the_worked_example_runs_on_the_closed_form_stepper() {
         }
     };
     same_law("linear law, scan against tree", |s| run(s, false), |s| run(s, true));
+}
+
+/// The linear law's bins and sum tree on the closed-form stepper (dynamic plate), which keep a
+/// horizon's plan across events while the plate's widened bounds allow, against the worked
+/// example, which plans anew after every event. On the letter's plate one junction moves
+/// the plate too much over a horizon for a plan to be kept; on it scaled to `N = 3000` (`K
+/// = N/2`, `M = eta = N/4`, the same time scales) nearly every event keeps it.
+#[test]
+fn linear_weak_bonds_bins_and_tree_keeping_plans_against_the_worked_example() {
+    let n = 3000;
+    let sets = [
+        format!("junctions.n={n}"),
+        format!("plate.k={}", n / 2),
+        format!("plate.mass={}", n / 4),
+        format!("plate.eta={}", n / 4),
+        "junctions.initial=stationary".to_string(),
+        "run.t_end=30".to_string(),
+    ];
+    let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
+    let run = |seed: u64, model: &str| {
+        let s = scene("linear", seed, &sets);
+        let (k0, a, law) = (s.junctions.k0, a_of(&s), Linear::from_scene(&s));
+        match model {
+            "bins" => {
+                let binned = |rng: &mut _| BinnedRupture::try_new(k0, a, n, rng).unwrap();
+                mean_rupture_tension_over(ExactLinear::<_, DefaultQueue>::new(&s, &law, binned), 5.0, 30.0)
+            }
+            "tree" => {
+                let tree = |_: &mut _| TreeRupture::new(k0, a, n);
+                mean_rupture_tension_over(ExactLinear::<_, DefaultQueue>::new(&s, &law, tree), 5.0, 30.0)
+            }
+            _ => mean_rupture_tension_over(
+                ExactLinear::<_, DefaultQueue>::new(&s, &law, |_| Scan::new(k0, a)),
+                5.0,
+                30.0,
+            ),
+        }
+    };
+    same_law("linear law at N = 3000, bins against scan", |s| run(s, "bins"), |s| run(s, "scan"));
+    same_law("linear law at N = 3000, tree against scan", |s| run(s, "tree"), |s| run(s, "scan"));
+}
+
+/// The linear law's bins on the letter's scene against the worked example.
+#[test]
+fn linear_weak_bonds_bins_against_the_worked_example() {
+    let run = |seed: u64, bins: bool| {
+        let s = scene("linear", seed, &[]);
+        let (k0, a, law, n) = (s.junctions.k0, a_of(&s), Linear::from_scene(&s), s.junctions.n);
+        if bins {
+            let binned = |rng: &mut _| BinnedRupture::try_new(k0, a, n, rng).unwrap();
+            mean_rupture_tension(ExactLinear::<_, DefaultQueue>::new(&s, &law, binned))
+        } else {
+            mean_rupture_tension(ExactLinear::<_, DefaultQueue>::new(&s, &law, |_| Scan::new(k0, a)))
+        }
+    };
+    same_law("linear law, bins against scan", |s| run(s, true), |s| run(s, false));
 }
 
 /// The worked example on the series stepper (tilted law, kinematic plate), against the tree.

@@ -143,6 +143,11 @@ impl<Q: ChannelQueue> Channels<Q> {
         self.clocks[ch].next = t;
         self.queue.set(ch, t);
     }
+    /// The pending time of channel `ch`.
+    #[inline]
+    pub fn time(&self, ch: usize) -> f64 {
+        self.clocks[ch].next
+    }
     /// The channel that fires first and its time.
     #[inline]
     pub fn first(&self) -> (usize, f64) {

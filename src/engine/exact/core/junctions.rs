@@ -21,6 +21,7 @@ pub fn rupture<S: Stepper, R: RuptureModel, O: Observer>(
 ) {
     let last = core.bags.n_attached() - 1;
     let a = core.bags.take_attached(slot);
+    core.changed = a.c;
     s.detached(core, slot, last, &a);
     r.detached(&mut core.bags.attached, slot, last, &a);
     let x = s.y(core) - a.c;
@@ -44,6 +45,7 @@ pub fn form<S: Stepper, R: RuptureModel, O: Observer>(core: &mut Core<S::Queue>,
     let x = reattached_extension(core.reattach, core.lambda, &d, core.tau);
     let y = s.y(core);
     let c = y - x;
+    core.changed = c;
     core.bags.attach_in_bin(c, d.id, 0);
     core.counters.formations += 1;
     emit(obs, core.time(), EventKind::Formation, d.id, x, |x| s.tension(x));
@@ -114,8 +116,9 @@ pub const fn horizon<S: Stepper, R: RuptureModel>() -> bool {
 
 /// Sets every channel's rate after a change of state (formation `kon0 N_det`, times the
 /// stepper's acceptance; rupture and horizon from the model's [`RuptureModel::plan`] over the
-/// stepper's bounds, none for weak bonds found inside plate steps); channel `fired` draws
-/// afresh. Always inlined (it runs after every event).
+/// stepper's bounds, or after an event the current horizon's plan kept
+/// ([`RuptureModel::replan`]); none for weak bonds found inside plate steps); channel `fired`
+/// draws afresh. Always inlined (it runs after every event).
 #[inline(always)]
 pub fn refresh_clocks<S: Stepper, R: RuptureModel>(
     core: &mut Core<S::Queue>,
@@ -124,14 +127,24 @@ pub fn refresh_clocks<S: Stepper, R: RuptureModel>(
     fired: Option<usize>,
 ) {
     let now = core.tau;
-    let plan = if R::IS_WEAK && !horizon::<S, R>() {
+    // After an event inside a thinning horizon, its plan is kept while its bounds hold for
+    // the plate's new path: the old path's widened by the event's reach.
+    let kept = if horizon::<S, R>() && fired.is_some() {
+        let rest = core.channels.time(HORIZON) - now;
+        r.replan(|lo, hi| s.reach(core, rest, lo, hi), core.bags.n_attached())
+    } else {
+        None
+    };
+    let plan = if let Some(rate) = kept {
+        Plan { rate, horizon: f64::NAN }
+    } else if R::IS_WEAK && !horizon::<S, R>() {
         Plan { rate: 0.0, horizon: f64::INFINITY }
     } else {
         r.plan(|h| s.bounds(core, h), core.bags.n_attached())
     };
     let formation_rate = core.formation.kon0 * s.formation_acceptance(core) * count(core.bags.n_detached());
     core.channels.set_rates(now, [formation_rate, plan.rate], fired, &mut core.rng);
-    if horizon::<S, R>() {
+    if horizon::<S, R>() && kept.is_none() {
         core.channels.set_time(HORIZON, now + plan.horizon);
     }
 }

@@ -138,6 +138,14 @@ pub struct BinnedRupture {
     /// The bins where each term is in force over the current bounds.
     #[serde(default)]
     sides: Sides,
+    /// The occupied range `lo..hi` when `cumulative` was last summed (another range: sum
+    /// it all again).
+    #[serde(default)]
+    summed: [usize; 2],
+    /// The first bin (index) whose count changed since then: `cumulative` holds from there
+    /// on (`usize::MAX`: none changed; 0, as a checkpoint restores it: all).
+    #[serde(default)]
+    dirty: usize,
     /// The next [`AHEAD`] candidates' tickets; `head` is the next one's.
     tickets: [Ticket; AHEAD],
     head: u8,
@@ -170,6 +178,8 @@ impl BinnedRupture {
             hi: HALF,
             cumulative: Vec::new(),
             sides: Sides::default(),
+            summed: [HALF, HALF],
+            dirty: usize::MAX,
             tickets,
             head: 0,
             upcoming: 0,
@@ -200,6 +210,20 @@ impl BinnedRupture {
     fn sum_up(&mut self, y_lo: f64, y_hi: f64) {
         self.sides = Sides::over(self.scale, y_lo, y_hi);
         sum_up(&self.bins[self.lo..self.hi], self.lo, self.sides, &mut self.cumulative);
+        (self.summed, self.dirty) = ([self.lo, self.hi], usize::MAX);
+    }
+    /// The running sums brought up to date under the current sides: from the first bin
+    /// whose count changed on (the same additions, in the same order, as summing all of
+    /// them: [`resum_from`]), or all of them if the occupied range moved.
+    #[inline]
+    fn resum(&mut self) {
+        let (lo, hi) = (self.lo, self.hi);
+        if self.summed != [lo, hi] || self.cumulative.len() != hi - lo {
+            sum_up(&self.bins[lo..hi], lo, self.sides, &mut self.cumulative);
+        } else if self.dirty < hi {
+            resum_from(&self.bins[lo..hi], lo, self.dirty.max(lo) - lo, self.sides, &mut self.cumulative);
+        }
+        (self.summed, self.dirty) = ([lo, hi], usize::MAX);
     }
     /// Bin `j`'s bound `b_j / k0`: the sum of its terms in force under the factors `e_hi`,
     /// `e_lo`.
@@ -252,6 +276,7 @@ impl BinnedRupture {
     #[inline(always)]
     fn insert(&mut self, attached: &mut [Attached], slot: usize, c: f64) {
         let j = self.bin_of(c);
+        self.dirty = self.dirty.min(j);
         let bin = &mut self.bins[j];
         attached[slot].bin = bin.members.len() as u32;
         let m = Member { e: (self.a * c).exp(), slot: slot as u32 };
@@ -381,6 +406,7 @@ impl RuptureModel for BinnedRupture {
             return;
         }
         let j = self.bin_of(a.c);
+        self.dirty = self.dirty.min(j);
         let bin = &mut self.bins[j];
         let p = a.bin as usize;
         bin.members.swap_remove(p);
@@ -402,11 +428,27 @@ impl RuptureModel for BinnedRupture {
     }
     /// The bins' sums are recomputed over the horizon's bounds once they are chosen.
     fn plan(&mut self, bounds: impl FnMut(f64) -> (f64, f64), n_att: usize) -> Plan {
-        let BinnedRupture { h, bins, lo, hi, cumulative, sides, scale, k0, a, .. } = self;
+        let BinnedRupture { h, bins, lo, hi, cumulative, sides, summed, dirty, scale, k0, a, .. } = self;
         h.plan_with(bounds, n_att, *k0, *a, |y_lo, y_hi| {
             *sides = Sides::over(*scale, y_lo, y_hi);
             sum_up(&bins[*lo..*hi], *lo, *sides, cumulative);
-            cumulative.last().copied().unwrap_or([0.0; 2])
+            (*summed, *dirty) = ([*lo, *hi], usize::MAX);
+            (cumulative.last().copied().unwrap_or([0.0; 2]), sides.limits(*scale))
+        })
+    }
+    /// The plan is kept while the plate's path stays within its factors' and its sides'
+    /// limits; the sums are brought up to date from the bins whose counts changed.
+    #[inline]
+    fn replan(&mut self, reach: impl FnOnce(f64, f64) -> f64, n_att: usize) -> Option<f64> {
+        if n_att == 0 || !self.h.widen(reach) {
+            return None;
+        }
+        self.resum();
+        let (m, p) = self.h.terms(self.totals());
+        let rate = self.k0 * (m + p);
+        (rate.is_finite() && rate > 0.0).then(|| {
+            self.h.keep(rate);
+            rate
         })
     }
     /// The bins' sums are recomputed here (the attached junctions may have changed since the
@@ -457,6 +499,7 @@ impl RuptureModel for BinnedRupture {
             }
         }
         (self.lo, self.hi) = (HALF, HALF);
+        self.h.forget();
         // The new bins' counts over the range they span (not the whole table), then a buffer
         // for each that holds its count.
         let a = self.a;
@@ -532,6 +575,17 @@ impl Sides {
         }
         Sides { upto: table_index(hi) + 1, from: table_index(lo) }
     }
+    /// The plate positions `[lo, hi]` for which these sides hold: every bin at or above
+    /// `upto` keeps its anchors above the plate while `y scale < upto - HALF` (the rounded
+    /// products `floor_index` compares are monotone in `y`), and every bin below `from` its
+    /// anchors below while `y scale >= from - HALF`; unbounded where a side reaches the
+    /// table's end. The caller moves them inwards for round-off.
+    #[inline]
+    fn limits(&self, scale: f64) -> [f64; 2] {
+        let lo = if self.from == 0 { f64::NEG_INFINITY } else { (self.from as f64 - HALF as f64) / scale };
+        let hi = if self.upto > 2 * HALF { f64::INFINITY } else { (self.upto as f64 - HALF as f64) / scale };
+        [lo, hi]
+    }
     /// Whether terms 0 and 1 are in force in bin `j`.
     #[inline(always)]
     fn terms(&self, j: usize) -> [bool; 2] {
@@ -564,11 +618,26 @@ fn sum_up(bins: &[Bin], first: usize, sides: Sides, cumulative: &mut Vec<[f64; 2
     cumulative.clear();
     let mut acc = [0.0f64; 2];
     for (i, bin) in bins.iter().enumerate() {
-        let (n, u) = (count(bin.members.len()), bin.bound);
-        let [t0, t1] = sides.terms(first + i);
-        acc = [acc[0] + if t0 { n * u[0] } else { 0.0 }, acc[1] + if t1 { n * u[1] } else { 0.0 }];
+        acc = add_bin(acc, bin, sides.terms(first + i));
         cumulative.push(acc);
     }
+}
+
+/// [`sum_up`]'s running sums recomputed from position `from` on (those before it hold).
+#[inline]
+fn resum_from(bins: &[Bin], first: usize, from: usize, sides: Sides, cumulative: &mut [[f64; 2]]) {
+    let mut acc = if from > 0 { cumulative[from - 1] } else { [0.0; 2] };
+    for i in from..bins.len() {
+        acc = add_bin(acc, &bins[i], sides.terms(first + i));
+        cumulative[i] = acc;
+    }
+}
+
+/// The running sums `acc` with the bin's terms in force (`terms`) added: `n U_k`.
+#[inline(always)]
+fn add_bin(acc: [f64; 2], bin: &Bin, [t0, t1]: [bool; 2]) -> [f64; 2] {
+    let (n, u) = (count(bin.members.len()), bin.bound);
+    [acc[0] + if t0 { n * u[0] } else { 0.0 }, acc[1] + if t1 { n * u[1] } else { 0.0 }]
 }
 
 impl BinnedRupture {
@@ -712,6 +781,126 @@ mod tests {
             }
         }
         assert!(one_sided > 100_000, "{one_sided} one-sided bins");
+    }
+
+    /// The sides of bounds `[y_lo, y_hi]` hold over their limits (moved inwards as a plan
+    /// moves them): at every position within, every member's rate stays under its bin's
+    /// bound from the terms in force, with the factors of that position.
+    #[test]
+    fn sides_hold_within_their_limits() {
+        let mut rng = pcg(6);
+        let mut bounded = 0;
+        for a in [1e-3, 0.1, 1.0, 37.0] {
+            let r = BinnedRupture::try_new(1.0, a, 64, &mut rng).unwrap();
+            let edge = |j: f64| j * H / a;
+            for _ in 0..400 {
+                let y_lo = match rng.next_u64() % 3 {
+                    0 => edge((rng.next_u64() % 40) as f64 - 20.0),
+                    1 => edge((rng.next_u64() % 40) as f64 - 20.0).next_down(),
+                    _ => (rng.uniform() - 0.5) * 40.0 * H / a,
+                };
+                let y_hi = y_lo + [0.0, 1e-9, 0.3, 3.0][(rng.next_u64() % 4) as usize] * H / a;
+                let sides = Sides::over(r.scale, y_lo, y_hi);
+                let [lo, hi] = sides.limits(r.scale);
+                let guard = 1e-12 * (lo.abs().max(hi.abs()) + 1.0 / a);
+                let (lo, hi) = (lo + guard, hi - guard);
+                for j in -24i32..24 {
+                    for c in [edge(j as f64), edge(j as f64).next_up(), edge(j as f64 + 1.0).next_down()] {
+                        let [u0, u1] = r.bins[r.bin_of(c)].bound;
+                        let [t0, t1] = sides.terms(r.bin_of(c));
+                        for y in [lo, hi, 0.5 * (lo + hi)] {
+                            if !y.is_finite() {
+                                continue;
+                            }
+                            let b = (if t0 { (a * y).exp() * u0 } else { 0.0 })
+                                + (if t1 { (-a * y).exp() * u1 } else { 0.0 });
+                            let rate = (a * (y - c).abs()).exp();
+                            assert!(rate <= b * (1.0 + 1e-12), "a {a} [{lo}, {hi}] y {y} c {c}: {rate} > {b}");
+                            bounded += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(bounded > 100_000, "{bounded} rates bounded");
+    }
+
+    /// After events, the plan is kept while its bounds, widened by their reach, stay within
+    /// its limits (its factors' and its sides'), at the rate of the junctions attached then:
+    /// the same bits as summing every bin under the plan's sides; a reach past the limits or
+    /// a re-base (which forgets the plan) plans anew.
+    #[test]
+    fn a_plan_is_kept_while_the_plate_stays_within_its_limits() {
+        let mut rng = pcg(9);
+        let a = 0.7;
+        let mut r = BinnedRupture::try_new(1.0, a, 4096, &mut rng).unwrap();
+        let mut attached: Vec<Attached> = Vec::new();
+        let drive = Drive { y0: 0.3, v: 0.7 };
+        for step in 0..2000u32 {
+            let c = (rng.uniform() - 0.5) * 20.0;
+            attached.push(record(c, step));
+            let slot = attached.len() - 1;
+            r.attached(&mut attached, slot, c, 0.0);
+        }
+        r.plan(|h| drive.bounds(h), attached.len());
+        let mut kept = 0;
+        for step in 0..2000u32 {
+            if rng.uniform() < 0.5 {
+                let c = 0.3 + (rng.uniform() - 0.5) * 4.0;
+                attached.push(record(c, step));
+                let slot = attached.len() - 1;
+                r.attached(&mut attached, slot, c, 0.3);
+            } else {
+                let slot = index(rng.next_u64(), attached.len());
+                let last = attached.len() - 1;
+                let gone = attached.swap_remove(slot);
+                r.detached(&mut attached, slot, last, &gone);
+            }
+            let Some(rate) = r.replan(|_, _| 1e-12, attached.len()) else {
+                r.plan(|h| drive.bounds(h), attached.len());
+                continue;
+            };
+            kept += 1;
+            let mut full = Vec::new();
+            sum_up(&r.bins[r.lo..r.hi], r.lo, r.sides, &mut full);
+            let (m, p) = r.h.terms(full.last().copied().unwrap());
+            assert_eq!(rate.to_bits(), (m + p).to_bits(), "step {step}");
+        }
+        assert!(kept > 1900, "{kept} of 2000 events kept the plan");
+        assert_eq!(r.replan(|_, _| 1e3 / a, attached.len()), None);
+        r.plan(|h| drive.bounds(h), attached.len());
+        r.rebuild(&mut attached);
+        assert_eq!(r.replan(|_, _| 0.0, attached.len()), None, "a re-base forgets the plan");
+    }
+
+    /// The running sums brought up to date from the first changed bin ([`BinnedRupture::resum`])
+    /// are those of summing every bin again, bit for bit, through random attachments and
+    /// detachments (the range of occupied bins moving or not) under fixed sides.
+    #[test]
+    fn partial_sums_are_the_bits_of_a_full_sum() {
+        let mut rng = pcg(7);
+        let a = 0.7;
+        let mut r = BinnedRupture::try_new(1.0, a, 64, &mut rng).unwrap();
+        let mut attached: Vec<Attached> = Vec::new();
+        r.sides = Sides::over(r.scale, -1.0, 1.0);
+        for step in 0..5_000u32 {
+            if attached.len() < 3 || rng.uniform() < 0.5 {
+                let c = (rng.uniform() - 0.5) * 20.0;
+                attached.push(record(c, step));
+                let slot = attached.len() - 1;
+                r.attached(&mut attached, slot, c, 0.0);
+            } else {
+                let slot = index(rng.next_u64(), attached.len());
+                let last = attached.len() - 1;
+                let gone = attached.swap_remove(slot);
+                r.detached(&mut attached, slot, last, &gone);
+            }
+            r.resum();
+            let mut full = Vec::new();
+            sum_up(&r.bins[r.lo..r.hi], r.lo, r.sides, &mut full);
+            let bits = |v: &[[f64; 2]]| v.iter().map(|x| [x[0].to_bits(), x[1].to_bits()]).collect::<Vec<_>>();
+            assert_eq!(bits(&r.cumulative), bits(&full), "step {step}");
+        }
     }
 
     /// `draws` candidates of `r` with the plate at `y`: the accepted junctions' counts, their

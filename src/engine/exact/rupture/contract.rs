@@ -29,6 +29,17 @@ pub trait RuptureModel: Clone + std::fmt::Debug + Serialize + DeserializeOwned +
     /// The candidate rate from now on, for `n_att` attached junctions, and how long it holds;
     /// `bounds(h)` gives proven bounds `(y_lo, y_hi)` of the plate over the next `h`.
     fn plan(&mut self, bounds: impl FnMut(f64) -> (f64, f64), n_att: usize) -> Plan;
+    /// After an event inside the current horizon: the candidate rate until the horizon's
+    /// end for the `n_att` junctions attached now, if the plan's bounds still hold for the
+    /// plate's new path, which `reach(y_lo, y_hi)` bounds in distance from a path within
+    /// `[y_lo, y_hi]` (the plan's bounds as widened so far, [`Horizon::widen`]); `None`
+    /// (the default): plan anew.
+    ///
+    /// [`Horizon::widen`]: super::horizon::Horizon::widen
+    #[inline]
+    fn replan(&mut self, _reach: impl FnOnce(f64, f64) -> f64, _n_att: usize) -> Option<f64> {
+        None
+    }
     /// Weak bonds thinned over a plate step: sets the bounds `y_lo <= y <= y_hi` and returns
     /// the total candidate rate under them (may be `+inf`).
     #[inline]

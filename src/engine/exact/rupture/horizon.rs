@@ -58,9 +58,15 @@ impl ExpGrid {
     /// build an out-of-line version would be a call per bound.
     #[inline(always)]
     fn exp_up(&mut self, x: f64) -> f64 {
+        self.exp_up_to(x).0
+    }
+    /// [`ExpGrid::exp_up`] and the largest exponent whose exponential it bounds: `g / GRID`
+    /// on the table, `x` itself beyond it.
+    #[inline(always)]
+    fn exp_up_to(&mut self, x: f64) -> (f64, f64) {
         let t = x * GRID;
         if t.is_nan() || t.abs() >= GRID_MAX as f64 {
-            return x.exp();
+            return (x.exp(), x);
         }
         // ceil(t) by truncation (`f64::ceil` is a library call without SSE4.1).
         let mut g = t as i64;
@@ -70,7 +76,7 @@ impl ExpGrid {
         if self.0.is_empty() {
             self.build();
         }
-        self.0[(g + GRID_MAX as i64) as usize]
+        (self.0[(g + GRID_MAX as i64) as usize], g as f64 / GRID)
     }
     /// The table, once.
     #[cold]
@@ -96,13 +102,19 @@ pub struct Horizon {
     /// Last horizon length (the next search starts there).
     horizon: f64,
     /// Last candidate rate: the horizon need not cover many more candidates than
-    /// [`CANDIDATES_PER_HORIZON`], because the bound is renewed at every event anyway.
+    /// [`CANDIDATES_PER_HORIZON`]: a longer horizon only loosens the bound.
     last_rate: f64,
     /// The rates cannot be bounded over even the shortest horizon (`HORIZON_MIN`): every
     /// attached junction ruptures at once, one candidate each, all accepted.
     pub immediate: bool,
     /// The last plan bounded attached junctions (its horizon is meaningful).
     bounding: bool,
+    /// `[lo, hi]`: the plate positions within which the plan's factors (and a model's own
+    /// limits, such as the bins' sides) still bound every rate, a little inside the exact
+    /// ones for round-off ([`Horizon::widen`]). A checkpoint written without them restores
+    /// none: its first event plans anew.
+    #[serde(default = "no_limits")]
+    limits: [f64; 2],
     /// `exp(g / GRID)` for the plans' bounds on the grid ([`Horizon::set_grid_bounds`]).
     #[serde(skip)]
     grid: ExpGrid,
@@ -119,9 +131,24 @@ impl Default for Horizon {
             last_rate: 0.0,
             immediate: false,
             bounding: false,
+            limits: no_limits(),
             grid: ExpGrid::default(),
         }
     }
+}
+
+/// Limits no position is within.
+fn no_limits() -> [f64; 2] {
+    [f64::INFINITY, f64::NEG_INFINITY]
+}
+
+/// `[lo, hi]` moved inwards by `1e-12` of their magnitude and of `1/a`: a position within
+/// them is within the exact limits after the rounding of any product that tests it (none
+/// for limits that are not finite).
+#[inline]
+fn inside(lo: f64, hi: f64, a: f64) -> [f64; 2] {
+    let guard = 1e-12 * (lo.abs().max(hi.abs()) + 1.0 / a);
+    if guard.is_finite() { [lo + guard, hi - guard] } else { no_limits() }
 }
 
 impl Horizon {
@@ -156,10 +183,11 @@ impl Horizon {
     /// `CANDIDATES_PER_HORIZON` candidates at the last rate.
     #[inline(always)]
     pub fn plan(&mut self, bounds: impl FnMut(f64) -> (f64, f64), n_att: usize, k0: f64, a: f64, w: [f64; 2]) -> Plan {
-        self.plan_with(bounds, n_att, k0, a, |_, _| w)
+        self.plan_with(bounds, n_att, k0, a, |_, _| (w, [f64::NEG_INFINITY, f64::INFINITY]))
     }
     /// [`Horizon::plan`] with weight sums that depend on the final bounds: `w(y_lo, y_hi)`,
-    /// asked once (the bins' terms in force, [`super::BinnedRupture`]).
+    /// asked once (the bins' terms in force, [`super::BinnedRupture`]), which returns them
+    /// with the positions `[lo, hi]` within which they hold (`[-inf, inf]`: everywhere).
     #[inline(always)]
     pub fn plan_with(
         &mut self,
@@ -167,7 +195,7 @@ impl Horizon {
         n_att: usize,
         k0: f64,
         a: f64,
-        w: impl FnOnce(f64, f64) -> [f64; 2],
+        w: impl FnOnce(f64, f64) -> ([f64; 2], [f64; 2]),
     ) -> Plan {
         self.immediate = false;
         self.bounding = false;
@@ -178,7 +206,7 @@ impl Horizon {
             // Constant rate k0: the bound is exact up to the factor of its two terms (2 with
             // the tree's weights, about 2.2 with the bins' bounds).
             self.set_bounds(a, 0.0, 0.0);
-            let (m, p) = self.terms(w(0.0, 0.0));
+            let (m, p) = self.terms(w(0.0, 0.0).0);
             return Plan { rate: k0 * (m + p), horizon: f64::INFINITY };
         }
         let cap =
@@ -200,9 +228,15 @@ impl Horizon {
             b = b2;
         }
         self.horizon = h;
-        self.set_grid_bounds(a, b.0, b.1);
+        self.y_lo = b.0;
+        self.y_hi = b.1;
+        let (e_hi, x_hi) = self.grid.exp_up_to(a * b.1);
+        let (e_lo, x_lo) = self.grid.exp_up_to(-a * b.0);
+        (self.e_hi, self.e_lo) = (e_hi, e_lo);
         self.bounding = true;
-        let (m, p) = self.terms(w(b.0, b.1));
+        let (weights, [lo, hi]) = w(b.0, b.1);
+        self.limits = inside(lo.max(-x_lo / a), hi.min(x_hi / a), a);
+        let (m, p) = self.terms(weights);
         let rate = k0 * (m + p);
         if a * (b.1 - b.0) > SPREAD || !rate.is_finite() {
             // Not even HORIZON_MIN resolves the rates (the plate crosses more than 1/a in
@@ -215,6 +249,32 @@ impl Horizon {
         }
         self.last_rate = rate;
         Plan { rate, horizon: h }
+    }
+    /// After an event inside the horizon, whose effect on the plate's path is at most
+    /// `reach(y_lo, y_hi)` in position (for a path that was within the bounds), the bounds
+    /// widened by it (and by the additions' rounding); whether they still lie within the
+    /// plan's limits, so that the plan holds to the horizon's end. `false` when the last
+    /// plan bounds nothing over a horizon (a constant rate, all rupturing at once) or the
+    /// reach is not a number.
+    #[inline]
+    pub fn widen(&mut self, reach: impl FnOnce(f64, f64) -> f64) -> bool {
+        if !self.bounding || self.immediate {
+            return false;
+        }
+        let d = reach(self.y_lo, self.y_hi) + 4.0 * f64::EPSILON * (self.y_lo.abs() + self.y_hi.abs());
+        self.y_lo -= d;
+        self.y_hi += d;
+        self.y_lo >= self.limits[0] && self.y_hi <= self.limits[1]
+    }
+    /// The plan is kept with the candidate rate `rate` (the next search's cap follows it).
+    #[inline]
+    pub fn keep(&mut self, rate: f64) {
+        self.last_rate = rate;
+    }
+    /// The plan no longer bounds anything (the frame moved): the next one is searched afresh.
+    #[inline]
+    pub fn forget(&mut self) {
+        self.bounding = false;
     }
     /// Whether the frame must be re-based now: `a |y|` too large for the weights, or a
     /// thinning horizon too short to be resolved at the local time `tau`.
@@ -242,5 +302,43 @@ mod tests {
             assert!(e <= exact * (1.0 / GRID).exp() * (1.0 + 1e-14), "x {x}: {e} vs {exact}");
         }
         assert_eq!(g.exp_up(0.0), 1.0);
+    }
+
+    /// A plan's limits: at every position within them (ends included) its factors bound
+    /// `exp(a y)` and `exp(-a y)` (to the exponential's own rounding); they contain the
+    /// plan's bounds unless a bound sits within the round-off guard of a grid point, and
+    /// lie within a grid step of them. Widening by nothing keeps a plan, by the distance to
+    /// a limit does not, and a plan that bounds nothing is never kept.
+    #[test]
+    fn plans_hold_within_their_limits() {
+        let mut rng = crate::rng::pcg(5);
+        let mut kept = 0;
+        for i in 0..20_000 {
+            let a = [1e-3, 0.1, 1.0, 37.0][i % 4];
+            let y_lo = (rng.uniform() - 0.5) * 2.0 * FRAME_EXPONENT_LIMIT / a;
+            let y_hi = y_lo + rng.uniform() * SPREAD / a;
+            let mut h = Horizon::default();
+            let plan = h.plan(|_| (y_lo, y_hi), 10, 1.0, a, [1.0, 1.0]);
+            assert!(plan.rate.is_finite() && h.bounding && !h.immediate);
+            let [lo, hi] = h.limits;
+            assert!(lo <= hi && lo > y_lo - 1.0 / (GRID * a) * 1.01 && hi < y_hi + 1.0 / (GRID * a) * 1.01);
+            for k in 0..=8 {
+                let y = lo + (hi - lo) * k as f64 / 8.0;
+                let tol = 1.0 + 4.0 * f64::EPSILON;
+                assert!((a * y).exp() <= h.e_hi * tol && (-a * y).exp() <= h.e_lo * tol, "a {a} y {y} in [{lo}, {hi}]");
+            }
+            if lo <= y_lo && y_hi <= hi {
+                kept += 1;
+                let mut widened = h.clone();
+                assert!(widened.widen(|_, _| 0.0));
+                let mut far = h.clone();
+                assert!(!far.widen(|l, u| (hi - u).max(l - lo) * 1.5 + 1e-300));
+                assert!(!h.clone().widen(|_, _| f64::NAN));
+            }
+        }
+        assert!(kept > 19_000, "{kept} plans contain their bounds");
+        let mut flat = Horizon::default();
+        flat.plan(|_| (0.0, 1.0), 10, 1.0, 0.0, [1.0, 1.0]);
+        assert!(!flat.widen(|_, _| 0.0), "a constant rate bounds nothing over a horizon");
     }
 }

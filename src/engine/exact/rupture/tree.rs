@@ -69,6 +69,19 @@ impl RuptureModel for TreeRupture {
     fn plan(&mut self, bounds: impl FnMut(f64) -> (f64, f64), n_att: usize) -> Plan {
         self.h.plan(bounds, n_att, self.k0, self.a, self.tree.total())
     }
+    /// The tree's totals are kept up to date by every change: only the bounds are checked.
+    #[inline]
+    fn replan(&mut self, reach: impl FnOnce(f64, f64) -> f64, n_att: usize) -> Option<f64> {
+        if n_att == 0 || !self.h.widen(reach) {
+            return None;
+        }
+        let (m, p) = self.terms();
+        let rate = self.k0 * (m + p);
+        rate.is_finite().then(|| {
+            self.h.keep(rate);
+            rate
+        })
+    }
     #[inline]
     fn bound(&mut self, y_lo: f64, y_hi: f64) -> f64 {
         self.h.set_grid_bounds(self.a, y_lo, y_hi);
@@ -110,6 +123,7 @@ impl RuptureModel for TreeRupture {
         let a = self.a;
         let over: Vec<usize> = (0..attached.len()).filter(|&s| anchor_overflows(a, attached[s].c)).collect();
         self.tree.rebuild(attached.iter().map(|j| if anchor_overflows(a, j.c) { [0.0; 2] } else { weights(a, j.c) }));
+        self.h.forget();
         over
     }
     #[inline]
@@ -122,6 +136,35 @@ impl RuptureModel for TreeRupture {
 mod tests {
     use super::*;
     use crate::engine::exact::stepper::linear::Drive;
+
+    /// After an event, the plan is kept while its bounds, widened by the event's reach, stay
+    /// within its limits, at the rate of the junctions attached then under the plan's
+    /// factors; a reach past the limits, a reach that is not a number, or a re-base (which
+    /// forgets the plan) plans anew.
+    #[test]
+    fn a_plan_is_kept_while_the_plate_stays_within_its_limits() {
+        let (a, n) = (3.0, 64);
+        let mut rng = crate::rng::pcg(8);
+        let mut w = TreeRupture::new(1.0, a, n);
+        let mut records = Vec::new();
+        for slot in 0..n / 2 {
+            let c = (rng.uniform() - 0.5) * 4.0;
+            assert!(w.attached(&mut [], slot, c, 0.0));
+            records.push(Attached { c, id: slot as u32, bin: 0 });
+        }
+        let drive = Drive { y0: 0.3, v: 0.7 };
+        let plan = w.plan(|h| drive.bounds(h), n / 2);
+        assert_eq!(w.replan(|_, _| 0.0, n / 2), Some(plan.rate));
+        assert!(w.attached(&mut [], n / 2, 0.1, 0.3));
+        let (m, p) = w.terms();
+        assert_eq!(w.replan(|_, _| 1e-9, n / 2 + 1), Some(m + p));
+        assert_eq!(w.replan(|_, _| f64::NAN, n / 2 + 1), None);
+        w.plan(|h| drive.bounds(h), n / 2 + 1);
+        assert_eq!(w.replan(|_, _| 10.0, n / 2 + 1), None);
+        w.plan(|h| drive.bounds(h), n / 2);
+        w.rebuild(&mut records);
+        assert_eq!(w.replan(|_, _| 0.0, n / 2), None, "a re-base forgets the plan");
+    }
 
     /// A plan bounds every junction's rate over its whole horizon (`b_i >= r_i`: the
     /// acceptance never exceeds 1), and the acceptance squeeze of `pick` brackets the rate:

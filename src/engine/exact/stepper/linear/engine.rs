@@ -312,6 +312,19 @@ impl<Q: ChannelQueue, M: PlateMotion> Stepper for LinearStepper<Q, M> {
         if M::KINEMATIC { self.drive().bounds(h) } else { self.piece.traj.current().bounds(h) }
     }
 
+    /// The event changed the bond force `kappa (N_att y - C)` by `g = +-kappa (y_old - c)`
+    /// along the old path, `|g| <= kappa max(|hi - c|, |lo - c|)`, from a common state:
+    /// [`Trajectory::response`] of that bound. A kinematic plate does not respond.
+    #[inline(always)]
+    fn reach(&self, core: &Core<Q>, rest: f64, lo: f64, hi: f64) -> f64 {
+        if M::KINEMATIC {
+            return 0.0;
+        }
+        let c = core.changed;
+        let g = self.kappa * (hi - c).abs().max((lo - c).abs());
+        self.piece.traj.current().response(rest) * g
+    }
+
     #[inline]
     fn y(&self, _core: &Core<Q>) -> f64 {
         self.y

@@ -98,13 +98,44 @@ pub enum Branch {
 /// Coefficients of `M y'' + eta y' + k y = a + b tau`, with the solution branch chosen once.
 ///
 /// Fields not used by the branch are zero. Written and read as its fields without the
-/// short path's constants, which are derived again from `M`, `eta`, `k`, `rho` when read.
+/// short path's and the enclosure's constants, which are derived again from `M`, `eta`, `k`, `rho`
+/// when read.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(from = "PlateFields", into = "PlateFields")]
 pub struct LinearPlate {
     fields: PlateFields,
     /// The short path's constants ([`short`]).
     short: Short,
+    /// The short-horizon enclosure's constants ([`Trajectory::bounds`]).
+    reach: Reach,
+}
+
+/// `1/eta`, `1/(2M)`, `1/(2 eta)`, `1/(6M)` and `M/eta` (`+inf` or NaN for a zero mass or
+/// viscosity, which the enclosure's `min` passes over), so that [`Trajectory::bounds`]
+/// multiplies where it would divide: each within two ulps of the quotient, far inside the
+/// enclosure's margin. One division (`1/eta`; `1/M` is the plate's own): the engine
+/// classifies a plate whenever the attached count reaches a value it has not cached.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Reach {
+    inv_eta: f64,
+    inv_2m: f64,
+    inv_2eta: f64,
+    inv_6m: f64,
+    m_over_eta: f64,
+}
+
+impl Reach {
+    fn new(f: &PlateFields) -> Reach {
+        let inv_eta = 1.0 / f.eta;
+        let inv_m = if f.mass > 0.0 { f.inv_m } else { f64::INFINITY };
+        Reach {
+            inv_eta,
+            inv_2m: 0.5 * inv_m,
+            inv_2eta: 0.5 * inv_eta,
+            inv_6m: inv_m * (1.0 / 6.0),
+            m_over_eta: f.mass * inv_eta,
+        }
+    }
 }
 
 impl std::ops::Deref for LinearPlate {
@@ -118,7 +149,7 @@ impl std::ops::Deref for LinearPlate {
 impl From<PlateFields> for LinearPlate {
     fn from(fields: PlateFields) -> Self {
         let short = Short::new(fields.mass, fields.eta, fields.k, fields.rho);
-        LinearPlate { fields, short }
+        LinearPlate { fields, short, reach: Reach::new(&fields) }
     }
 }
 
@@ -791,6 +822,24 @@ impl Trajectory {
         Integrals { i1, i2: (ipp + 2.0 * ipz + i_zsq).max(0.0) }
     }
 
+    /// How far a force `g(tau)` with `|g| <= 1`, added to this plate's equation from a state
+    /// it shares with another path, moves it from that path over `[0, h]`: the difference
+    /// `d` obeys `M d'' + eta d' + k d = g`, `d(0) = d'(0) = 0`, so by the short-horizon
+    /// enclosure of [`Trajectory::bounds`] (`v0 = f0 = b = 0`, `g` in place of the forcing)
+    /// `sup |d| <= c2 / (1 - k c2) <= c2 (1 + 2 k c2)` when `k c2 <= 1/2`, times `1 + 1e-12`
+    /// for round-off; `+inf` otherwise, or for a NaN `h`.
+    #[inline]
+    pub fn response(&self, h: f64) -> f64 {
+        if h.is_nan() {
+            return f64::INFINITY;
+        }
+        let (p, h) = (&self.plate, h.max(0.0));
+        let r = &p.reach;
+        let c2 = (h * r.inv_eta).min(h * h * r.inv_2m);
+        let kc2 = p.k * c2;
+        if kc2 <= 0.5 { c2 * (1.0 + 2.0 * kc2) * (1.0 + BOUND_REL_MARGIN) } else { f64::INFINITY }
+    }
+
     /// Proven bounds `lo <= y(tau) <= hi` for all `tau` in `[0, h]` (loose, never wrong).
     ///
     /// The enclosure is the intersection of two independent ones (see `docs/propagator.md`):
@@ -802,7 +851,8 @@ impl Trajectory {
     ///   `y - y0 ∈ hull(0, v0 cv) + hull(0, f0 c2) + hull(0, b c3) ± k c2 D` with
     ///   `cv = min(h, M/eta)` (0 for `M = 0`), `c2 = min(h/eta, h^2/(2M))`,
     ///   `c3 = min(h^2/(2 eta), h^3/(6 M))` and `D = sup |y - y0|`, which the same inequality
-    ///   bounds by `D <= (|v0| cv + |f0| c2 + |b| c3) / (1 - k c2)`.
+    ///   bounds by `D <= (|v0| cv + |f0| c2 + |b| c3) / (1 - k c2)`, itself at most that sum
+    ///   times `1 + 2 k c2` (used: a product, not a quotient).
     /// * **Energy** (`k > 0`): `y = y0 + c0 + c1 tau + z` with `z` homogeneous. The energy
     ///   `E = M z'^2/2 + k z^2/2` has `E' = -eta z'^2 <= 0`, so `|z| <= sqrt(z0^2 + M z0'^2/k)`.
     ///   For `M = 0`, `z = z0 e^{r tau}` lies between 0 and `z0`; for separated real roots
@@ -817,14 +867,18 @@ impl Trajectory {
         let mut lo = f64::NEG_INFINITY;
         let mut hi = f64::INFINITY;
         // Short-horizon enclosure.
-        let cv = if p.mass > 0.0 { h.min(p.mass / p.eta) } else { 0.0 };
-        let c2 = (h / p.eta).min(h * h / (2.0 * p.mass));
-        let c3 = (h * h / (2.0 * p.eta)).min(h * h * h / (6.0 * p.mass));
+        let r = &p.reach;
+        let cv = if p.mass > 0.0 { h.min(r.m_over_eta) } else { 0.0 };
+        let h2 = h * h;
+        let c2 = (h * r.inv_eta).min(h2 * r.inv_2m);
+        let c3 = (h2 * r.inv_2eta).min(h2 * h * r.inv_6m);
         let kc2 = k * c2;
         if kc2 <= 0.5 {
             let (tv, tf, tb) = (v0 * cv, f0 * c2, b * c3);
             let mag = tv.abs() + tf.abs() + tb.abs();
-            let d = mag / (1.0 - kc2);
+            // `mag / (1 - kc2) <= mag (1 + 2 kc2)` for `kc2 <= 1/2` (the chord of a convex
+            // function): a product where a quotient would wait.
+            let d = mag * (1.0 + 2.0 * kc2);
             let kd = kc2 * d;
             let dlo = tv.min(0.0) + tf.min(0.0) + tb.min(0.0) - kd;
             let dhi = tv.max(0.0) + tf.max(0.0) + tb.max(0.0) + kd;
