@@ -59,6 +59,18 @@ fn mean_rupture_tension_over<E: Engine>(mut e: E, t_warm: f64, t_end: f64) -> f6
     t.iter().sum::<f64>() / t.len() as f64
 }
 
+/// The settings that scale the letter's Fig. 1 to `n` junctions: `K = N/2`, `M = eta = N/4`
+/// (the plate's time scales those of `N = 300`), stationary start.
+fn scaled(n: usize) -> Vec<String> {
+    vec![
+        format!("junctions.n={n}"),
+        format!("plate.k={}", n / 2),
+        format!("plate.mass={}", n / 4),
+        format!("plate.eta={}", n / 4),
+        "junctions.initial=stationary".to_string(),
+    ]
+}
+
 /// `a = beta dx kappa`, the envelope's exponent.
 fn a_of(s: &Scene) -> f64 {
     s.junctions.beta_dx() * s.junctions.kappa
@@ -110,14 +122,8 @@ fn the_worked_example_runs_on_the_closed_form_stepper() {
 #[test]
 fn linear_weak_bonds_bins_and_tree_keeping_plans_against_the_worked_example() {
     let n = 3000;
-    let sets = [
-        format!("junctions.n={n}"),
-        format!("plate.k={}", n / 2),
-        format!("plate.mass={}", n / 4),
-        format!("plate.eta={}", n / 4),
-        "junctions.initial=stationary".to_string(),
-        "run.t_end=30".to_string(),
-    ];
+    let mut sets = scaled(n);
+    sets.push("run.t_end=30".to_string());
     let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
     let run = |seed: u64, model: &str| {
         let s = scene("linear", seed, &sets);
@@ -203,13 +209,7 @@ fn tilted_weak_bonds_bins_against_the_tree() {
 #[test]
 fn tilted_weak_bonds_formations_drawn_ahead_against_drawn_at_use() {
     let n = PREFETCH_MIN_N;
-    let sets = [
-        format!("junctions.n={n}"),
-        format!("plate.k={}", n / 2),
-        format!("plate.mass={}", n / 4),
-        format!("plate.eta={}", n / 4),
-        "junctions.initial=stationary".to_string(),
-    ];
+    let sets = scaled(n);
     let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
     let run = |seed: u64, ahead: bool| {
         let s = scene("tilted", seed, &sets);

@@ -741,6 +741,18 @@ mod tests {
         assert!(r.spare.buffers.iter().map(Vec::capacity).sum::<usize>() <= 64);
     }
 
+    /// Plate bounds `[y_lo, y_hi]` for the bins' tests: equal, close, across bin edges or
+    /// far apart, the lower one on a bin's edge, just below it, or anywhere.
+    fn plate_range(rng: &mut crate::rng::Pcg64, a: f64) -> (f64, f64) {
+        let edge = |j: f64| j * H / a;
+        let y_lo = match rng.next_u64() % 3 {
+            0 => edge((rng.next_u64() % 40) as f64 - 20.0),
+            1 => edge((rng.next_u64() % 40) as f64 - 20.0).next_down(),
+            _ => (rng.uniform() - 0.5) * 40.0 * H / a,
+        };
+        (y_lo, y_lo + [0.0, 1e-9, 0.3, 3.0][(rng.next_u64() % 4) as usize] * H / a)
+    }
+
     /// Over plate bounds `[y_lo, y_hi]` (equal, close, across bin edges, far apart), every
     /// member's rate `exp(a |y - c|)` at every `y` within stays under its bin's bound from
     /// the terms in force; the bins outside the bounds keep one term only.
@@ -752,12 +764,7 @@ mod tests {
             let mut r = BinnedRupture::try_new(1.0, a, 64, &mut rng).unwrap();
             let edge = |j: f64| j * H / a;
             for _ in 0..400 {
-                let y_lo = match rng.next_u64() % 3 {
-                    0 => edge((rng.next_u64() % 40) as f64 - 20.0),
-                    1 => edge((rng.next_u64() % 40) as f64 - 20.0).next_down(),
-                    _ => (rng.uniform() - 0.5) * 40.0 * H / a,
-                };
-                let y_hi = y_lo + [0.0, 1e-9, 0.3, 3.0][(rng.next_u64() % 4) as usize] * H / a;
+                let (y_lo, y_hi) = plate_range(&mut rng, a);
                 r.sides = Sides::over(r.scale, y_lo, y_hi);
                 let (e_hi, e_lo) = ((a * y_hi).exp(), (-a * y_lo).exp());
                 for j in -24i32..24 {
@@ -794,12 +801,7 @@ mod tests {
             let r = BinnedRupture::try_new(1.0, a, 64, &mut rng).unwrap();
             let edge = |j: f64| j * H / a;
             for _ in 0..400 {
-                let y_lo = match rng.next_u64() % 3 {
-                    0 => edge((rng.next_u64() % 40) as f64 - 20.0),
-                    1 => edge((rng.next_u64() % 40) as f64 - 20.0).next_down(),
-                    _ => (rng.uniform() - 0.5) * 40.0 * H / a,
-                };
-                let y_hi = y_lo + [0.0, 1e-9, 0.3, 3.0][(rng.next_u64() % 4) as usize] * H / a;
+                let (y_lo, y_hi) = plate_range(&mut rng, a);
                 let sides = Sides::over(r.scale, y_lo, y_hi);
                 let [lo, hi] = sides.limits(r.scale);
                 let guard = 1e-12 * (lo.abs().max(hi.abs()) + 1.0 / a);
