@@ -6,7 +6,7 @@
 use super::policy::{REBASE, emit, reattached_extension};
 use super::state::{Core, HORIZON};
 use crate::engine::exact::core::bags::{Detached, count};
-use crate::engine::exact::rupture::{Plan, RuptureModel};
+use crate::engine::exact::rupture::RuptureModel;
 use crate::engine::exact::stepper::contract::{Stepper, WeakRuptures};
 use crate::observe::{EventKind, Observer};
 
@@ -135,16 +135,18 @@ pub fn refresh_clocks<S: Stepper, R: RuptureModel>(
     } else {
         None
     };
-    let plan = if let Some(rate) = kept {
-        Plan { rate, horizon: f64::NAN }
-    } else if R::IS_WEAK && !horizon::<S, R>() {
-        Plan { rate: 0.0, horizon: f64::INFINITY }
-    } else {
-        r.plan(|h| s.bounds(core, h), core.bags.n_attached())
+    // The rupture rate, and the horizon's new end when it was planned anew.
+    let (rate, end) = match kept {
+        Some(rate) => (rate, None),
+        None if R::IS_WEAK && !horizon::<S, R>() => (0.0, None),
+        None => {
+            let plan = r.plan(|h| s.bounds(core, h), core.bags.n_attached());
+            (plan.rate, horizon::<S, R>().then_some(now + plan.horizon))
+        }
     };
     let formation_rate = core.formation.kon0 * s.formation_acceptance(core) * count(core.bags.n_detached());
-    core.channels.set_rates(now, [formation_rate, plan.rate], fired, &mut core.rng);
-    if horizon::<S, R>() && kept.is_none() {
-        core.channels.set_time(HORIZON, now + plan.horizon);
+    core.channels.set_rates(now, [formation_rate, rate], fired, &mut core.rng);
+    if let Some(end) = end {
+        core.channels.set_time(HORIZON, end);
     }
 }

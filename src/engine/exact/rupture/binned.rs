@@ -212,19 +212,6 @@ impl BinnedRupture {
         sum_up(&self.bins[self.lo..self.hi], self.lo, self.sides, &mut self.cumulative);
         (self.summed, self.dirty) = ([self.lo, self.hi], usize::MAX);
     }
-    /// The running sums brought up to date under the current sides: from the first bin
-    /// whose count changed on (the same additions, in the same order, as summing all of
-    /// them: [`resum_from`]), or all of them if the occupied range moved.
-    #[inline]
-    fn resum(&mut self) {
-        let (lo, hi) = (self.lo, self.hi);
-        if self.summed != [lo, hi] || self.cumulative.len() != hi - lo {
-            sum_up(&self.bins[lo..hi], lo, self.sides, &mut self.cumulative);
-        } else if self.dirty < hi {
-            resum_from(&self.bins[lo..hi], lo, self.dirty.max(lo) - lo, self.sides, &mut self.cumulative);
-        }
-        (self.summed, self.dirty) = ([lo, hi], usize::MAX);
-    }
     /// Bin `j`'s bound `b_j / k0`: the sum of its terms in force under the factors `e_hi`,
     /// `e_lo`.
     #[inline(always)]
@@ -440,15 +427,10 @@ impl RuptureModel for BinnedRupture {
     /// limits; the sums are brought up to date from the bins whose counts changed.
     #[inline]
     fn replan(&mut self, reach: impl FnOnce(f64, f64) -> f64, n_att: usize) -> Option<f64> {
-        if n_att == 0 || !self.h.widen(reach) {
-            return None;
-        }
-        self.resum();
-        let (m, p) = self.h.terms(self.totals());
-        let rate = self.k0 * (m + p);
-        (rate.is_finite() && rate > 0.0).then(|| {
-            self.h.keep(rate);
-            rate
+        let BinnedRupture { h, bins, lo, hi, cumulative, sides, summed, dirty, k0, .. } = self;
+        h.replan(reach, n_att, *k0, || {
+            resum(&bins[*lo..*hi], [*lo, *hi], *sides, cumulative, summed, dirty);
+            cumulative.last().copied().unwrap_or([0.0; 2])
         })
     }
     /// The bins' sums are recomputed here (the attached junctions may have changed since the
@@ -621,6 +603,27 @@ fn sum_up(bins: &[Bin], first: usize, sides: Sides, cumulative: &mut Vec<[f64; 2
         acc = add_bin(acc, bin, sides.terms(first + i));
         cumulative.push(acc);
     }
+}
+
+/// The running sums over `bins` (the occupied range `[lo, hi]`) brought up to date under
+/// the current sides: from the first bin whose count changed, `dirty`, on (the same
+/// additions, in the same order, as summing all of them: [`resum_from`]), or all of them
+/// when the range is not the one `summed` records; both then record the sums as current.
+#[inline(always)]
+fn resum(
+    bins: &[Bin],
+    [lo, hi]: [usize; 2],
+    sides: Sides,
+    cumulative: &mut Vec<[f64; 2]>,
+    summed: &mut [usize; 2],
+    dirty: &mut usize,
+) {
+    if *summed != [lo, hi] || cumulative.len() != hi - lo {
+        sum_up(bins, lo, sides, cumulative);
+    } else if *dirty < hi {
+        resum_from(bins, lo, (*dirty).max(lo) - lo, sides, cumulative);
+    }
+    (*summed, *dirty) = ([lo, hi], usize::MAX);
 }
 
 /// [`sum_up`]'s running sums recomputed from position `from` on (those before it hold).
@@ -875,7 +878,7 @@ mod tests {
         assert_eq!(r.replan(|_, _| 0.0, attached.len()), None, "a re-base forgets the plan");
     }
 
-    /// The running sums brought up to date from the first changed bin ([`BinnedRupture::resum`])
+    /// The running sums brought up to date from the first changed bin ([`resum`])
     /// are those of summing every bin again, bit for bit, through random attachments and
     /// detachments (the range of occupied bins moving or not) under fixed sides.
     #[test]
@@ -897,7 +900,8 @@ mod tests {
                 let gone = attached.swap_remove(slot);
                 r.detached(&mut attached, slot, last, &gone);
             }
-            r.resum();
+            let [lo, hi] = [r.lo, r.hi];
+            resum(&r.bins[lo..hi], [lo, hi], r.sides, &mut r.cumulative, &mut r.summed, &mut r.dirty);
             let mut full = Vec::new();
             sum_up(&r.bins[r.lo..r.hi], r.lo, r.sides, &mut full);
             let bits = |v: &[[f64; 2]]| v.iter().map(|x| [x[0].to_bits(), x[1].to_bits()]).collect::<Vec<_>>();

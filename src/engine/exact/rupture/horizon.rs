@@ -53,15 +53,10 @@ impl PartialEq for ExpGrid {
 
 impl ExpGrid {
     /// `exp(x)` rounded up to the grid: `exp(g / GRID)` with the smallest integer `g >= GRID x`
-    /// (at least `exp(x)`, up to the exponential's own round-off, as `exp(x)` itself).
-    /// Always inlined, its table built out of line ([`ExpGrid::build`]): in the `release`
-    /// build an out-of-line version would be a call per bound.
-    #[inline(always)]
-    fn exp_up(&mut self, x: f64) -> f64 {
-        self.exp_up_to(x).0
-    }
-    /// [`ExpGrid::exp_up`] and the largest exponent whose exponential it bounds: `g / GRID`
-    /// on the table, `x` itself beyond it.
+    /// (at least `exp(x)`, up to the exponential's own round-off, as `exp(x)` itself), and
+    /// the largest exponent whose exponential it bounds: `g / GRID` on the table, `x` itself
+    /// beyond it. Always inlined, its table built out of line ([`ExpGrid::build`]): in the
+    /// `release` build an out-of-line version would be a call per bound.
     #[inline(always)]
     fn exp_up_to(&mut self, x: f64) -> (f64, f64) {
         let t = x * GRID;
@@ -166,10 +161,19 @@ impl Horizon {
     /// the plans and by the bound over a plate step alike.
     #[inline]
     pub fn set_grid_bounds(&mut self, a: f64, y_lo: f64, y_hi: f64) {
+        self.grid_bounds(a, y_lo, y_hi);
+    }
+    /// [`Horizon::set_grid_bounds`], returning the largest exponents its two factors bound
+    /// (`[x_lo, x_hi]`: `exp(-a y) <= e_lo` for `-a y <= x_lo`, `exp(a y) <= e_hi` for
+    /// `a y <= x_hi`, `ExpGrid::exp_up_to`).
+    #[inline(always)]
+    fn grid_bounds(&mut self, a: f64, y_lo: f64, y_hi: f64) -> [f64; 2] {
         self.y_lo = y_lo;
         self.y_hi = y_hi;
-        self.e_hi = self.grid.exp_up(a * y_hi);
-        self.e_lo = self.grid.exp_up(-a * y_lo);
+        let (e_hi, x_hi) = self.grid.exp_up_to(a * y_hi);
+        let (e_lo, x_lo) = self.grid.exp_up_to(-a * y_lo);
+        (self.e_hi, self.e_lo) = (e_hi, e_lo);
+        [x_lo, x_hi]
     }
     /// `exp(a y_hi) W0` and `exp(-a y_lo) W1` for the weight sums `w = [W0, W1]`.
     #[inline]
@@ -228,11 +232,7 @@ impl Horizon {
             b = b2;
         }
         self.horizon = h;
-        self.y_lo = b.0;
-        self.y_hi = b.1;
-        let (e_hi, x_hi) = self.grid.exp_up_to(a * b.1);
-        let (e_lo, x_lo) = self.grid.exp_up_to(-a * b.0);
-        (self.e_hi, self.e_lo) = (e_hi, e_lo);
+        let [x_lo, x_hi] = self.grid_bounds(a, b.0, b.1);
         self.bounding = true;
         let (weights, [lo, hi]) = w(b.0, b.1);
         self.limits = inside(lo.max(-x_lo / a), hi.min(x_hi / a), a);
@@ -266,10 +266,28 @@ impl Horizon {
         self.y_hi += d;
         self.y_lo >= self.limits[0] && self.y_hi <= self.limits[1]
     }
-    /// The plan is kept with the candidate rate `rate` (the next search's cap follows it).
-    #[inline]
-    pub fn keep(&mut self, rate: f64) {
-        self.last_rate = rate;
+    /// A model's [`RuptureModel::replan`](super::RuptureModel::replan) over this horizon:
+    /// with `n_att` junctions attached, the plan's bounds widened by `reach` ([`Horizon::widen`]),
+    /// and if they hold, the candidate rate `k0 (e_hi W0 + e_lo W1)` for the weight sums
+    /// `weights()` of the junctions attached now, kept if it is a positive number (the next
+    /// search's cap follows it).
+    #[inline(always)]
+    pub fn replan(
+        &mut self,
+        reach: impl FnOnce(f64, f64) -> f64,
+        n_att: usize,
+        k0: f64,
+        weights: impl FnOnce() -> [f64; 2],
+    ) -> Option<f64> {
+        if n_att == 0 || !self.widen(reach) {
+            return None;
+        }
+        let (m, p) = self.terms(weights());
+        let rate = k0 * (m + p);
+        (rate.is_finite() && rate > 0.0).then(|| {
+            self.last_rate = rate;
+            rate
+        })
     }
     /// The plan no longer bounds anything (the frame moved): the next one is searched afresh.
     #[inline]
@@ -297,11 +315,11 @@ mod tests {
         let mut rng = crate::rng::pcg(3);
         for i in 0..100_000 {
             let x = if i % 2 == 0 { (rng.uniform() - 0.5) * 200.0 } else { (rng.uniform() - 0.5) * 1e-3 };
-            let (e, exact) = (g.exp_up(x), x.exp());
+            let (e, exact) = (g.exp_up_to(x).0, x.exp());
             assert!(e >= exact, "x {x}: {e} < {exact}");
             assert!(e <= exact * (1.0 / GRID).exp() * (1.0 + 1e-14), "x {x}: {e} vs {exact}");
         }
-        assert_eq!(g.exp_up(0.0), 1.0);
+        assert_eq!(g.exp_up_to(0.0), (1.0, 0.0));
     }
 
     /// A plan's limits: at every position within them (ends included) its factors bound

@@ -72,15 +72,8 @@ impl RuptureModel for TreeRupture {
     /// The tree's totals are kept up to date by every change: only the bounds are checked.
     #[inline]
     fn replan(&mut self, reach: impl FnOnce(f64, f64) -> f64, n_att: usize) -> Option<f64> {
-        if n_att == 0 || !self.h.widen(reach) {
-            return None;
-        }
-        let (m, p) = self.terms();
-        let rate = self.k0 * (m + p);
-        rate.is_finite().then(|| {
-            self.h.keep(rate);
-            rate
-        })
+        let total = self.tree.total();
+        self.h.replan(reach, n_att, self.k0, || total)
     }
     #[inline]
     fn bound(&mut self, y_lo: f64, y_hi: f64) -> f64 {
