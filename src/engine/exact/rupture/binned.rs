@@ -89,6 +89,12 @@ struct Bin {
 
 /// Candidates drawn ahead (a power of two, taken modulo with a mask).
 const AHEAD: usize = 4;
+/// The number of junctions from which a candidate requests its record at the three sizes
+/// its bin may have by then, and a rupture's writes elsewhere ahead (`BinnedRupture::request`):
+/// at `N = 1e6` the weak command of docs/performance.md "CLI runs" takes about 0.89x the
+/// time with them, at `N = 3e5` as long, and at `N = 1e5`, where the lines stay in the
+/// caches, 1.02x as long.
+const WIDE_FROM: usize = 300_000;
 /// How far a bin's count may drift before the back ticket is used.
 const DRIFT: usize = 4;
 
@@ -135,6 +141,10 @@ pub struct BinnedRupture {
     /// is in force (`Sides`), recomputed from the counts by [`BinnedRupture::plan`] and
     /// [`RuptureModel::bound`] (never accumulated across events); their last entry is `[W0, W1]`.
     cumulative: Vec<[f64; 2]>,
+    /// The bounds `[U0_i, U1_i]` over `lo..hi` with a term not in force (`Sides`) set to
+    /// zero: a bin adds `n_i` times these to the running sums.
+    #[serde(default)]
+    weights: Vec<[f64; 2]>,
     /// The bins where each term is in force over the current bounds.
     #[serde(default)]
     sides: Sides,
@@ -177,6 +187,7 @@ impl BinnedRupture {
             lo: HALF,
             hi: HALF,
             cumulative: Vec::new(),
+            weights: Vec::new(),
             sides: Sides::default(),
             summed: [HALF, HALF],
             dirty: usize::MAX,
@@ -209,7 +220,7 @@ impl BinnedRupture {
     /// running sums over the occupied bins from their counts.
     fn sum_up(&mut self, y_lo: f64, y_hi: f64) {
         self.sides = Sides::over(self.scale, y_lo, y_hi);
-        sum_up(&self.bins[self.lo..self.hi], self.lo, self.sides, &mut self.cumulative);
+        sum_up(&self.bins[self.lo..self.hi], self.lo, self.sides, &mut self.cumulative, &mut self.weights);
         (self.summed, self.dirty) = ([self.lo, self.hi], usize::MAX);
     }
     /// Bin `j`'s bound `b_j / k0`: the sum of its terms in force under the factors `e_hi`,
@@ -415,10 +426,10 @@ impl RuptureModel for BinnedRupture {
     }
     /// The bins' sums are recomputed over the horizon's bounds once they are chosen.
     fn plan(&mut self, bounds: impl FnMut(f64) -> (f64, f64), n_att: usize) -> Plan {
-        let BinnedRupture { h, bins, lo, hi, cumulative, sides, summed, dirty, scale, k0, a, .. } = self;
+        let BinnedRupture { h, bins, lo, hi, cumulative, weights, sides, summed, dirty, scale, k0, a, .. } = self;
         h.plan_with(bounds, n_att, *k0, *a, |y_lo, y_hi| {
             *sides = Sides::over(*scale, y_lo, y_hi);
-            sum_up(&bins[*lo..*hi], *lo, *sides, cumulative);
+            sum_up(&bins[*lo..*hi], *lo, *sides, cumulative, weights);
             (*summed, *dirty) = ([*lo, *hi], usize::MAX);
             (cumulative.last().copied().unwrap_or([0.0; 2]), sides.limits(*scale))
         })
@@ -427,9 +438,9 @@ impl RuptureModel for BinnedRupture {
     /// limits; the sums are brought up to date from the bins whose counts changed.
     #[inline]
     fn replan(&mut self, reach: impl FnOnce(f64, f64) -> f64, n_att: usize) -> Option<f64> {
-        let BinnedRupture { h, bins, lo, hi, cumulative, sides, summed, dirty, k0, .. } = self;
+        let BinnedRupture { h, bins, lo, hi, cumulative, weights, sides, summed, dirty, k0, .. } = self;
         h.replan(reach, n_att, *k0, || {
-            resum(&bins[*lo..*hi], [*lo, *hi], *sides, cumulative, summed, dirty);
+            resum(&bins[*lo..*hi], [*lo, *hi], *sides, [cumulative, weights], summed, dirty);
             cumulative.last().copied().unwrap_or([0.0; 2])
         })
     }
@@ -573,6 +584,12 @@ impl Sides {
     fn terms(&self, j: usize) -> [bool; 2] {
         [j < self.upto, j >= self.from]
     }
+    /// Bin `j`'s bounds `u` with those of a term not in force set to zero.
+    #[inline]
+    fn weights(&self, j: usize, u: [f64; 2]) -> [f64; 2] {
+        let [t0, t1] = self.terms(j);
+        [if t0 { u[0] } else { 0.0 }, if t1 { u[1] } else { 0.0 }]
+    }
 }
 
 /// The table index `floor(t) + HALF` of a scaled position `t` (not NaN), clamped to the
@@ -594,15 +611,17 @@ fn floor_index(t: f64) -> usize {
     (j + HALF as i64) as usize
 }
 
-/// Running sums over `bins` (table indices from `first`) of each term where it is in force.
-#[inline]
-fn sum_up(bins: &[Bin], first: usize, sides: Sides, cumulative: &mut Vec<[f64; 2]>) {
-    cumulative.clear();
-    let mut acc = [0.0f64; 2];
+/// Running sums over `bins` (table indices from `first`) of each term where it is in force,
+/// and the bins' `weights` under these sides.
+#[inline(never)]
+fn sum_up(bins: &[Bin], first: usize, sides: Sides, cumulative: &mut Vec<[f64; 2]>, weights: &mut Vec<[f64; 2]>) {
+    weights.clear();
     for (i, bin) in bins.iter().enumerate() {
-        acc = add_bin(acc, bin, sides.terms(first + i));
-        cumulative.push(acc);
+        weights.push(sides.weights(first + i, bin.bound));
     }
+    cumulative.clear();
+    cumulative.resize(bins.len(), [0.0; 2]);
+    resum_from(bins, weights, 0, cumulative);
 }
 
 /// The running sums over `bins` (the occupied range `[lo, hi]`) brought up to date under
@@ -614,43 +633,46 @@ fn resum(
     bins: &[Bin],
     [lo, hi]: [usize; 2],
     sides: Sides,
-    cumulative: &mut Vec<[f64; 2]>,
+    [cumulative, weights]: [&mut Vec<[f64; 2]>; 2],
     summed: &mut [usize; 2],
     dirty: &mut usize,
 ) {
-    if *summed != [lo, hi] || cumulative.len() != hi - lo {
-        sum_up(bins, lo, sides, cumulative);
+    if *summed != [lo, hi] || cumulative.len() != hi - lo || weights.len() != hi - lo {
+        sum_up(bins, lo, sides, cumulative, weights);
     } else if *dirty < hi {
-        resum_from(bins, lo, (*dirty).max(lo) - lo, sides, cumulative);
+        resum_from(bins, weights, (*dirty).max(lo) - lo, cumulative);
     }
     (*summed, *dirty) = ([lo, hi], usize::MAX);
 }
 
-/// [`sum_up`]'s running sums recomputed from position `from` on (those before it hold).
-#[inline]
-fn resum_from(bins: &[Bin], first: usize, from: usize, sides: Sides, cumulative: &mut [[f64; 2]]) {
+/// [`sum_up`]'s running sums recomputed from position `from` on (those before it hold):
+/// each bin adds its count `n` times its `weights` (`n U_k`, or zero where term `k` is not
+/// in force: adding `+0` leaves a sum's bits as they are).
+#[inline(always)]
+fn resum_from(bins: &[Bin], weights: &[[f64; 2]], from: usize, cumulative: &mut [[f64; 2]]) {
+    let len = bins.len().min(weights.len()).min(cumulative.len());
     let mut acc = if from > 0 { cumulative[from - 1] } else { [0.0; 2] };
-    for i in from..bins.len() {
-        acc = add_bin(acc, &bins[i], sides.terms(first + i));
+    for i in from..len {
+        let (n, w) = (count(bins[i].members.len()), weights[i]);
+        acc = [acc[0] + n * w[0], acc[1] + n * w[1]];
         cumulative[i] = acc;
     }
-}
-
-/// The running sums `acc` with the bin's terms in force (`terms`) added: `n U_k`.
-#[inline(always)]
-fn add_bin(acc: [f64; 2], bin: &Bin, [t0, t1]: [bool; 2]) -> [f64; 2] {
-    let (n, u) = (count(bin.members.len()), bin.bound);
-    [acc[0] + if t0 { n * u[0] } else { 0.0 }, acc[1] + if t1 { n * u[1] } else { 0.0 }]
 }
 
 impl BinnedRupture {
     /// Requests the memory of later candidates, in two stages a few candidates apart: the
     /// member the back ticket (used [`AHEAD`] candidates from now) would pick, in the bin it
     /// would choose now, at the bin's sizes `n - DRIFT ..= n + DRIFT` (both ends and the
-    /// middle of the range: a line or two); and the attached record of the member the
-    /// second ticket would pick in the bin it chose then (its member, requested two
-    /// candidates ago, is read now), whose slot is kept as [`RuptureModel::upcoming`]. The
-    /// addresses need not be valid (a prefetch never faults).
+    /// middle of the range: a line or two); and the attached records of the members the
+    /// second ticket would pick in the bin it chose then, at the bin's sizes `n - 1 ..= n + 1`
+    /// (an event in between moves the pick to a neighbour; the members, requested two
+    /// candidates ago, are read now), the one at `n` kept as [`RuptureModel::upcoming`].
+    /// Beside them, the lines a rupture writes elsewhere ([`RuptureModel::detached`]): the
+    /// record of that bin's last member, which fills the removed member's place, and the
+    /// member of the attached bag's last junction, which fills the removed record's. Below
+    /// [`WIDE_FROM`] junctions, where these lines stay in the caches, the records are
+    /// requested at `n` alone and the writes' lines not at all. The addresses need not be
+    /// valid (a prefetch never faults).
     #[inline(always)]
     fn request(&mut self, attached: &[Attached]) {
         let b = (self.head as usize + AHEAD - 1) & (AHEAD - 1);
@@ -666,10 +688,26 @@ impl BinnedRupture {
             prefetch_ptr(base.wrapping_add(hi));
         }
         let second = self.tickets[(self.head as usize + 1) & (AHEAD - 1)];
+        let record = |m: &Member| prefetch_ptr(attached.as_ptr().wrapping_add(m.slot as usize));
+        let wide = self.spare.limit >= WIDE_FROM;
         if let Some(bin) = self.bins.get(second.hint as usize) {
-            if let Some(m) = bin.members.get(index(second.pick, bin.members.len())) {
-                prefetch_ptr(attached.as_ptr().wrapping_add(m.slot as usize));
+            let n = bin.members.len();
+            let (lo, hi) = if wide { (n.saturating_sub(1), n + 1) } else { (n, n) };
+            for i in index(second.pick, lo)..=index(second.pick, hi) {
+                if let Some(m) = bin.members.get(i) {
+                    record(m);
+                }
+            }
+            if let Some(m) = bin.members.get(index(second.pick, n)) {
                 self.upcoming = m.slot;
+            }
+            if let Some(m) = bin.members.last().filter(|_| wide) {
+                record(m);
+            }
+        }
+        if let Some(last) = attached.last().filter(|a| wide && a.bin != UNBINNED) {
+            if let Some(bin) = self.bins.get(self.bin_of(last.c)) {
+                prefetch_ptr(bin.members.as_ptr().wrapping_add(last.bin as usize));
             }
         }
     }
@@ -684,6 +722,19 @@ mod tests {
 
     fn record(c: f64, id: u32) -> Attached {
         Attached { c, id, bin: 0 }
+    }
+
+    /// The running sums over the occupied bins, summed afresh in order, each bin adding
+    /// `n U_k` for the terms in force and nothing for the others.
+    fn oracle_sums(r: &BinnedRupture) -> Vec<[f64; 2]> {
+        let mut acc = [0.0f64; 2];
+        (r.lo..r.hi)
+            .map(|j| {
+                let (n, u, [t0, t1]) = (r.bins[j].members.len() as f64, r.bins[j].bound, r.sides.terms(j));
+                acc = [acc[0] + if t0 { n * u[0] } else { 0.0 }, acc[1] + if t1 { n * u[1] } else { 0.0 }];
+                acc
+            })
+            .collect()
     }
 
     /// Every member's weights lie under its bin's bounds, and within `exp(h)` of them, for
@@ -866,8 +917,7 @@ mod tests {
                 continue;
             };
             kept += 1;
-            let mut full = Vec::new();
-            sum_up(&r.bins[r.lo..r.hi], r.lo, r.sides, &mut full);
+            let full = oracle_sums(&r);
             let (m, p) = r.h.terms(full.last().copied().unwrap());
             assert_eq!(rate.to_bits(), (m + p).to_bits(), "step {step}");
         }
@@ -901,9 +951,8 @@ mod tests {
                 r.detached(&mut attached, slot, last, &gone);
             }
             let [lo, hi] = [r.lo, r.hi];
-            resum(&r.bins[lo..hi], [lo, hi], r.sides, &mut r.cumulative, &mut r.summed, &mut r.dirty);
-            let mut full = Vec::new();
-            sum_up(&r.bins[r.lo..r.hi], r.lo, r.sides, &mut full);
+            resum(&r.bins[lo..hi], [lo, hi], r.sides, [&mut r.cumulative, &mut r.weights], &mut r.summed, &mut r.dirty);
+            let full = oracle_sums(&r);
             let bits = |v: &[[f64; 2]]| v.iter().map(|x| [x[0].to_bits(), x[1].to_bits()]).collect::<Vec<_>>();
             assert_eq!(bits(&r.cumulative), bits(&full), "step {step}");
         }
