@@ -689,6 +689,7 @@ impl BinnedRupture {
         }
         let second = self.tickets[(self.head as usize + 1) & (AHEAD - 1)];
         let record = |m: &Member| prefetch_ptr(attached.as_ptr().wrapping_add(m.slot as usize));
+        // The spares' limit is the run's number of junctions.
         let wide = self.spare.limit >= WIDE_FROM;
         if let Some(bin) = self.bins.get(second.hint as usize) {
             let n = bin.members.len();
