@@ -106,8 +106,8 @@ impl<S: Stepper, R: RuptureModel> Engine for Exact<S, R> {
             match ch {
                 FORMATION => {
                     if s.formation(core, t_next, obs)? {
-                        form(core, s, r, obs);
-                        after_event(core, s, r, Some(FORMATION), obs);
+                        let c = form(core, s, r, obs);
+                        after_event(core, s, r, Some((FORMATION, c)), obs);
                     } else {
                         core.channels.redraw(FORMATION, t_next, &mut core.rng);
                     }
@@ -123,8 +123,8 @@ impl<S: Stepper, R: RuptureModel> Engine for Exact<S, R> {
                     match r.pick(&mut core.rng, &core.bags.attached, &law, || s.position(t_next).unwrap_or(f64::NAN)) {
                         Some(slot) => {
                             s.close(core, t_next, obs)?;
-                            rupture(core, s, r, slot, obs);
-                            after_event(core, s, r, Some(RUPTURE), obs);
+                            let c = rupture(core, s, r, slot, obs);
+                            after_event(core, s, r, Some((RUPTURE, c)), obs);
                         }
                         None => core.channels.redraw(RUPTURE, t_next, &mut core.rng),
                     }

@@ -10,7 +10,7 @@ use crate::engine::exact::rupture::RuptureModel;
 use crate::engine::exact::stepper::contract::{Stepper, WeakRuptures};
 use crate::observe::{EventKind, Observer};
 
-/// Ruptures the attached junction in `slot` now.
+/// Ruptures the attached junction in `slot` now; its anchor.
 #[inline(always)]
 pub fn rupture<S: Stepper, R: RuptureModel, O: Observer>(
     core: &mut Core<S::Queue>,
@@ -18,25 +18,30 @@ pub fn rupture<S: Stepper, R: RuptureModel, O: Observer>(
     r: &mut R,
     slot: usize,
     obs: &mut O,
-) {
+) -> f64 {
     let last = core.bags.n_attached() - 1;
     let a = core.bags.take_attached(slot);
-    core.changed = a.c;
     s.detached(core, slot, last, &a);
     r.detached(&mut core.bags.attached, slot, last, &a);
     let x = s.y(core) - a.c;
     core.bags.detached.push(Detached { x, t: core.tau, id: a.id });
     core.counters.ruptures += 1;
     emit(obs, core.time(), EventKind::Rupture, a.id, x, |x| s.tension(x));
+    a.c
 }
 
 /// Attaches a detached junction ([`Stepper::formation_slot`]) now, with its re-attached
 /// extension; if its rupture rate overflows (weak bonds), it ruptures at once. A model that
 /// needs it re-bases first ([`RuptureModel::needs_rebase`]: with no junction attached the
 /// plate may have moved far since the last re-base, and the new anchor's weights must be
-/// representable).
+/// representable). Its anchor.
 #[inline]
-pub fn form<S: Stepper, R: RuptureModel, O: Observer>(core: &mut Core<S::Queue>, s: &mut S, r: &mut R, obs: &mut O) {
+pub fn form<S: Stepper, R: RuptureModel, O: Observer>(
+    core: &mut Core<S::Queue>,
+    s: &mut S,
+    r: &mut R,
+    obs: &mut O,
+) -> f64 {
     if r.needs_rebase(s.y(core), core.tau) {
         rebase(core, s, r, obs);
     }
@@ -45,7 +50,6 @@ pub fn form<S: Stepper, R: RuptureModel, O: Observer>(core: &mut Core<S::Queue>,
     let x = reattached_extension(core.reattach, core.lambda, &d, core.tau);
     let y = s.y(core);
     let c = y - x;
-    core.changed = c;
     core.bags.attach_in_bin(c, d.id, 0);
     core.counters.formations += 1;
     emit(obs, core.time(), EventKind::Formation, d.id, x, |x| s.tension(x));
@@ -54,6 +58,7 @@ pub fn form<S: Stepper, R: RuptureModel, O: Observer>(core: &mut Core<S::Queue>,
     if !r.attached(&mut core.bags.attached, slot, c, y) {
         rupture(core, s, r, slot, obs);
     }
+    c
 }
 
 /// Re-bases the frame if positions or times have grown ([`REBASE`]; amortised O(1) per event).
@@ -88,15 +93,15 @@ pub fn rebase<S: Stepper, R: RuptureModel, O: Observer>(core: &mut Core<S::Queue
     }
 }
 
-/// After an event at the current time (`fired`: the channel that fired, if one did):
-/// re-base, a new piece, new rates. Always inlined: it runs after every event,
+/// After an event at the current time (`fired`: the channel that fired, if one did, and the
+/// anchor of the junction its event attached or detached): re-base, a new piece, new rates. Always inlined: it runs after every event,
 /// its call cost a twentieth of one, and inlined `fired` is a constant.
 #[inline(always)]
 pub fn after_event<S: Stepper, R: RuptureModel, O: Observer>(
     core: &mut Core<S::Queue>,
     s: &mut S,
     r: &mut R,
-    fired: Option<usize>,
+    fired: Option<(usize, f64)>,
     obs: &mut O,
 ) {
     core.events_since_rebase += 1;
@@ -118,22 +123,23 @@ pub const fn horizon<S: Stepper, R: RuptureModel>() -> bool {
 /// stepper's acceptance; rupture and horizon from the model's [`RuptureModel::plan`] over the
 /// stepper's bounds, or after an event the current horizon's plan kept
 /// ([`RuptureModel::replan`]); none for weak bonds found inside plate steps); channel `fired`
-/// draws afresh. Always inlined (it runs after every event).
+/// draws afresh (with the anchor of the junction its event attached or detached). Always inlined (it runs after every event).
 #[inline(always)]
 pub fn refresh_clocks<S: Stepper, R: RuptureModel>(
     core: &mut Core<S::Queue>,
     s: &mut S,
     r: &mut R,
-    fired: Option<usize>,
+    fired: Option<(usize, f64)>,
 ) {
     let now = core.tau;
     // After an event inside a thinning horizon, its plan is kept while its bounds hold for
     // the plate's new path: the old path's widened by the event's reach.
-    let kept = if horizon::<S, R>() && fired.is_some() {
-        let rest = core.channels.time(HORIZON) - now;
-        r.replan(|lo, hi| s.reach(core, rest, lo, hi), core.bags.n_attached())
-    } else {
-        None
+    let kept = match fired {
+        Some((_, c)) if horizon::<S, R>() => {
+            let rest = core.channels.time(HORIZON) - now;
+            r.replan(|lo, hi| s.reach(c, rest, lo, hi), core.bags.n_attached())
+        }
+        _ => None,
     };
     // The rupture rate, and the horizon's new end when it was planned anew.
     let (rate, end) = match kept {
@@ -145,7 +151,7 @@ pub fn refresh_clocks<S: Stepper, R: RuptureModel>(
         }
     };
     let formation_rate = core.formation.kon0 * s.formation_acceptance(core) * count(core.bags.n_detached());
-    core.channels.set_rates(now, [formation_rate, rate], fired, &mut core.rng);
+    core.channels.set_rates(now, [formation_rate, rate], fired.map(|(ch, _)| ch), &mut core.rng);
     if let Some(end) = end {
         core.channels.set_time(HORIZON, end);
     }

@@ -37,15 +37,6 @@ pub struct Core<Q: ChannelQueue> {
     pub counters: Counters,
     /// Events since the frame was last re-based ([`REBASE`](super::policy::REBASE)).
     pub events_since_rebase: u64,
-    /// The anchor of the junction the last event attached or detached (NaN in a resumed
-    /// run until its first event): what [`Stepper::reach`](crate::engine::exact::stepper::contract::Stepper::reach)
-    /// bounds the plate's response to.
-    #[serde(skip, default = "not_a_number")]
-    pub changed: f64,
-}
-
-fn not_a_number() -> f64 {
-    f64::NAN
 }
 
 impl<Q: ChannelQueue> Core<Q> {
@@ -70,7 +61,6 @@ impl<Q: ChannelQueue> Core<Q> {
             rng,
             counters: Counters { events: Some(0), candidates: Some(0), rebases: Some(0), ..Default::default() },
             events_since_rebase: 0,
-            changed: f64::NAN,
         })
     }
 

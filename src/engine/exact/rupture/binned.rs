@@ -207,7 +207,8 @@ impl BinnedRupture {
     }
     /// Bytes of the model in a checkpoint (MessagePack, structs as maps) for `n` junctions at
     /// most: a member with its field names (22 bytes) per junction, and at most 96 bytes
-    /// per bin of the table (its bounds, and its running sums when occupied).
+    /// per bin of the table (its bounds, 35 bytes, and when occupied its running sums and
+    /// weights, 19 bytes each).
     pub fn encoded_bytes_for(n: usize) -> u64 {
         22 * n as u64 + 96 * (2 * HALF + 1) as u64
     }
@@ -612,8 +613,8 @@ fn floor_index(t: f64) -> usize {
 }
 
 /// Running sums over `bins` (table indices from `first`) of each term where it is in force,
-/// and the bins' `weights` under these sides.
-#[inline(never)]
+/// and the bins' `weights` under these sides. Out of line: it runs once per plan, and
+/// inlined into the event loop it cost the loop instructions on every event.
 fn sum_up(bins: &[Bin], first: usize, sides: Sides, cumulative: &mut Vec<[f64; 2]>, weights: &mut Vec<[f64; 2]>) {
     weights.clear();
     for (i, bin) in bins.iter().enumerate() {
@@ -725,6 +726,22 @@ mod tests {
         Attached { c, id, bin: 0 }
     }
 
+    /// Attaches junction `id` with anchor `c` (the plate at `y`) at the end of the bag, as the
+    /// core does; whether it was binned.
+    fn attach(r: &mut BinnedRupture, attached: &mut Vec<Attached>, c: f64, id: u32, y: f64) -> bool {
+        attached.push(record(c, id));
+        let slot = attached.len() - 1;
+        r.attached(attached, slot, c, y)
+    }
+
+    /// Detaches a uniform junction by `swap_remove`, as the core does.
+    fn detach_any(r: &mut BinnedRupture, attached: &mut Vec<Attached>, rng: &mut Pcg64) {
+        let slot = index(rng.next_u64(), attached.len());
+        let last = attached.len() - 1;
+        let gone = attached.swap_remove(slot);
+        r.detached(attached, slot, last, &gone);
+    }
+
     /// The running sums over the occupied bins, summed afresh in order, each bin adding
     /// `n U_k` for the terms in force and nothing for the others.
     fn oracle_sums(r: &BinnedRupture) -> Vec<[f64; 2]> {
@@ -775,15 +792,10 @@ mod tests {
             if attached.is_empty() || x < 0.5 {
                 // Mostly near the plate; one in fifty beyond the rate's cap.
                 let c = if rng.uniform() < 0.02 { 2.0 * EXPONENT_CAP / a } else { (rng.uniform() - 0.5) * 40.0 };
-                attached.push(record(c, step));
-                let slot = attached.len() - 1;
-                let binned = r.attached(&mut attached, slot, c, 0.0);
+                let binned = attach(&mut r, &mut attached, c, step, 0.0);
                 assert_eq!(binned, a * c.abs() <= EXPONENT_CAP);
             } else if x < 0.995 {
-                let slot = index(rng.next_u64(), attached.len());
-                let last = attached.len() - 1;
-                let gone = attached.swap_remove(slot);
-                r.detached(&mut attached, slot, last, &gone);
+                detach_any(&mut r, &mut attached, &mut rng);
             } else {
                 let dy = (rng.uniform() - 0.5) * 10.0;
                 attached.iter_mut().for_each(|j| j.c -= dy);
@@ -895,23 +907,16 @@ mod tests {
         let drive = Drive { y0: 0.3, v: 0.7 };
         for step in 0..2000u32 {
             let c = (rng.uniform() - 0.5) * 20.0;
-            attached.push(record(c, step));
-            let slot = attached.len() - 1;
-            r.attached(&mut attached, slot, c, 0.0);
+            attach(&mut r, &mut attached, c, step, 0.0);
         }
         r.plan(|h| drive.bounds(h), attached.len());
         let mut kept = 0;
         for step in 0..2000u32 {
             if rng.uniform() < 0.5 {
                 let c = 0.3 + (rng.uniform() - 0.5) * 4.0;
-                attached.push(record(c, step));
-                let slot = attached.len() - 1;
-                r.attached(&mut attached, slot, c, 0.3);
+                attach(&mut r, &mut attached, c, step, 0.3);
             } else {
-                let slot = index(rng.next_u64(), attached.len());
-                let last = attached.len() - 1;
-                let gone = attached.swap_remove(slot);
-                r.detached(&mut attached, slot, last, &gone);
+                detach_any(&mut r, &mut attached, &mut rng);
             }
             let Some(rate) = r.replan(|_, _| 1e-12, attached.len()) else {
                 r.plan(|h| drive.bounds(h), attached.len());
@@ -942,14 +947,9 @@ mod tests {
         for step in 0..5_000u32 {
             if attached.len() < 3 || rng.uniform() < 0.5 {
                 let c = (rng.uniform() - 0.5) * 20.0;
-                attached.push(record(c, step));
-                let slot = attached.len() - 1;
-                r.attached(&mut attached, slot, c, 0.0);
+                attach(&mut r, &mut attached, c, step, 0.0);
             } else {
-                let slot = index(rng.next_u64(), attached.len());
-                let last = attached.len() - 1;
-                let gone = attached.swap_remove(slot);
-                r.detached(&mut attached, slot, last, &gone);
+                detach_any(&mut r, &mut attached, &mut rng);
             }
             let [lo, hi] = [r.lo, r.hi];
             resum(&r.bins[lo..hi], [lo, hi], r.sides, [&mut r.cumulative, &mut r.weights], &mut r.summed, &mut r.dirty);

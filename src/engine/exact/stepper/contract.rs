@@ -103,13 +103,13 @@ pub trait Stepper: Clone + std::fmt::Debug + Serialize + DeserializeOwned + Send
     fn bounds(&self, _core: &Core<Self::Queue>, _h: f64) -> (f64, f64) {
         (f64::NEG_INFINITY, f64::INFINITY)
     }
-    /// How far the event just past (the junction anchored at `core.changed` attached or
-    /// detached) can move the plate over the next `rest` of the piece just opened, away
-    /// from the path it had before the event, if that path lay within `[lo, hi]` ever since
-    /// the event: `sup |y_new - y_old|` bounded ([`WeakRuptures::Horizon`]). `+inf` (the
-    /// default): not known.
+    /// How far the event just past (the junction anchored at `c` attached or detached) can
+    /// move the plate over the next `rest` of the piece just opened, away from the path it
+    /// had before the event, if that path lay within `[lo, hi]` ever since the event:
+    /// `sup |y_new - y_old|` bounded ([`WeakRuptures::Horizon`]). `+inf` (the default): not
+    /// known.
     #[inline]
-    fn reach(&self, _core: &Core<Self::Queue>, _rest: f64, _lo: f64, _hi: f64) -> f64 {
+    fn reach(&self, _c: f64, _rest: f64, _lo: f64, _hi: f64) -> f64 {
         f64::INFINITY
     }
     /// Moves the plate towards its target. A closed form reaches any time in one piece:

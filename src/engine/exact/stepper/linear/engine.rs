@@ -316,11 +316,10 @@ impl<Q: ChannelQueue, M: PlateMotion> Stepper for LinearStepper<Q, M> {
     /// along the old path, `|g| <= kappa max(|hi - c|, |lo - c|)`, from a common state:
     /// [`Trajectory::response`] of that bound. A kinematic plate does not respond.
     #[inline(always)]
-    fn reach(&self, core: &Core<Q>, rest: f64, lo: f64, hi: f64) -> f64 {
+    fn reach(&self, c: f64, rest: f64, lo: f64, hi: f64) -> f64 {
         if M::KINEMATIC {
             return 0.0;
         }
-        let c = core.changed;
         let g = self.kappa * (hi - c).abs().max((lo - c).abs());
         self.piece.traj.current().response(rest) * g
     }
