@@ -30,9 +30,10 @@
 //! A member stores `exp(a c)` and its slot in the attached bag; the junction's record
 //! stores its position in its bin ([`Attached::bin`]), so a rupture, which has read the
 //! record, finds and removes the member in O(1); the bin is a function of `c`. The bins'
-//! buffers grow by doubling and shrink by half when a quarter full, and emptied ones are
-//! kept for reuse (`SPARES`): about a member's bytes per junction in runs
-//! ([`BinnedRupture::bytes_for`]).
+//! buffers grow by doubling and shrink by half when a quarter full; the buffers a bin
+//! outgrows or gives up, and those of emptied bins, are kept for reuse (`SPARES`), so that
+//! the bins filling ahead of the plate take the memory of those draining behind it: about
+//! a member's bytes per junction in runs ([`BinnedRupture::bytes_for`]).
 
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -119,10 +120,11 @@ impl Ticket {
     }
 }
 
-/// Emptied bins' buffers kept for reuse, at most (a bin that fills again takes one instead
-/// of new memory, which the system would have to clear), and together at most a member per
-/// junction.
-const SPARES: usize = 2;
+/// Buffers kept for reuse, at most (those of emptied bins, and those a bin outgrew or gave
+/// up: a bin that grows or shrinks takes one instead of new memory, which the system would
+/// have to clear), and together at most a member per junction. Sixteen hold a buffer of
+/// the sizes a bin passes through at `N = 1e6` (about fifteen powers of two).
+const SPARES: usize = 16;
 
 /// Weak bonds with the linear law: thinning against a bound per bin of anchors.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -314,8 +316,8 @@ impl BinnedRupture {
     }
 }
 
-/// Emptied buffers kept for reuse: at most [`SPARES`], of at most `limit` members together
-/// (a checkpoint keeps the limit, not the buffers).
+/// Buffers kept for reuse: at most [`SPARES`], of at most `limit` members together (a
+/// checkpoint keeps the limit, not the buffers).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 struct Spares {
     #[serde(skip)]
@@ -344,6 +346,13 @@ impl Spares {
     fn take(&mut self, need: usize) -> Option<Vec<Member>> {
         take_best(&mut self.buffers, need)
     }
+    /// The smallest kept buffer of `need` to `most` members, if there is one.
+    fn take_within(&mut self, need: usize, most: usize) -> Option<Vec<Member>> {
+        let i = (0..self.buffers.len())
+            .filter(|&i| (need..=most).contains(&self.buffers[i].capacity()))
+            .min_by_key(|&i| self.buffers[i].capacity())?;
+        Some(self.buffers.swap_remove(i))
+    }
 }
 
 /// The smallest buffer of `pool` that holds `need` members, taken out of it.
@@ -355,28 +364,40 @@ fn take_best(pool: &mut Vec<Vec<Member>>, need: usize) -> Option<Vec<Member>> {
 /// An empty buffer for `capacity` members, advised onto huge pages before it is written (a
 /// large bin is read at random, as a bag is).
 fn new_buffer(capacity: usize) -> Vec<Member> {
+    #[cfg(test)]
+    tests::NEW_BUFFERS.with(|n| n.set(n.get() + 1));
     let v = Vec::with_capacity(capacity);
     crate::engine::exact::core::bags::advise_huge_pages(&v);
     v
 }
 
 /// Makes room in the full `members`: a spare buffer at least twice as large if there is one,
-/// else a new one. The old buffer is freed.
+/// else a new one. The old buffer becomes a spare (a bin that shrinks takes it).
 #[cold]
 #[inline(never)]
 fn grow(members: &mut Vec<Member>, spare: &mut Spares) {
     let need = (2 * members.capacity()).max(8);
     let mut grown = spare.take(need).unwrap_or_else(|| new_buffer(need));
     grown.extend_from_slice(members);
-    *members = grown;
+    spare.keep(std::mem::replace(members, grown));
 }
 
 /// Halves the buffer of `members` once they fill less than a quarter of it (amortised O(1)
-/// per removal; a bin of more than 16 members keeps at most four times their memory).
+/// per removal; a bin of more than 16 members keeps at most four times their memory): into
+/// a spare of that size if there is one, and the old buffer becomes a spare (a bin that
+/// grows takes it), so that the bins drifting through the table reuse each other's memory
+/// instead of the system clearing new memory for them.
 #[inline]
-fn shrink(members: &mut Vec<Member>) {
-    if members.capacity() >= 64 && 4 * members.len() < members.capacity() {
-        members.shrink_to(members.capacity() / 2);
+fn shrink(members: &mut Vec<Member>, spare: &mut Spares) {
+    let cap = members.capacity();
+    if cap >= 64 && 4 * members.len() < cap {
+        match spare.take_within(2 * members.len(), cap / 2) {
+            Some(mut smaller) => {
+                smaller.extend_from_slice(members);
+                spare.keep(std::mem::replace(members, smaller));
+            }
+            None => members.shrink_to(cap / 2),
+        }
     }
 }
 
@@ -413,7 +434,7 @@ impl RuptureModel for BinnedRupture {
             attached[m.slot as usize].bin = p as u32;
         }
         if !bin.members.is_empty() {
-            shrink(&mut bin.members);
+            shrink(&mut bin.members, &mut self.spare);
         } else {
             // An emptied bin's buffer becomes a spare (the anchors drift through the bins).
             self.spare.keep(std::mem::take(&mut bin.members));
@@ -604,11 +625,18 @@ fn table_index(t: f64) -> usize {
 /// `floor(t) + HALF` for `|t| <= HALF`: a member's bin ([`BinnedRupture::bin_of`]).
 #[inline(always)]
 fn floor_index(t: f64) -> usize {
-    // floor(t) by truncation, for t of either sign.
-    let mut j = t as i64;
-    if (j as f64) > t {
-        j -= 1;
-    }
+    // One rounding instruction where the processor has it (x86-64-v3 builds); else by
+    // truncation, for t of either sign (the same value: floor(NaN) as i64 is 0 in both).
+    #[cfg(any(target_feature = "sse4.1", not(target_arch = "x86_64")))]
+    let j = t.floor() as i64;
+    #[cfg(not(any(target_feature = "sse4.1", not(target_arch = "x86_64"))))]
+    let j = {
+        let mut j = t as i64;
+        if (j as f64) > t {
+            j -= 1;
+        }
+        j
+    };
     (j + HALF as i64) as usize
 }
 
@@ -806,6 +834,46 @@ mod tests {
         }
         assert!(r.spare.buffers.len() <= SPARES);
         assert!(r.spare.buffers.iter().map(Vec::capacity).sum::<usize>() <= 64);
+    }
+
+    thread_local! {
+        /// Buffers [`new_buffer`] made on this thread.
+        pub(super) static NEW_BUFFERS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+    }
+
+    /// Anchors drifting through the table, as the plate's motion makes them: bins fill at
+    /// the front and drain behind (uniform detachments). Once the first bins have filled
+    /// and drained, the buffers outgrown at the front and those given up behind are reused
+    /// for each other: after the warm-up, fewer new buffers are made than one per bin
+    /// crossed (36 for 432 bins), where growing each bin from scratch makes about five. The spares stay within
+    /// their limit, and the bookkeeping stays consistent.
+    #[test]
+    fn drifting_bins_reuse_each_others_buffers() {
+        let mut rng = pcg(5);
+        let (a, n) = (1.0, 6000);
+        let mut r = BinnedRupture::try_new(1.0, a, n, &mut rng).unwrap();
+        let mut attached: Vec<Attached> = Vec::new();
+        let (steps, warm, drift) = (200_000u32, 50_000, 5e-4);
+        let mut made = 0;
+        for step in 0..steps {
+            if step == warm {
+                made = NEW_BUFFERS.with(std::cell::Cell::get);
+            }
+            let c = f64::from(step) * drift + 0.1 * rng.uniform();
+            attach(&mut r, &mut attached, c, step, c);
+            if attached.len() > n {
+                detach_any(&mut r, &mut attached, &mut rng);
+            }
+            if step % 20_000 == 0 {
+                r.check(&attached);
+            }
+        }
+        r.check(&attached);
+        let after = NEW_BUFFERS.with(std::cell::Cell::get) - made;
+        let crossed = (f64::from(steps - warm) * drift * a / H) as usize;
+        assert!(after < crossed, "{after} new buffers after the warm-up, {crossed} bins crossed");
+        assert!(r.spare.buffers.len() <= SPARES);
+        assert!(r.spare.buffers.iter().map(Vec::capacity).sum::<usize>() <= n);
     }
 
     /// Plate bounds `[y_lo, y_hi]` for the bins' tests: equal, close, across bin edges or
