@@ -836,6 +836,33 @@ mod tests {
         assert!(r.spare.buffers.iter().map(Vec::capacity).sum::<usize>() <= 64);
     }
 
+    /// The bin index by rounding is the truncation and correction that builds without
+    /// SSE4.1 use, at integers, a step of a few ulps either side of them, and halves, of
+    /// either sign, across the table (and for NaN).
+    #[test]
+    fn floor_index_is_the_truncation_form() {
+        let by_truncation = |t: f64| {
+            let mut j = t as i64;
+            if (j as f64) > t {
+                j -= 1;
+            }
+            (j + HALF as i64) as usize
+        };
+        let mut ts = vec![0.0, -0.0, f64::NAN];
+        for k in -(HALF as i64) + 1..HALF as i64 {
+            let k = k as f64;
+            let (mut lo, mut hi) = (k, k);
+            for _ in 0..3 {
+                (lo, hi) = (lo.next_down(), hi.next_up());
+                ts.extend([lo, hi]);
+            }
+            ts.extend([k, k + 0.5, k - 0.5]);
+        }
+        for t in ts {
+            assert_eq!(floor_index(t), by_truncation(t), "t = {t}");
+        }
+    }
+
     thread_local! {
         /// Buffers [`new_buffer`] made on this thread.
         pub(super) static NEW_BUFFERS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
