@@ -35,6 +35,8 @@
 //! the bins filling ahead of the plate take the memory of those draining behind it: about
 //! a member's bytes per junction in runs ([`BinnedRupture::bytes_for`]).
 
+use std::ops::RangeInclusive;
+
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
@@ -342,22 +344,15 @@ impl Spares {
             }
         }
     }
-    /// A kept buffer of at least `need` members, if there is one.
-    fn take(&mut self, need: usize) -> Option<Vec<Member>> {
-        take_best(&mut self.buffers, need)
-    }
-    /// The smallest kept buffer of `need` to `most` members, if there is one.
-    fn take_within(&mut self, need: usize, most: usize) -> Option<Vec<Member>> {
-        let i = (0..self.buffers.len())
-            .filter(|&i| (need..=most).contains(&self.buffers[i].capacity()))
-            .min_by_key(|&i| self.buffers[i].capacity())?;
-        Some(self.buffers.swap_remove(i))
+    /// The smallest kept buffer for `sizes` members, if there is one.
+    fn take(&mut self, sizes: RangeInclusive<usize>) -> Option<Vec<Member>> {
+        take_best(&mut self.buffers, sizes)
     }
 }
 
-/// The smallest buffer of `pool` that holds `need` members, taken out of it.
-fn take_best(pool: &mut Vec<Vec<Member>>, need: usize) -> Option<Vec<Member>> {
-    let i = (0..pool.len()).filter(|&i| pool[i].capacity() >= need).min_by_key(|&i| pool[i].capacity())?;
+/// The smallest buffer of `pool` whose capacity lies in `sizes`, taken out of it.
+fn take_best(pool: &mut Vec<Vec<Member>>, sizes: RangeInclusive<usize>) -> Option<Vec<Member>> {
+    let i = (0..pool.len()).filter(|&i| sizes.contains(&pool[i].capacity())).min_by_key(|&i| pool[i].capacity())?;
     Some(pool.swap_remove(i))
 }
 
@@ -377,9 +372,14 @@ fn new_buffer(capacity: usize) -> Vec<Member> {
 #[inline(never)]
 fn grow(members: &mut Vec<Member>, spare: &mut Spares) {
     let need = (2 * members.capacity()).max(8);
-    let mut grown = spare.take(need).unwrap_or_else(|| new_buffer(need));
-    grown.extend_from_slice(members);
-    spare.keep(std::mem::replace(members, grown));
+    let grown = spare.take(need..=usize::MAX).unwrap_or_else(|| new_buffer(need));
+    move_into(members, grown, spare);
+}
+
+/// Moves `members` into `buffer` (which holds them); their old buffer becomes a spare.
+fn move_into(members: &mut Vec<Member>, mut buffer: Vec<Member>, spare: &mut Spares) {
+    buffer.extend_from_slice(members);
+    spare.keep(std::mem::replace(members, buffer));
 }
 
 /// Halves the buffer of `members` once they fill less than a quarter of it (amortised O(1)
@@ -391,11 +391,8 @@ fn grow(members: &mut Vec<Member>, spare: &mut Spares) {
 fn shrink(members: &mut Vec<Member>, spare: &mut Spares) {
     let cap = members.capacity();
     if cap >= 64 && 4 * members.len() < cap {
-        match spare.take_within(2 * members.len(), cap / 2) {
-            Some(mut smaller) => {
-                smaller.extend_from_slice(members);
-                spare.keep(std::mem::replace(members, smaller));
-            }
+        match spare.take(2 * members.len()..=cap / 2) {
+            Some(smaller) => move_into(members, smaller, spare),
             None => members.shrink_to(cap / 2),
         }
     }
@@ -527,7 +524,7 @@ impl RuptureModel for BinnedRupture {
         }
         for (i, &n) in counts.iter().enumerate().filter(|(_, n)| **n > 0) {
             self.bins[first + i].members =
-                take_best(&mut pool, n).unwrap_or_else(|| new_buffer(n.next_power_of_two().max(8)));
+                take_best(&mut pool, n..=usize::MAX).unwrap_or_else(|| new_buffer(n.next_power_of_two().max(8)));
         }
         let mut over = Vec::new();
         for slot in 0..attached.len() {
@@ -872,8 +869,8 @@ mod tests {
     /// the front and drain behind (uniform detachments). Once the first bins have filled
     /// and drained, the buffers outgrown at the front and those given up behind are reused
     /// for each other: after the warm-up, fewer new buffers are made than one per bin
-    /// crossed (36 for 432 bins), where growing each bin from scratch makes about five. The spares stay within
-    /// their limit, and the bookkeeping stays consistent.
+    /// crossed (36 for 432 bins), where growing each bin from scratch makes about five.
+    /// The spares stay within their limit, and the bookkeeping stays consistent.
     #[test]
     fn drifting_bins_reuse_each_others_buffers() {
         let mut rng = pcg(5);
