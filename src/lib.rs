@@ -7,7 +7,7 @@
 //! - [`scene`]: the problem: a scene file, its validation into typed parameters, and the one
 //!   table of force laws and bond kinds (`scene::laws`);
 //! - [`physics`]: the model's pure functions: force laws and bond kinds (each with its table),
-//!   formation rate, plate;
+//!   formation rate, plate, the weak-bond rate's exponential;
 //! - [`engine`]: the methods that advance a scene: [`engine::fixed`] (the letter's
 //!   fixed-step scheme, and [`engine::fixed::stability`], where each of its plate integrators
 //!   is stable) and [`engine::exact`] (event-driven kinetic Monte Carlo: one core, with the

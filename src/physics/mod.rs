@@ -3,6 +3,7 @@
 //! `scene::laws` builds them from a scene.
 
 pub mod bond;
+pub mod exp;
 pub mod force;
 pub mod plate;
 pub mod rates;

@@ -3,6 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::contract::{Bond, BondParams, check_k0};
+use crate::physics::exp::exp;
 use crate::physics::force::ParamError;
 
 /// Weak bonds: `k_off = k0 exp(beta dx f)`, `beta dx = dx / temperature`.
@@ -36,7 +37,7 @@ impl Bond for Weak {
         if self.k0 == 0.0 {
             return 0.0;
         }
-        self.k0 * (self.beta_dx * tension).exp()
+        self.k0 * exp(self.beta_dx * tension)
     }
     fn k0(&self) -> f64 {
         self.k0
