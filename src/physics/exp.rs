@@ -132,32 +132,29 @@ fn table_method(x: f64) -> f64 {
 mod tests {
     use super::*;
     use crate::rng::{UniformSource, pcg};
+    use twofloat::TwoFloat;
 
     /// Ulps between two finite doubles of the same sign.
     fn ulps(a: f64, b: f64) -> u64 {
         a.to_bits().abs_diff(b.to_bits())
     }
 
-    /// `(H_j, H_j T_j)`, the table's `2^(j/128)` as a double-double.
-    fn root(j: usize) -> (f64, f64) {
+    /// The table's `2^(j/128)`, `H_j (1 + T_j)`, as a double-double.
+    fn root(j: usize) -> TwoFloat {
         let h = f64::from_bits(TABLE[2 * j + 1].wrapping_add((j as u64) << 45));
-        (h, h * f64::from_bits(TABLE[2 * j]))
+        TwoFloat::from(h) + TwoFloat::from(h * f64::from_bits(TABLE[2 * j]))
     }
 
     /// Every entry squared (in double-double arithmetic, error about `2^-104`) is the entry
     /// of the doubled exponent, times 2 past the end, and entry 0 is exactly 1: the only
-    /// positive solution is `2^(j/128)`, so a wrong entry anywhere fails.
+    /// positive solution is `2^(j/128)`, so an entry wrong by more than `2^-100` of itself fails.
     #[test]
     fn table_is_the_roots_of_two() {
-        assert_eq!(root(0), (1.0, 0.0));
+        assert_eq!(root(0), TwoFloat::from(1.0));
         for j in 0..128 {
-            let (h, l) = root(j);
-            let (p, e) = (h * h, h.mul_add(h, -h * h));
-            let sq = (p, e + 2.0 * h * l);
-            let (th, tl) =
-                if 2 * j < 128 { root(2 * j) } else { (2.0 * root(2 * j - 128).0, 2.0 * root(2 * j - 128).1) };
-            let diff = (sq.0 - th) + (sq.1 - tl);
-            assert!(diff.abs() <= th * 2f64.powi(-100), "entry {j}: squared off by {diff:e}");
+            let want = if 2 * j < 128 { root(2 * j) } else { TwoFloat::from(2.0) * root(2 * j - 128) };
+            let diff = (root(j) * root(j) - want).hi();
+            assert!(diff.abs() <= want.hi() * 2f64.powi(-100), "entry {j}: squared off by {diff:e}");
         }
     }
 

@@ -623,18 +623,24 @@ fn table_index(t: f64) -> usize {
 #[inline(always)]
 fn floor_index(t: f64) -> usize {
     // One rounding instruction where the processor has it (x86-64-v3 builds); else by
-    // truncation, for t of either sign (the same value: floor(NaN) as i64 is 0 in both).
+    // truncation (the same value: floor(NaN) as i64 is 0 in both).
     #[cfg(any(target_feature = "sse4.1", not(target_arch = "x86_64")))]
     let j = t.floor() as i64;
     #[cfg(not(any(target_feature = "sse4.1", not(target_arch = "x86_64"))))]
-    let j = {
-        let mut j = t as i64;
-        if (j as f64) > t {
-            j -= 1;
-        }
-        j
-    };
+    let j = floor_by_truncation(t);
     (j + HALF as i64) as usize
+}
+
+/// `floor(t)` as an integer by truncation and correction, for `t` of either sign: no
+/// rounding instruction (`f64::floor` is a library call without SSE4.1).
+#[cfg_attr(any(target_feature = "sse4.1", not(target_arch = "x86_64")), allow(dead_code))]
+#[inline(always)]
+fn floor_by_truncation(t: f64) -> i64 {
+    let mut j = t as i64;
+    if (j as f64) > t {
+        j -= 1;
+    }
+    j
 }
 
 /// Running sums over `bins` (table indices from `first`) of each term where it is in force,
@@ -838,13 +844,7 @@ mod tests {
     /// either sign, across the table (and for NaN).
     #[test]
     fn floor_index_is_the_truncation_form() {
-        let by_truncation = |t: f64| {
-            let mut j = t as i64;
-            if (j as f64) > t {
-                j -= 1;
-            }
-            (j + HALF as i64) as usize
-        };
+        let by_truncation = |t: f64| (floor_by_truncation(t) + HALF as i64) as usize;
         let mut ts = vec![0.0, -0.0, f64::NAN];
         for k in -(HALF as i64) + 1..HALF as i64 {
             let k = k as f64;
