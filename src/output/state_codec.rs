@@ -29,6 +29,21 @@ pub fn decode<'de, T: Deserialize<'de>>(bytes: &'de [u8]) -> Result<T, CodecErro
     erased_serde::deserialize(&mut erased)
 }
 
+/// Splits the bytes of a pair `(name, value)` written by [`encode`] into the name and the
+/// bytes of the value (decode those with [`decode`]). Reading the pair's array header and
+/// its string here, rather than decoding a tuple type, keeps the tuple's decoder from being
+/// compiled once per value type.
+pub fn split_named(bytes: &[u8]) -> Result<(&str, &[u8]), CodecError> {
+    use serde::de::Error;
+    let mut rest = bytes;
+    match rmp::decode::read_array_len(&mut rest) {
+        Ok(2) => {}
+        Ok(len) => return Err(CodecError::invalid_length(len as usize, &"a pair (name, state)")),
+        Err(e) => return Err(CodecError::custom(format_args!("not a pair (name, state): {e}"))),
+    }
+    rmp::decode::read_str_from_slice(rest).map_err(|e| CodecError::custom(format_args!("no name: {e}")))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -58,6 +73,28 @@ mod tests {
         assert_eq!(back, s);
         let plain_back: S = rmp_serde::from_slice(&plain).unwrap();
         assert_eq!(plain_back, s);
+    }
+
+    /// A pair's name and value read apart are those of the pair; anything else is an error.
+    #[test]
+    fn a_named_pair_splits_into_its_name_and_value() {
+        let s = S { a: -2.5, b: Some(7), v: vec![1.0, f64::NAN], name: "z".into() };
+        let mut bytes = Vec::new();
+        encode(&mut bytes, &("stickslip::Engine<A, B>", &s)).unwrap();
+        let (name, body) = split_named(&bytes).unwrap();
+        assert_eq!(name, "stickslip::Engine<A, B>");
+        let back: S = decode(body).unwrap();
+        assert_eq!((back.a, back.b, back.name.as_str()), (-2.5, Some(7), "z"));
+        assert_eq!(back.v[0], 1.0);
+        assert!(back.v[1].is_nan());
+        let mut three = Vec::new();
+        encode(&mut three, &("a", 1u8, 2u8)).unwrap();
+        assert!(split_named(&three).is_err());
+        let mut unnamed = Vec::new();
+        encode(&mut unnamed, &(3u8, &s)).unwrap();
+        assert!(split_named(&unnamed).is_err());
+        assert!(split_named(&[]).is_err());
+        assert!(split_named(&bytes[..3]).is_err());
     }
 
     #[test]

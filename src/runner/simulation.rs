@@ -10,8 +10,6 @@
 
 use std::any::type_name;
 
-use serde::de::IgnoredAny;
-
 use super::drive::{Outcome, StopFlag, drive_walk};
 use super::grid::{GridPosition, OutputGrid, Walk};
 use super::observers::CoreObservers;
@@ -233,11 +231,11 @@ impl EngineVisitor for Restore<'_> {
     fn visit<E: Engine>(self, fresh: E) -> Self::Output {
         // The fresh engine only told the type; the state replaces it.
         drop(fresh);
-        let (found, _): (String, IgnoredAny) = state_codec::decode(self.state).map_err(StateError::Malformed)?;
+        let (found, body) = state_codec::split_named(self.state).map_err(StateError::Malformed)?;
         if found != type_name::<E>() {
-            return Err(StateError::WrongEngine { found, expected: type_name::<E>() });
+            return Err(StateError::WrongEngine { found: found.to_owned(), expected: type_name::<E>() });
         }
-        let (_, engine): (IgnoredAny, E) = state_codec::decode(self.state).map_err(StateError::Malformed)?;
+        let engine: E = state_codec::decode(body).map_err(StateError::Malformed)?;
         Ok(Simulation::with(self.scene, engine))
     }
 }

@@ -11,7 +11,7 @@
 //! sum.
 
 use super::flip::Flip;
-use crate::observe::{EventKind, JunctionEvent, Observer};
+use crate::observe::{EventKind, JunctionEvent};
 use crate::physics::{Bond, ForceLaw};
 use crate::rng::UniformSource;
 
@@ -43,6 +43,56 @@ pub(super) struct StepParams<L, B> {
     pub on_cut: f64,
     /// `!0` to keep a forming junction's extension (`reattach = "residual"`), `0` to zero it.
     pub keep_formed: u64,
+}
+
+/// Where a pass puts its junctions' events. The pass is compiled once for each of the two
+/// kinds below, whatever observes the run: without events its update stays branch-free (and
+/// vectorised); with them, a chunk's events are kept in order and handed on after the chunk.
+pub(super) trait Events {
+    /// Whether events are built at all.
+    const ON: bool;
+    /// Junction `junction` flipped at `t` (a rupture if `rupture`), its extension now `x`.
+    fn flipped<L: ForceLaw>(&mut self, law: &L, t: f64, junction: usize, rupture: bool, x: f64);
+    /// Hands on the events of the chunk just passed, in index order.
+    fn chunk_done(&mut self);
+}
+
+/// No observer wants events.
+pub(super) struct NoEvents;
+
+impl Events for NoEvents {
+    const ON: bool = false;
+    #[inline(always)]
+    fn flipped<L: ForceLaw>(&mut self, _: &L, _: f64, _: usize, _: bool, _: f64) {}
+    #[inline(always)]
+    fn chunk_done(&mut self) {}
+}
+
+/// A chunk's events, handed to `to` after the chunk.
+pub(super) struct ChunkEvents<'a> {
+    pub kept: Vec<JunctionEvent>,
+    pub to: &'a mut dyn FnMut(&[JunctionEvent]),
+}
+
+impl Events for ChunkEvents<'_> {
+    const ON: bool = true;
+    /// Out of line: a junction flips in a few per cent of its steps, and the pass's loop
+    /// stays tighter without the event's code in it.
+    #[cold]
+    #[inline(never)]
+    fn flipped<L: ForceLaw>(&mut self, law: &L, t: f64, junction: usize, rupture: bool, x: f64) {
+        self.kept.push(JunctionEvent {
+            t,
+            junction: junction as u32,
+            kind: if rupture { EventKind::Rupture } else { EventKind::Formation },
+            extension: x,
+            tension: law.tension(x),
+        });
+    }
+    fn chunk_done(&mut self) {
+        (self.to)(&self.kept);
+        self.kept.clear();
+    }
 }
 
 /// What one chunk's pass found.
@@ -100,13 +150,13 @@ pub(super) fn pack_attached(qs: &[u8], xs: &[f64], dx: f64, packed: &mut [f64; B
 /// after the update ([`pack_attached`], a loop of its own, so that the update stays
 /// vectorised) and evaluated together ([`ForceLaw::force_x_many`]).
 #[inline(always)]
-pub(super) fn pass_chunk<L: ForceLaw, B: Bond, R: UniformSource, F: Flip, O: Observer>(
+pub(super) fn pass_chunk<L: ForceLaw, B: Bond, R: UniformSource, F: Flip, E: Events>(
     s: &StepParams<L, B>,
     rng: &mut R,
     qs: &mut [u8],
     xs: &mut [f64],
     first: usize,
-    obs: &mut O,
+    events: &mut E,
 ) -> ChunkSums {
     let mut draws = [0.0; BLOCK];
     let mut terms = [0.0; BLOCK];
@@ -115,7 +165,7 @@ pub(super) fn pass_chunk<L: ForceLaw, B: Bond, R: UniformSource, F: Flip, O: Obs
         let draws = &mut draws[..qs.len()];
         rng.raws(draws);
         let (ruptures, formations) =
-            update_block::<L, B, R, F, O>(s, draws, qs, xs, &mut terms, first + block * BLOCK, obs);
+            update_block::<L, B, R, F, E>(s, draws, qs, xs, &mut terms, first + block * BLOCK, events);
         out.ruptures += ruptures;
         out.formations += formations;
         let terms = if L::IS_LINEAR {
@@ -129,6 +179,7 @@ pub(super) fn pass_chunk<L: ForceLaw, B: Bond, R: UniformSource, F: Flip, O: Obs
             out.sum += term;
         }
     }
+    events.chunk_done();
     out
 }
 
@@ -137,14 +188,14 @@ pub(super) fn pass_chunk<L: ForceLaw, B: Bond, R: UniformSource, F: Flip, O: Obs
 /// time: every choice that depends on it is a bitwise select under a mask computed from the
 /// stored byte (`0` or `!0`), which the compiler cannot turn back into a branch.
 #[inline(always)]
-fn update_block<L: ForceLaw, B: Bond, R: UniformSource, F: Flip, O: Observer>(
+fn update_block<L: ForceLaw, B: Bond, R: UniformSource, F: Flip, E: Events>(
     s: &StepParams<L, B>,
     draws: &[f64],
     qs: &mut [u8],
     xs: &mut [f64],
     terms: &mut [f64; BLOCK],
     first: usize,
-    obs: &mut O,
+    events: &mut E,
 ) -> (u64, u64) {
     let (mut ruptures, mut formations) = (0u64, 0u64);
     for (j, ((qi, xi), &r)) in qs.iter_mut().zip(xs.iter_mut()).zip(draws).enumerate() {
@@ -169,14 +220,8 @@ fn update_block<L: ForceLaw, B: Bond, R: UniformSource, F: Flip, O: Observer>(
         if L::IS_LINEAR {
             terms[j] = select(mask(q_new), x_new, 0.0);
         }
-        if O::EVENTS && flip {
-            obs.event(&JunctionEvent {
-                t: s.t,
-                junction: (first + j) as u32,
-                kind: if q_old != 0 { EventKind::Rupture } else { EventKind::Formation },
-                extension: x_new,
-                tension: s.law.tension(x_new),
-            });
+        if E::ON && flip {
+            events.flipped(&s.law, s.t, first + j, q_old != 0, x_new);
         }
     }
     (ruptures, formations)

@@ -13,15 +13,18 @@
 use std::marker::PhantomData;
 
 use serde::de::DeserializeOwned;
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use super::chunk::{BLOCK, CHUNK, ChunkSums, StepParams, mask, pack_attached, pass_chunk, select, total};
+use super::chunk::{
+    BLOCK, CHUNK, ChunkEvents, ChunkSums, Events, NoEvents, StepParams, mask, pack_attached, pass_chunk, select, total,
+};
 use super::flip::Flip;
 use super::integrator::{Integrator, PlateState};
+use super::stored;
 use super::team::Team;
 use crate::engine::alloc::{self, AllocError};
 use crate::engine::{Counters, Engine, EngineError};
-use crate::observe::{Nothing, Observer, Sample, Segment};
+use crate::observe::{JunctionEvent, Observer, Sample, Segment};
 use crate::physics::{Bond, ForceLaw, Formation, Plate};
 use crate::rng::UniformSource;
 use crate::scene::{EngineKind, Initial, Reattach, Scene};
@@ -30,8 +33,9 @@ use crate::scene::{EngineKind, Initial, Reattach, Scene};
 pub const DIVERGENCE_LIMIT: f64 = 1e100;
 
 /// The fixed-step engine, specialised to a force law `L`, bond kind `B`, generator `R`
-/// and flip rule `F`.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+/// and flip rule `F`. Stored (serde) as the map of its fields but the last two
+/// (`src/engine/fixed/stored.rs`).
+#[derive(Clone, Debug)]
 pub struct FixedEngine<L, B, R, F> {
     law: L,
     bond: B,
@@ -67,8 +71,100 @@ pub struct FixedEngine<L, B, R, F> {
     ruptures: u64,
     formations: u64,
     /// The threads that share the pass ([`Engine::set_threads`]); not part of the state.
-    #[serde(skip)]
     team: Option<Team>,
+    /// The buffer of a chunk's events, kept from step to step; not part of the state.
+    kept: Vec<JunctionEvent>,
+}
+
+/// The chunks' passes one after the other on this thread, the generator running through
+/// them. A function of its own (never inlined), so that the loop is compiled the same way
+/// whatever else the crate holds.
+#[inline(never)]
+fn pass_in_order<L: ForceLaw, B: Bond, R: UniformSource, F: Flip, E: Events>(
+    params: &StepParams<L, B>,
+    rng: &mut R,
+    q: &mut [u8],
+    x: &mut [f64],
+    events: &mut E,
+) -> Vec<ChunkSums> {
+    let mut sums = Vec::with_capacity(q.len().div_ceil(CHUNK));
+    for (c, (qs, xs)) in q.chunks_mut(CHUNK).zip(x.chunks_mut(CHUNK)).enumerate() {
+        sums.push(pass_chunk::<L, B, R, F, E>(params, rng, qs, xs, c * CHUNK, events));
+    }
+    sums
+}
+
+impl<L: Serialize, B: Serialize, R: Serialize, F> Serialize for FixedEngine<L, B, R, F> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        stored::Written {
+            law: &self.law,
+            bond: &self.bond,
+            flip: PhantomData,
+            formation: &self.formation,
+            plate: &self.plate,
+            integrator: &self.integrator,
+            rng: &self.rng,
+            dt: self.dt,
+            relax: self.relax,
+            unstretched: self.unstretched,
+            strong_off_threshold: self.strong_off_threshold,
+            steps: self.steps,
+            plate_x: self.plate_x,
+            plate_v: self.plate_v,
+            q: &self.q,
+            x: &self.x,
+            pending_dx: self.pending_dx,
+            pending_relax: self.pending_relax,
+            attached: self.attached,
+            ruptures: self.ruptures,
+            formations: self.formations,
+        }
+        .serialize(s)
+    }
+}
+
+impl<'de, L: Deserialize<'de>, B: Deserialize<'de>, R: Deserialize<'de>, F> Deserialize<'de>
+    for FixedEngine<L, B, R, F>
+{
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let (mut law, mut bond, mut rng) = (None, None, None);
+        let u = stored::read(
+            &mut <dyn erased_serde::Deserializer>::erase(d),
+            &mut |d| stored::typed(&mut law, d),
+            &mut |d| stored::typed(&mut bond, d),
+            &mut |d| stored::typed(&mut rng, d),
+        )
+        .map_err(serde::de::Error::custom)?;
+        // `read` refuses a map without them.
+        let (Some(law), Some(bond), Some(rng)) = (law, bond, rng) else {
+            return Err(serde::de::Error::custom("a fixed-step engine's law, bond or generator is missing"));
+        };
+        Ok(FixedEngine {
+            law,
+            bond,
+            flip: PhantomData,
+            formation: u.formation,
+            plate: u.plate,
+            integrator: u.integrator,
+            rng,
+            dt: u.dt,
+            relax: u.relax,
+            unstretched: u.unstretched,
+            strong_off_threshold: u.strong_off_threshold,
+            steps: u.steps,
+            plate_x: u.plate_x,
+            plate_v: u.plate_v,
+            q: u.q,
+            x: u.x,
+            pending_dx: u.pending_dx,
+            pending_relax: u.pending_relax,
+            attached: u.attached,
+            ruptures: u.ruptures,
+            formations: u.formations,
+            team: None,
+            kept: Vec::new(),
+        })
+    }
 }
 
 /// What one pass over the junctions found.
@@ -137,6 +233,7 @@ where
             ruptures: 0,
             formations: 0,
             team: None,
+            kept: Vec::new(),
         })
     }
 
@@ -176,14 +273,14 @@ where
     /// `F_b = sum_i q_i f^x(x_i)` with the new `q`, summed chunk by chunk ([`total`]).
     ///
     /// Each chunk is [`pass_chunk`] from the generator's state at its first draw. Alone, or
-    /// when the observer wants events (reported in index order), the chunks go in order on
-    /// this thread and the generator runs through them; with a team, chunk `c` starts from
-    /// the step's state skipped by `c CHUNK` draws, the team's threads take the chunks, and
-    /// the generator then skips the step's `N` draws. The thresholds shared by many
-    /// junctions are moved to the raw scale once per step ([`Flip::raw_threshold`], exact),
-    /// so a draw is compared without its division.
+    /// when events are wanted (handed on chunk by chunk, in index order), the chunks go in
+    /// order on this thread and the generator runs through them; with a team, chunk `c`
+    /// starts from the step's state skipped by `c CHUNK` draws, the team's threads take the
+    /// chunks, and the generator then skips the step's `N` draws. The thresholds shared by
+    /// many junctions are moved to the raw scale once per step ([`Flip::raw_threshold`],
+    /// exact), so a draw is compared without its division.
     #[inline(always)]
-    fn junction_pass<O: Observer>(&mut self, t: f64, on_threshold: f64, obs: &mut O) -> Pass {
+    fn junction_pass<E: Events>(&mut self, t: f64, on_threshold: f64, events: &mut E) -> Pass {
         let params = StepParams {
             law: self.law,
             bond: self.bond,
@@ -197,7 +294,7 @@ where
         };
         let chunks = self.q.chunks_mut(CHUNK).zip(self.x.chunks_mut(CHUNK));
         let sums: Vec<ChunkSums> = match &self.team {
-            Some(team) if !O::EVENTS => {
+            Some(team) if !E::ON => {
                 let mut start = self.rng.clone();
                 let items = chunks.map(|(qs, xs)| {
                     let rng = start.clone();
@@ -205,18 +302,12 @@ where
                     (rng, qs, xs)
                 });
                 let sums = team.map(items, |c, (mut rng, qs, xs)| {
-                    pass_chunk::<L, B, R, F, Nothing>(&params, &mut rng, qs, xs, c * CHUNK, &mut Nothing)
+                    pass_chunk::<L, B, R, F, NoEvents>(&params, &mut rng, qs, xs, c * CHUNK, &mut NoEvents)
                 });
                 self.rng = start;
                 sums
             }
-            _ => {
-                let rng = &mut self.rng;
-                chunks
-                    .enumerate()
-                    .map(|(c, (qs, xs))| pass_chunk::<L, B, R, F, O>(&params, rng, qs, xs, c * CHUNK, obs))
-                    .collect()
-            }
+            _ => pass_in_order::<L, B, R, F, E>(&params, &mut self.rng, &mut self.q, &mut self.x, events),
         };
         let sum = total(sums.iter().map(|c| c.sum));
         let ruptures: u64 = sums.iter().map(|c| c.ruptures).sum();
@@ -294,13 +385,37 @@ where
         self.integrator == Integrator::Kinematic
     }
 
-    /// One step from `t_n` to `t_{n+1}`: flips, `F_b`, plate, pending junction update.
+    /// One step from `t_n` to `t_{n+1}`: flips, `F_b`, plate, pending junction update; the
+    /// observer gets the step's events (if it wants them) and then its segment.
+    ///
+    /// The step itself ([`FixedEngine::step_with`]) does not depend on the observer, so it
+    /// is compiled twice per engine type (with and without events), not once per observer.
     #[inline]
     fn step<O: Observer>(&mut self, obs: &mut O) -> Result<(), EngineError> {
+        let segment = if O::EVENTS {
+            let mut to = |events: &[JunctionEvent]| {
+                for e in events {
+                    obs.event(e);
+                }
+            };
+            let mut events = ChunkEvents { kept: std::mem::take(&mut self.kept), to: &mut to };
+            let segment = self.step_with(&mut events);
+            self.kept = events.kept;
+            segment?
+        } else {
+            self.step_with(&mut NoEvents)?
+        };
+        obs.segment(&segment);
+        Ok(())
+    }
+
+    /// One step, its events put in `events`; returns the step's segment.
+    #[inline(never)]
+    fn step_with<E: Events>(&mut self, events: &mut E) -> Result<Segment, EngineError> {
         let t = self.steps as f64 * self.dt;
         let t_next = (self.steps + 1) as f64 * self.dt;
         let on_threshold = F::threshold(self.formation.k_on(self.plate_v) * self.dt);
-        let pass = self.junction_pass(t, on_threshold, obs);
+        let pass = self.junction_pass(t, on_threshold, events);
         let state = PlateState { t, t_next, x: self.plate_x, v: self.plate_v, bond_force: pass.bond_force };
         let next = self.integrator.step(&self.plate, self.dt, state, |dx| self.bond_force_moved(dx, pass));
         for (quantity, value) in [("X", next.x), ("Xd", next.v)] {
@@ -309,7 +424,7 @@ where
             }
         }
         let kinematic = self.kinematic();
-        obs.segment(&Segment {
+        let segment = Segment {
             t0: t,
             t1: t_next,
             friction: if kinematic { pass.bond_force } else { self.friction(t) },
@@ -317,14 +432,14 @@ where
             bond_force: pass.bond_force,
             viscous: self.plate.eta * next.viscous_v,
             attached: self.attached,
-        });
+        };
         // Kinematic: attached junctions move by exactly V dt per step.
         self.pending_dx = if kinematic { self.plate.v * self.dt } else { next.x - self.plate_x };
         self.pending_relax = self.relax;
         self.plate_x = next.x;
         self.plate_v = next.v;
         self.steps += 1;
-        Ok(())
+        Ok(segment)
     }
 }
 
@@ -392,7 +507,7 @@ mod tests {
     use super::*;
     use crate::engine::fixed::flip::LinearFlip;
     use crate::observe::Recorder;
-    use crate::physics::{Linear, Strong};
+    use crate::physics::{Formation, Linear, Plate, Strong};
     use crate::rng::ParkMiller;
     use crate::test_scenes as testkit;
 
@@ -423,6 +538,110 @@ mod tests {
                 let want = if old.0 { old.1 + dx } else { old.1 * relax };
                 assert_eq!(now.1, want, "junction {i}");
             }
+        }
+    }
+
+    /// The stored form is the map a derived serde implementation of the engine's fields
+    /// writes (`Derived`, the fields in declaration order): the same bytes, read back by
+    /// either; and a map with a field missing or repeated is refused.
+    #[test]
+    fn stored_form_is_the_derived_map() {
+        #[derive(Serialize, Deserialize)]
+        struct Derived<L, B, R> {
+            law: L,
+            bond: B,
+            flip: PhantomData<()>,
+            formation: Formation,
+            plate: Plate,
+            integrator: Integrator,
+            rng: R,
+            dt: f64,
+            relax: f64,
+            unstretched: bool,
+            strong_off_threshold: f64,
+            steps: u64,
+            plate_x: f64,
+            plate_v: f64,
+            q: Vec<u8>,
+            x: Vec<f64>,
+            pending_dx: f64,
+            pending_relax: f64,
+            attached: u64,
+            ruptures: u64,
+            formations: u64,
+        }
+        use crate::output::state_codec::{decode, encode};
+        use crate::physics::{Tilted, Weak};
+        let s = testkit::fig1_with(&["run.engine=fixed", "junctions.force_law=tilted", "junctions.bond=weak"]);
+        let (law, bond) = (Tilted::from_scene(&s), Weak::from_scene(&s));
+        let mut e = FixedEngine::new(&s, law, bond, ParkMiller::new(9).unwrap(), LinearFlip);
+        e.advance(40.0, &mut crate::observe::Nothing).unwrap();
+        let d = Derived {
+            law: e.law,
+            bond: e.bond,
+            flip: PhantomData,
+            formation: e.formation,
+            plate: e.plate,
+            integrator: e.integrator,
+            rng: e.rng.clone(),
+            dt: e.dt,
+            relax: e.relax,
+            unstretched: e.unstretched,
+            strong_off_threshold: e.strong_off_threshold,
+            steps: e.steps,
+            plate_x: e.plate_x,
+            plate_v: e.plate_v,
+            q: e.q.clone(),
+            x: e.x.clone(),
+            pending_dx: e.pending_dx,
+            pending_relax: e.pending_relax,
+            attached: e.attached,
+            ruptures: e.ruptures,
+            formations: e.formations,
+        };
+        let (mut ours, mut derived) = (Vec::new(), Vec::new());
+        encode(&mut ours, &e).unwrap();
+        encode(&mut derived, &d).unwrap();
+        assert_eq!(ours, derived);
+        type E = FixedEngine<Tilted, Weak, ParkMiller, LinearFlip>;
+        let mut back: E = decode(&derived).unwrap();
+        let again: Derived<Tilted, Weak, ParkMiller> = decode(&ours).unwrap();
+        assert_eq!((again.steps, again.x.len()), (e.steps, e.x.len()));
+        let mut both = Vec::new();
+        encode(&mut both, &back).unwrap();
+        assert_eq!(both, ours);
+        // The restored engine goes on as the original does.
+        e.advance(60.0, &mut crate::observe::Nothing).unwrap();
+        back.advance(60.0, &mut crate::observe::Nothing).unwrap();
+        let bits = |e: &E| (e.sample().x.to_bits(), e.x.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), e.q.clone());
+        assert_eq!(bits(&back), bits(&e));
+
+        // Without `plate_v`, or with `steps` twice, or without the generator: refused.
+        let map = |drop: &str, twice: &str| -> Vec<u8> {
+            let v: serde_json::Value = serde_json::to_value(&d).unwrap();
+            let mut fields: Vec<(String, serde_json::Value)> = v
+                .as_object()
+                .unwrap()
+                .iter()
+                .filter(|(k, _)| k.as_str() != drop)
+                .map(|(k, v)| (k.clone(), v.clone()))
+                .collect();
+            if let Some(dup) = fields.iter().find(|(k, _)| k == twice).cloned() {
+                fields.push(dup);
+            }
+            let mut bytes = Vec::new();
+            let mut ser = rmp_serde::Serializer::new(&mut bytes).with_struct_map();
+            use serde::ser::SerializeMap;
+            let mut m = serde::Serializer::serialize_map(&mut ser, Some(fields.len())).unwrap();
+            for (k, v) in &fields {
+                m.serialize_entry(k, v).unwrap();
+            }
+            m.end().unwrap();
+            bytes
+        };
+        assert!(decode::<E>(&map("", "")).is_ok());
+        for (drop, twice) in [("plate_v", ""), ("", "steps"), ("rng", ""), ("", "law")] {
+            assert!(decode::<E>(&map(drop, twice)).is_err(), "without {drop:?}, twice {twice:?}");
         }
     }
 }

@@ -3,7 +3,7 @@
 //!
 //! - [`dispatch`] resolves the scene's options into type parameters once per run;
 //! - [`engine`] holds the state and the step, [`chunk`] the step's pass over one chunk of
-//!   junctions, [`team`] the threads that share the chunks;
+//!   junctions, [`team`] the threads that share the chunks, `stored` the state's serde form;
 //! - [`flip`] the flip rules, [`integrator`] the plate integrators, [`stability`] their
 //!   stability limits at a scene's parameters (`stickslip stability`).
 
@@ -12,6 +12,7 @@ pub mod engine;
 pub mod flip;
 pub mod integrator;
 pub mod stability;
+mod stored;
 pub mod team;
 
 pub use chunk::CHUNK;

@@ -74,10 +74,15 @@ impl Team {
             }
             drain();
         });
-        let mut done = done.into_inner().unwrap_or_else(|e| e.into_inner());
-        done.sort_unstable_by_key(|&(i, _)| i);
-        done.into_iter().map(|(_, t)| t).collect()
+        in_item_order(done.into_inner().unwrap_or_else(|e| e.into_inner()))
     }
+}
+
+/// The results without their item numbers, in item order. Outside [`Team::map`], so that
+/// the sort is compiled once per result type rather than once per caller.
+fn in_item_order<T>(mut done: Vec<(usize, T)>) -> Vec<T> {
+    done.sort_unstable_by_key(|&(i, _)| i);
+    done.into_iter().map(|(_, t)| t).collect()
 }
 
 #[cfg(test)]
