@@ -644,4 +644,64 @@ mod tests {
             assert!(decode::<E>(&map(drop, twice)).is_err(), "without {drop:?}, twice {twice:?}");
         }
     }
+
+    /// Over several chunks, a step's events come before its segment, in index order, one
+    /// per flip the counters count, each with the junction's state and extension after the
+    /// step; and the step without events (the team's path) leaves the same state.
+    #[test]
+    fn events_of_many_chunks_come_in_index_order_before_the_segment() {
+        use crate::observe::JunctionEvent;
+        use crate::physics::Weak;
+        struct Order(Vec<char>);
+        impl Observer for Order {
+            const EVENTS: bool = true;
+            fn event(&mut self, _: &JunctionEvent) {
+                self.0.push('e');
+            }
+            fn segment(&mut self, _: &Segment) {
+                self.0.push('s');
+            }
+        }
+        let n = 3 * CHUNK + 17;
+        let s = testkit::fig1_with(&[
+            "run.engine=fixed",
+            "junctions.force_law=linear",
+            "junctions.bond=weak",
+            &format!("junctions.n={n}"),
+            "junctions.initial=stationary",
+        ]);
+        let (law, bond) = (Linear::from_scene(&s), Weak::from_scene(&s));
+        let mut e = FixedEngine::new(&s, law, bond, ParkMiller::new(5).unwrap(), LinearFlip);
+        let mut quiet = e.clone();
+        for step in 0..6 {
+            let before = e.counters();
+            let mut before_step = e.clone();
+            let mut rec = Recorder::default();
+            e.step(&mut rec).unwrap();
+            quiet.step(&mut crate::observe::Nothing).unwrap();
+            let after = e.counters();
+            let flips = (after.ruptures - before.ruptures) + (after.formations - before.formations);
+            assert_eq!(rec.events.len() as u64, flips, "step {step}");
+            assert!(flips > 0 && rec.events.last().unwrap().junction as usize > CHUNK);
+            assert!(rec.events.windows(2).all(|w| w[0].junction < w[1].junction));
+            assert_eq!(rec.segments.len(), 1);
+            // The same step's calls in the order they came: every event before the segment.
+            let mut order = Order(Vec::new());
+            before_step.step(&mut order).unwrap();
+            assert_eq!(order.0.len() as u64, flips + 1);
+            assert!(order.0[..flips as usize].iter().all(|&c| c == 'e') && order.0.last() == Some(&'s'));
+            for ev in &rec.events {
+                let i = ev.junction as usize;
+                assert_eq!(ev.t, rec.segments[0].t0);
+                assert_eq!(e.is_attached(i), ev.kind == crate::observe::EventKind::Formation);
+                assert_eq!(ev.extension.to_bits(), e.x[i].to_bits());
+                assert_eq!(ev.tension, law.tension(ev.extension));
+            }
+            assert_eq!(
+                quiet.x.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                e.x.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+            );
+            assert_eq!((quiet.q.clone(), quiet.plate_x.to_bits()), (e.q.clone(), e.plate_x.to_bits()));
+        }
+    }
 }
