@@ -239,7 +239,8 @@ fn update_block<L: ForceLaw, B: Bond, R: UniformSource, F: Flip, E: Events>(
 /// Weak bonds: whether each attached junction of a block flips, in index order of the
 /// attached, into `flips` (`1` or `0`): `xi_i < min(1, k_off(f(x_i(t_n))) dt)` (per the flip
 /// rule). The attached junctions' `x_i(t_n)` and draws are packed first (no branch on
-/// `q_i`), then their rates computed in a loop of their own.
+/// `q_i`), then their tensions computed together ([`ForceLaw::tension_many`]) and their rates
+/// in a loop of their own.
 #[inline(always)]
 fn weak_attached_flips<L: ForceLaw, B: Bond, R: UniformSource, F: Flip>(
     s: &StepParams<L, B>,
@@ -256,8 +257,10 @@ fn weak_attached_flips<L: ForceLaw, B: Bond, R: UniformSource, F: Flip>(
         r_at[k] = r;
         k += usize::from(q);
     }
-    for ((f, &x), &r) in flips.iter_mut().zip(&x_at[..k]).zip(&r_at[..k]) {
-        *f = u8::from(F::flips(R::to_uniform(r), F::threshold(s.bond.k_off(s.law.tension(x)) * s.dt)));
+    let tensions = &mut x_at[..k];
+    s.law.tension_many(tensions);
+    for ((f, &tension), &r) in flips.iter_mut().zip(&*tensions).zip(&r_at[..k]) {
+        *f = u8::from(F::flips(R::to_uniform(r), F::threshold(s.bond.k_off(tension) * s.dt)));
     }
 }
 

@@ -155,6 +155,14 @@ pub trait ForceLaw: Copy + Send + Sync + std::fmt::Debug + Serialize + Deseriali
             *x = self.force_x(*x);
         }
     }
+    /// [`ForceLaw::tension`] of every element of `xs`, in place, with the bits of one at a
+    /// time (a law may compute several at once, as [`ForceLaw::force_x_many`]).
+    #[inline]
+    fn tension_many(&self, xs: &mut [f64]) {
+        for x in xs {
+            *x = self.tension(*x);
+        }
+    }
     /// `d f^x / dx`, the junction's horizontal stiffness.
     fn stiffness_x(&self, x: f64) -> f64;
     /// `c >= 0` with `f(x) <= c |x|` for every `x`.
@@ -176,6 +184,12 @@ pub fn check_law<L: ForceLaw>(law: &L, xs: &[f64]) -> Result<(), String> {
         }
         if !(f >= 0.0 && f <= c * x.abs() * (1.0 + 1e-15)) {
             return Err(format!("{}: f({x}) = {f} is not in [0, c |x|] with c = {c}", L::NAME));
+        }
+        let (mut many_f, mut many_fx) = ([x; 5], [x; 5]);
+        law.tension_many(&mut many_f);
+        law.force_x_many(&mut many_fx);
+        if many_f.iter().any(|v| v.to_bits() != f.to_bits()) || many_fx.iter().any(|v| v.to_bits() != fx.to_bits()) {
+            return Err(format!("{}: tension_many or force_x_many at {x} disagrees with tension/force_x", L::NAME));
         }
         let k = law.stiffness_x(x);
         if !(k >= lo - 1e-15 * lo.abs() && k <= hi + 1e-15 * hi.abs()) {
