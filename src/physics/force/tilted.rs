@@ -22,6 +22,40 @@ impl Tilted {
     }
 }
 
+impl Tilted {
+    /// `one` of every element of `xs`, in place, four at a time: `l` from
+    /// [`hypot::common4`] (the C library's bits, vectorised) and then `with_l(x, l)`, the
+    /// same operations as `one`. A group of four with an argument outside `hypot`'s common
+    /// range, the remainder, and every element under a C library whose `hypot` differs
+    /// ([`hypot::matches_library`]) are done one at a time.
+    #[inline(always)]
+    fn four_at_a_time(&self, xs: &mut [f64], one: impl Fn(f64) -> f64, with_l: impl Fn(f64, f64) -> f64) {
+        if !hypot::matches_library() {
+            for x in xs {
+                *x = one(*x);
+            }
+            return;
+        }
+        let mut groups = xs.chunks_exact_mut(4);
+        for group in &mut groups {
+            let group: &mut [f64; 4] = group.try_into().unwrap();
+            let x = *group;
+            let (l, in_range) = hypot::common4(x, self.l0);
+            for i in 0..4 {
+                group[i] = with_l(x[i], l[i]);
+            }
+            if !in_range {
+                for i in 0..4 {
+                    group[i] = one(x[i]);
+                }
+            }
+        }
+        for x in groups.into_remainder() {
+            *x = one(*x);
+        }
+    }
+}
+
 impl ForceLaw for Tilted {
     const NAME: &'static str = "tilted";
     const STIFFNESS_NOTE: &'static str = "the tilted law's junction stiffness never exceeds kappa";
@@ -48,62 +82,15 @@ impl ForceLaw for Tilted {
         let f = self.kappa * s;
         (f, f * (x / l))
     }
-    /// [`ForceLaw::force_x`] four at a time: `l` from [`hypot::common4`] (the C library's
-    /// bits, vectorised), the rest the same operations as one at a time; a group of four
-    /// with an argument outside `hypot`'s common range, or a C library whose `hypot` differs
-    /// ([`hypot::matches_library`]), is done one at a time.
+    /// [`ForceLaw::force_x`] four at a time (`l` from the vectorised `hypot::common4`, the same bits).
     #[inline]
     fn force_x_many(&self, xs: &mut [f64]) {
-        if !hypot::matches_library() {
-            for x in xs {
-                *x = self.force_x(*x);
-            }
-            return;
-        }
-        let mut groups = xs.chunks_exact_mut(4);
-        for group in &mut groups {
-            let group: &mut [f64; 4] = group.try_into().unwrap();
-            let x = *group;
-            let (l, in_range) = hypot::common4(x, self.l0);
-            for i in 0..4 {
-                group[i] = self.kappa * (x[i] * x[i] / (l[i] + self.l0)) * (x[i] / l[i]);
-            }
-            if !in_range {
-                for i in 0..4 {
-                    group[i] = self.force_x(x[i]);
-                }
-            }
-        }
-        for x in groups.into_remainder() {
-            *x = self.force_x(*x);
-        }
+        self.four_at_a_time(xs, |x| self.force_x(x), |x, l| self.kappa * (x * x / (l + self.l0)) * (x / l));
     }
-    /// [`ForceLaw::tension`] four at a time, as [`Tilted::force_x_many`] does `f^x`.
+    /// [`ForceLaw::tension`] four at a time (`l` from the vectorised `hypot::common4`, the same bits).
     #[inline]
     fn tension_many(&self, xs: &mut [f64]) {
-        if !hypot::matches_library() {
-            for x in xs {
-                *x = self.tension(*x);
-            }
-            return;
-        }
-        let mut groups = xs.chunks_exact_mut(4);
-        for group in &mut groups {
-            let group: &mut [f64; 4] = group.try_into().unwrap();
-            let x = *group;
-            let (l, in_range) = hypot::common4(x, self.l0);
-            for i in 0..4 {
-                group[i] = self.kappa * (x[i] * x[i] / (l[i] + self.l0));
-            }
-            if !in_range {
-                for i in 0..4 {
-                    group[i] = self.tension(x[i]);
-                }
-            }
-        }
-        for x in groups.into_remainder() {
-            *x = self.tension(*x);
-        }
+        self.four_at_a_time(xs, |x| self.tension(x), |x, l| self.kappa * (x * x / (l + self.l0)));
     }
     /// `d/dx [kappa x (1 - l0/l)] = kappa (1 - l0^3 / l^3)`.
     #[inline]
