@@ -77,8 +77,8 @@ pub struct FixedEngine<L, B, R, F> {
 }
 
 /// The chunks' passes one after the other on this thread, the generator running through
-/// them. A function of its own (never inlined), so that the loop is compiled the same way
-/// whatever else the crate holds.
+/// them. A function of its own (never inlined): its loop is compiled once per engine type
+/// and kind of events, not inside each caller.
 #[inline(never)]
 fn pass_in_order<L: ForceLaw, B: Bond, R: UniformSource, F: Flip, E: Events>(
     params: &StepParams<L, B>,
@@ -292,10 +292,10 @@ where
             on_cut: F::raw_threshold::<R>(on_threshold),
             keep_formed: if self.unstretched { 0 } else { !0u64 },
         };
-        let chunks = self.q.chunks_mut(CHUNK).zip(self.x.chunks_mut(CHUNK));
         let sums: Vec<ChunkSums> = match &self.team {
             Some(team) if !E::ON => {
                 let mut start = self.rng.clone();
+                let chunks = self.q.chunks_mut(CHUNK).zip(self.x.chunks_mut(CHUNK));
                 let items = chunks.map(|(qs, xs)| {
                     let rng = start.clone();
                     start.skip(qs.len() as u64);

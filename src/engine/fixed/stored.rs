@@ -41,6 +41,9 @@ pub(super) const FIELDS: [&str; 21] = [
     "formations",
 ];
 
+/// The typed fields, in the order of [`Typed`]'s three functions.
+const TYPED: [&str; 3] = ["law", "bond", "rng"];
+
 /// An engine's fields as written, the typed ones type-erased.
 #[derive(Serialize)]
 #[serde(rename = "FixedEngine")]
@@ -137,6 +140,7 @@ impl<'de> Visitor<'de> for EngineVisitor<'_, 'de> {
     }
 
     fn visit_map<A: MapAccess<'de>>(mut self, mut map: A) -> Result<Untyped, A::Error> {
+        // Whether each of `TYPED` was read.
         let mut typed = [false; 3];
         let (mut formation, mut plate, mut integrator) = (None, None, None);
         let (mut dt, mut relax, mut unstretched, mut strong_off_threshold) = (None, None, None, None);
@@ -152,7 +156,7 @@ impl<'de> Visitor<'de> for EngineVisitor<'_, 'de> {
                         _ => (2, &mut self.rng),
                     };
                     if std::mem::replace(&mut typed[k], true) {
-                        return Err(de::Error::duplicate_field(FIELDS[[0, 1, 6][k]]));
+                        return Err(de::Error::duplicate_field(TYPED[k]));
                     }
                     map.next_value_seed(Seed(f))?;
                 }
@@ -182,7 +186,7 @@ impl<'de> Visitor<'de> for EngineVisitor<'_, 'de> {
             }
         }
         if let Some(k) = typed.iter().position(|&seen| !seen) {
-            return Err(de::Error::missing_field(FIELDS[[0, 1, 6][k]]));
+            return Err(de::Error::missing_field(TYPED[k]));
         }
         fn need<T, E: de::Error>(v: Option<T>, name: &'static str) -> Result<T, E> {
             v.ok_or_else(|| E::missing_field(name))
