@@ -26,7 +26,14 @@ pub fn anchor_overflows(a: f64, c: f64) -> bool {
 /// `max(e_hi w0, e_lo w1)`.
 #[inline]
 pub fn bracket(w: [f64; 2], e_hi: f64, e_lo: f64) -> (f64, f64) {
-    ((w[0] / e_lo).max(w[1] / e_hi), (e_hi * w[0]).max(e_lo * w[1]))
+    bracket_within(w, w, e_hi, e_lo)
+}
+
+/// [`bracket`] for weights known only within `w_lo <= w <= w_hi` (each component): the
+/// lower end from `w_lo`, the upper from `w_hi`.
+#[inline]
+pub fn bracket_within(w_lo: [f64; 2], w_hi: [f64; 2], e_hi: f64, e_lo: f64) -> (f64, f64) {
+    ((w_lo[0] / e_lo).max(w_lo[1] / e_hi), (e_hi * w_hi[0]).max(e_lo * w_hi[1]))
 }
 
 /// Decides a candidate whose rate `r` (units of `k0`) lies in `[lo_r, hi_r]`, with the
@@ -56,14 +63,23 @@ const SQUEEZE_HI: f64 = 1.0 + 1e-9;
 /// `max(w0 / e_lo, w1 / e_hi)` and `max(e_hi w0, e_lo w1)`, and a uniform outside decides
 /// without the plate's position and its exponential (the margins of [`squeeze`]
 /// make both tests agree with the exact one). All factors stay finite: `|a y| <=
-/// FRAME_EXPONENT_LIMIT` and `|a c| <= EXPONENT_CAP`.
+/// FRAME_EXPONENT_LIMIT` and `|a c| <= EXPONENT_CAP`. The squeeze may take bounds
+/// `w_lo <= w <= w_hi` of the weights ([`bracket_within`]); the exact test asks for the
+/// weights themselves (`w()`), only then.
 #[inline]
-pub fn accept(ub: f64, w: [f64; 2], e_hi: f64, e_lo: f64, ey: impl FnOnce() -> f64) -> bool {
-    let (lo, hi) = bracket(w, e_hi, e_lo);
+pub fn accept(
+    ub: f64,
+    [w_lo, w_hi]: [[f64; 2]; 2],
+    e_hi: f64,
+    e_lo: f64,
+    ey: impl FnOnce() -> f64,
+    w: impl FnOnce() -> [f64; 2],
+) -> bool {
+    let (lo, hi) = bracket_within(w_lo, w_hi, e_hi, e_lo);
     match squeeze(ub, lo, hi) {
         Some(decided) => decided,
         None => {
-            let ey = ey();
+            let (w, ey) = (w(), ey());
             ub < (ey * w[0]).max(w[1] / ey)
         }
     }

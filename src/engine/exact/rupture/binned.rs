@@ -27,7 +27,11 @@
 //! anchors of attached junctions span a few units of `a c`: a junction stretched far
 //! ruptures at once) and are scanned in a small table.
 //!
-//! A member stores `exp(a c)` and its slot in the attached bag; the junction's record
+//! A member stores `exp(a c)` relative to its bin's bound, rounded to `f32`, and its slot
+//! in the attached bag: 8 bytes. The weights it decodes to are known within a relative
+//! `2^-22`, so the acceptance's squeeze uses them widened by that much, and a candidate the
+//! squeeze leaves undecided recomputes `exp(a c)` from the junction's anchor, as its
+//! insertion did: the decisions are those of the exact weights. The junction's record
 //! stores its position in its bin ([`Attached::bin`]), so a rupture, which has read the
 //! record, finds and removes the member in O(1); the bin is a function of `c`. The bins'
 //! buffers grow by doubling and shrink by half when a quarter full; the buffers a bin
@@ -75,19 +79,78 @@ const HALF: usize = (EXPONENT_CAP / H) as usize + 2;
 /// The position of a junction in no bin (its rate overflows: it ruptures at once).
 pub const UNBINNED: u32 = u32::MAX;
 
-/// A binned junction: `exp(a c)` and its slot in the attached bag.
+/// A binned junction in 8 bytes: its weight `e = exp(a c)` relative to its bin's bound
+/// `U1_j`, `r = e / U1_j` rounded to `f32` (in `(e^-h / MARGIN, 1]`), and its slot in the
+/// attached bag. The weights decoded from `r` ([`Member::bounds`]) serve the acceptance's
+/// squeeze; the exact test recomputes `e` from the junction's anchor.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[repr(C)]
 struct Member {
-    e: f64,
+    r: f32,
     slot: u32,
+}
+
+/// A bound on the relative error of a member's decoded weights: `r`'s rounding to `f32`
+/// (`2^-24`) and the few roundings of `f64` operations, four times over.
+const WEIGHT_ERROR: f64 = 1.0 / 4_194_304.0; // 2^-22
+
+impl Member {
+    /// The member of weight `e = exp(a c)` in a bin of bound `u1 = U1_j`, in `slot`.
+    #[inline(always)]
+    fn new(e: f64, u1: f64, slot: usize) -> Member {
+        Member { r: (e / u1) as f32, slot: slot as u32 }
+    }
+    /// `[w_lo, w_hi]`, bounds of its weights `w = [exp(-a c), exp(a c)]` (each component)
+    /// in a bin of bound `u1`: the decoded `w1 = r u1` and `w0 = 1 / w1`, each moved out by
+    /// [`WEIGHT_ERROR`].
+    #[inline(always)]
+    fn bounds(self, u1: f64) -> [[f64; 2]; 2] {
+        let w1 = f64::from(self.r) * u1;
+        let w0 = 1.0 / w1;
+        let (lo, hi) = (1.0 - WEIGHT_ERROR, 1.0 + WEIGHT_ERROR);
+        [[w0 * lo, w1 * lo], [w0 * hi, w1 * hi]]
+    }
 }
 
 /// The members of one bin and its bounds `[U0_j, U1_j]`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "StoredBin")]
 struct Bin {
     members: Vec<Member>,
     bound: [f64; 2],
+}
+
+/// A bin as a checkpoint holds it: its members as [`Member`], or as the earlier form that
+/// stored each member's `e = exp(a c)` itself (read into `r` as [`Member::new`] computes it).
+#[derive(Deserialize)]
+struct StoredBin {
+    members: Vec<StoredMember>,
+    bound: [f64; 2],
+}
+
+#[derive(Deserialize)]
+struct StoredMember {
+    #[serde(default)]
+    r: Option<f32>,
+    #[serde(default)]
+    e: Option<f64>,
+    slot: u32,
+}
+
+impl TryFrom<StoredBin> for Bin {
+    type Error = &'static str;
+    fn try_from(b: StoredBin) -> Result<Bin, &'static str> {
+        let members = b
+            .members
+            .into_iter()
+            .map(|m| match (m.r, m.e) {
+                (Some(r), None) => Ok(Member { r, slot: m.slot }),
+                (None, Some(e)) => Ok(Member::new(e, b.bound[1], m.slot as usize)),
+                _ => Err("a bin member needs exactly one of `r` and `e`"),
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Bin { members, bound: b.bound })
+    }
 }
 
 /// Candidates drawn ahead (a power of two, taken modulo with a mask).
@@ -202,19 +265,18 @@ impl BinnedRupture {
             h: Horizon::default(),
         })
     }
-    /// Bytes for `n` junctions: the bin table, and a member and a quarter per junction (20
-    /// bytes; runs of the bench's scene, where a third of the junctions are attached, hold
-    /// 17 to 18 bytes per junction at `N = 1e6` and `1e7`: the buffers grow by doubling and
-    /// shrink by half when a quarter full, and the spares hold at most a member per junction).
+    /// Bytes for `n` junctions: the bin table, and a member and a quarter per junction (10
+    /// bytes; the buffers grow by doubling and shrink by half when a quarter full, and the
+    /// spares hold at most a member per junction; docs/runs.md gives what runs hold).
     pub fn bytes_for(n: usize) -> u64 {
         ((2 * HALF + 1) * (size_of::<Bin>() + size_of::<[f64; 2]>())) as u64 + (n * size_of::<Member>() * 5 / 4) as u64
     }
     /// Bytes of the model in a checkpoint (MessagePack, structs as maps) for `n` junctions at
-    /// most: a member with its field names (22 bytes) per junction, and at most 96 bytes
+    /// most: a member with its field names (18 bytes) per junction, and at most 96 bytes
     /// per bin of the table (its bounds, 35 bytes, and when occupied its running sums and
     /// weights, 19 bytes each).
     pub fn encoded_bytes_for(n: usize) -> u64 {
-        22 * n as u64 + 96 * (2 * HALF + 1) as u64
+        18 * n as u64 + 96 * (2 * HALF + 1) as u64
     }
     /// The bin index of anchor `c` (`|a c| <= EXPONENT_CAP`).
     #[inline]
@@ -282,7 +344,7 @@ impl BinnedRupture {
         self.dirty = self.dirty.min(j);
         let bin = &mut self.bins[j];
         attached[slot].bin = bin.members.len() as u32;
-        let m = Member { e: (self.a * c).exp(), slot: slot as u32 };
+        let m = Member::new((self.a * c).exp(), bin.bound[1], slot);
         if bin.members.len() == bin.members.capacity() {
             grow(&mut bin.members, &mut self.spare);
         }
@@ -309,7 +371,7 @@ impl BinnedRupture {
                 let a = &attached[m.slot as usize];
                 assert_eq!(a.bin as usize, p);
                 assert_eq!(self.bin_of(a.c), i);
-                assert_eq!(m.e, (self.a * a.c).exp());
+                assert_eq!(*m, Member::new((self.a * a.c).exp(), bin.bound[1], m.slot as usize));
                 members += 1;
             }
         }
@@ -492,10 +554,17 @@ impl RuptureModel for BinnedRupture {
         let m = bin.members[index(t.pick, bin.members.len())];
         let (e_hi, e_lo) = (self.h.e_hi, self.h.e_lo);
         let b = self.bin_bound(j, e_hi, e_lo);
+        let bounds = m.bounds(bin.bound[1]);
         self.request(attached);
         let ub = rng.uniform() * b;
-        let slot = m.slot as usize;
-        law.accept(ub, [1.0 / m.e, m.e], e_hi, e_lo, self.a, y, || attached[slot].c).then_some(slot)
+        let (slot, a) = (m.slot as usize, self.a);
+        // The exact weights as the junction's insertion computed them (`exp(a c)`, its
+        // reciprocal), from its anchor: only for a candidate the bounds do not decide.
+        let exact = || {
+            let e = (a * attached[slot].c).exp();
+            [1.0 / e, e]
+        };
+        law.accept_within(ub, bounds, e_hi, e_lo, a, y, || attached[slot].c, exact).then_some(slot)
     }
     /// Re-bins every junction. The old bins' buffers are reused for the new ones (the
     /// smallest that holds a new bin's count), so a re-base holds no second copy of the
@@ -806,6 +875,109 @@ mod tests {
                 let loose = H.exp() * MARGIN * (1.0 + 1e-12);
                 assert!(u[0] <= w[0] * loose && u[1] <= w[1] * loose, "a {a} c {c}: {u:?} loose over {w:?}");
             }
+        }
+    }
+
+    /// A member's decoded bounds hold its exact weights `[exp(-a c), exp(a c)]` (each
+    /// component) and lie within a few [`WEIGHT_ERROR`] of them, for anchors across the
+    /// whole range and on either side of every bin's edges.
+    #[test]
+    fn members_bound_their_exact_weights() {
+        let mut rng = pcg(4);
+        for a in [1e-3, 0.1, 1.0, 37.0] {
+            let r = BinnedRupture::try_new(1.0, a, 64, &mut rng).unwrap();
+            let mut anchors: Vec<f64> = (0..20_000).map(|_| (rng.uniform() - 0.5) * 2.0 * EXPONENT_CAP / a).collect();
+            for j in -50i32..50 {
+                let edge = f64::from(j) * H / a;
+                anchors.extend([edge, edge.next_up(), edge.next_down()]);
+            }
+            for c in anchors {
+                let u1 = r.bins[r.bin_of(c)].bound[1];
+                let e = (a * c).exp();
+                let [lo, hi] = Member::new(e, u1, 7).bounds(u1);
+                for (k, w) in [1.0 / e, e].into_iter().enumerate() {
+                    assert!(lo[k] <= w && w <= hi[k], "a {a} c {c}: {w} outside [{}, {}]", lo[k], hi[k]);
+                    assert!(hi[k] <= w * (1.0 + 3.0 * WEIGHT_ERROR) && lo[k] >= w * (1.0 - 3.0 * WEIGHT_ERROR));
+                }
+            }
+        }
+    }
+
+    /// A candidate decided from its member's bounds gets the decision of its exact weights,
+    /// with either law, for uniforms spread over the rate's bracket and crowded at its ends
+    /// and at the rate itself (horizons of one position included, where the bracket is the
+    /// rate).
+    #[test]
+    fn bounds_decide_as_the_exact_weights() {
+        use crate::engine::exact::rupture::accept::bracket;
+        use crate::engine::exact::rupture::rate::TiltedRate;
+        use crate::physics::{ForceLaw, Tilted};
+        let mut rng = pcg(6);
+        let a = 0.7;
+        let r = BinnedRupture::try_new(1.0, a, 64, &mut rng).unwrap();
+        let tilted = TiltedRate::new(Tilted { kappa: a, l0: 0.5 }, 1.0);
+        for i in 0..40_000 {
+            let c = (rng.uniform() - 0.5) * 40.0;
+            let u1 = r.bins[r.bin_of(c)].bound[1];
+            let e = (a * c).exp();
+            let (w, bounds) = ([1.0 / e, e], Member::new(e, u1, 0).bounds(u1));
+            let y_lo = c + (rng.uniform() - 0.5) * 8.0;
+            let y_hi = if i % 4 == 0 { y_lo } else { y_lo + rng.uniform() / a };
+            let y = y_lo + (y_hi - y_lo) * rng.uniform();
+            let (e_hi, e_lo) = ((a * y_hi).exp(), (-a * y_lo).exp());
+            let (lo, hi) = bracket(w, e_hi, e_lo);
+            let rates = [(a * (y - c).abs()).exp(), tilted.law.tension(y - c).exp()];
+            let mut ubs = vec![rng.uniform() * hi * 1.2];
+            for x in [lo, hi, rates[0], rates[1]] {
+                ubs.extend([-1e-7, -1e-8, -1e-15, 0.0, 1e-15, 1e-8, 1e-7].map(|d| x * (1.0 + d)));
+            }
+            for ub in ubs {
+                let exact = LinearRate.accept(ub, w, e_hi, e_lo, a, || y, || c);
+                assert_eq!(
+                    exact,
+                    LinearRate.accept_within(ub, bounds, e_hi, e_lo, a, || y, || c, || w),
+                    "c {c} y {y} ub {ub}"
+                );
+                let exact = tilted.accept(ub, w, e_hi, e_lo, a, || y, || c);
+                assert_eq!(
+                    exact,
+                    tilted.accept_within(ub, bounds, e_hi, e_lo, a, || y, || c, || w),
+                    "c {c} y {y} ub {ub}"
+                );
+            }
+        }
+    }
+
+    /// A checkpoint's bin in the earlier form (each member's `e = exp(a c)`) reads as the
+    /// members the current form holds; the current form reads back as written; a member
+    /// with both weights or neither is refused.
+    #[test]
+    fn stored_bins_read_in_either_form() {
+        #[derive(Serialize)]
+        struct Old {
+            #[serde(skip_serializing_if = "Option::is_none")]
+            e: Option<f64>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            r: Option<f32>,
+            slot: u32,
+        }
+        #[derive(Serialize)]
+        struct OldBin {
+            members: Vec<Old>,
+            bound: [f64; 2],
+        }
+        let bound = [(-3.0 * H).exp() * MARGIN, (4.0 * H).exp() * MARGIN];
+        let es = [(3.0 * H).exp(), (3.5 * H).exp(), (4.0 * H).exp().next_down()];
+        let encode = |members: Vec<Old>| rmp_serde::to_vec_named(&OldBin { members, bound }).unwrap();
+        let old = encode(es.iter().zip(0..).map(|(&e, slot)| Old { e: Some(e), r: None, slot }).collect());
+        let bin: Bin = rmp_serde::from_slice(&old).unwrap();
+        let want: Vec<Member> = es.iter().enumerate().map(|(slot, &e)| Member::new(e, bound[1], slot)).collect();
+        assert_eq!(bin, Bin { members: want, bound });
+        let back: Bin = rmp_serde::from_slice(&rmp_serde::to_vec_named(&bin).unwrap()).unwrap();
+        assert_eq!(back, bin);
+        for (e, r) in [(Some(1.0), Some(1.0)), (None, None)] {
+            let bad = encode(vec![Old { e, r, slot: 0 }]);
+            assert!(rmp_serde::from_slice::<Bin>(&bad).is_err());
         }
     }
 

@@ -5,13 +5,13 @@
 //! - [`LinearRate`]: `f = kappa |x|`, the rate is the envelope itself,
 //!   `r / k0 = e^{a |y - c|} = max(exp(a y) w0, w1 / exp(a y))` ([`accept`]).
 //! - [`TiltedRate`]: `f(x) = kappa (sqrt(x^2 + l0^2) - l0)`, so `|x| - l0 <= f / kappa <= |x|`
-//!   and `max(1, e^{-a l0} lo) <= r / k0 <= hi` with `lo`, `hi` the envelope's [`bracket`]:
+//!   and `max(1, e^{-a l0} lo) <= r / k0 <= hi` with `lo`, `hi` the envelope's [`bracket`](super::accept::bracket):
 //!   the squeeze decides most candidates without the plate's position, the junction or an
 //!   exponential; the rest take `exp(beta dx f(y - c))`.
 
 use serde::{Deserialize, Serialize};
 
-use super::accept::{EXPONENT_CAP, accept, bracket, squeeze};
+use super::accept::{EXPONENT_CAP, accept, bracket_within, squeeze};
 use crate::physics::{ForceLaw, Tilted};
 
 /// The acceptance of a weak-bond rupture candidate (units of `k0`).
@@ -21,23 +21,6 @@ pub trait RuptureRate: Copy + std::fmt::Debug {
     /// `c()` the junction's anchor (each asked for only if needed). An overflowing rate
     /// (exponent beyond [`EXPONENT_CAP`]) is accepted.
     #[allow(clippy::too_many_arguments)]
-    fn accept(
-        &self,
-        ub: f64,
-        w: [f64; 2],
-        e_hi: f64,
-        e_lo: f64,
-        a: f64,
-        y: impl FnOnce() -> f64,
-        c: impl FnOnce() -> f64,
-    ) -> bool;
-}
-
-/// The linear law: the rate is the envelope.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct LinearRate;
-
-impl RuptureRate for LinearRate {
     #[inline(always)]
     fn accept(
         &self,
@@ -47,9 +30,46 @@ impl RuptureRate for LinearRate {
         e_lo: f64,
         a: f64,
         y: impl FnOnce() -> f64,
-        _c: impl FnOnce() -> f64,
+        c: impl FnOnce() -> f64,
     ) -> bool {
-        accept(ub, w, e_hi, e_lo, || (a * y()).exp())
+        self.accept_within(ub, [w, w], e_hi, e_lo, a, y, c, || w)
+    }
+
+    /// [`RuptureRate::accept`] for a candidate whose weights are known only within bounds
+    /// `w_lo <= w <= w_hi` (`bounds = [w_lo, w_hi]`, each component), and exactly from `w()`,
+    /// asked for only if the bounds do not decide: the same decision.
+    #[allow(clippy::too_many_arguments)]
+    fn accept_within(
+        &self,
+        ub: f64,
+        bounds: [[f64; 2]; 2],
+        e_hi: f64,
+        e_lo: f64,
+        a: f64,
+        y: impl FnOnce() -> f64,
+        c: impl FnOnce() -> f64,
+        w: impl FnOnce() -> [f64; 2],
+    ) -> bool;
+}
+
+/// The linear law: the rate is the envelope.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LinearRate;
+
+impl RuptureRate for LinearRate {
+    #[inline(always)]
+    fn accept_within(
+        &self,
+        ub: f64,
+        bounds: [[f64; 2]; 2],
+        e_hi: f64,
+        e_lo: f64,
+        a: f64,
+        y: impl FnOnce() -> f64,
+        _c: impl FnOnce() -> f64,
+        w: impl FnOnce() -> [f64; 2],
+    ) -> bool {
+        accept(ub, bounds, e_hi, e_lo, || (a * y()).exp(), w)
     }
 }
 
@@ -75,17 +95,18 @@ impl TiltedRate {
 
 impl RuptureRate for TiltedRate {
     #[inline(always)]
-    fn accept(
+    fn accept_within(
         &self,
         ub: f64,
-        w: [f64; 2],
+        [w_lo, w_hi]: [[f64; 2]; 2],
         e_hi: f64,
         e_lo: f64,
         _a: f64,
         y: impl FnOnce() -> f64,
         c: impl FnOnce() -> f64,
+        _w: impl FnOnce() -> [f64; 2],
     ) -> bool {
-        let (lo, hi) = bracket(w, e_hi, e_lo);
+        let (lo, hi) = bracket_within(w_lo, w_hi, e_hi, e_lo);
         if hi <= SQUEEZE_RATE_MAX {
             if let Some(decided) = squeeze(ub, (self.shrink * lo).max(1.0), hi) {
                 return decided;
@@ -98,6 +119,7 @@ impl RuptureRate for TiltedRate {
 
 #[cfg(test)]
 mod tests {
+    use super::super::accept::bracket;
     use super::*;
     use crate::rng::{UniformSource, pcg};
 
