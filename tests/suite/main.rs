@@ -21,6 +21,7 @@ mod fixed_convergence;
 mod fixed_scheme;
 mod fixed_statistics;
 mod friction_law;
+mod house;
 mod kinds;
 mod kinematic;
 mod law_extension;
