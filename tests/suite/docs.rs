@@ -49,23 +49,26 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// Every file under `dir` (recursively) whose extension is one of `exts`, appended to `out`
+/// (an unreadable directory adds none). Also the source tree's check (`house`).
+pub(crate) fn files_under(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            files_under(&p, exts, out);
+        } else if p.extension().and_then(|x| x.to_str()).is_some_and(|x| exts.contains(&x)) {
+            out.push(p);
+        }
+    }
+}
+
 /// The files scanned, relative to the root: `README.md`, then every file under
 /// [`SCANNED`], sorted.
 fn scanned_files(root: &Path) -> Vec<PathBuf> {
-    fn walk(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {
-        let Ok(entries) = std::fs::read_dir(dir) else { return };
-        for e in entries.flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                walk(&p, exts, out);
-            } else if p.extension().and_then(|x| x.to_str()).is_some_and(|x| exts.contains(&x)) {
-                out.push(p);
-            }
-        }
-    }
     let mut files = vec![root.join("README.md")];
     for (dir, exts) in SCANNED {
-        walk(&root.join(dir), exts, &mut files);
+        files_under(&root.join(dir), exts, &mut files);
     }
     let this = root.join(file!());
     let mut rel: Vec<PathBuf> =

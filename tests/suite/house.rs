@@ -15,18 +15,6 @@ fn src() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src")
 }
 
-/// Every `.rs` file under `dir`.
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).expect("src/ is readable") {
-        let path = entry.expect("a directory entry").path();
-        if path.is_dir() {
-            rust_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path);
-        }
-    }
-}
-
 /// The module a file holds: `a/b.rs` and `a/b/mod.rs` hold `[a, b]`; `lib.rs` and `main.rs`
 /// the crate's root, `[]`.
 fn module_of(rel: &Path) -> Vec<String> {
@@ -83,8 +71,9 @@ fn resolve(cur: &[String], path: &str, modules: &BTreeSet<Vec<String>>) -> Optio
 fn source_files_stay_short_and_import_no_cycles() {
     let root = src();
     let mut files = Vec::new();
-    rust_files(&root, &mut files);
+    crate::docs::files_under(&root, &["rs"], &mut files);
     files.sort();
+    assert!(files.len() > 100, "src/ read: {} files", files.len());
     let mut problems = Vec::new();
     let mut modules = BTreeMap::new();
     for f in &files {

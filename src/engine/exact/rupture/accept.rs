@@ -24,15 +24,11 @@ pub fn anchor_overflows(a: f64, c: f64) -> bool {
 /// `e^{a |y - c|}` for every plate position `y_lo <= y <= y_hi` (factors `e_hi = exp(a y_hi)`,
 /// `e_lo = exp(-a y_lo)`): it lies between `max(w0 / e_lo, w1 / e_hi)` and
 /// `max(e_hi w0, e_lo w1)`.
+///
+/// For weights known only within `w_lo <= w <= w_hi` (each component; `w_lo = w_hi = w` when
+/// exact), the lower end is taken from `w_lo` and the upper from `w_hi`.
 #[inline]
-pub fn bracket(w: [f64; 2], e_hi: f64, e_lo: f64) -> (f64, f64) {
-    bracket_within(w, w, e_hi, e_lo)
-}
-
-/// [`bracket`] for weights known only within `w_lo <= w <= w_hi` (each component): the
-/// lower end from `w_lo`, the upper from `w_hi`.
-#[inline]
-pub fn bracket_within(w_lo: [f64; 2], w_hi: [f64; 2], e_hi: f64, e_lo: f64) -> (f64, f64) {
+pub fn bracket(w_lo: [f64; 2], w_hi: [f64; 2], e_hi: f64, e_lo: f64) -> (f64, f64) {
     ((w_lo[0] / e_lo).max(w_lo[1] / e_hi), (e_hi * w_hi[0]).max(e_lo * w_hi[1]))
 }
 
@@ -64,7 +60,7 @@ const SQUEEZE_HI: f64 = 1.0 + 1e-9;
 /// without the plate's position and its exponential (the margins of [`squeeze`]
 /// make both tests agree with the exact one). All factors stay finite: `|a y| <=
 /// FRAME_EXPONENT_LIMIT` and `|a c| <= EXPONENT_CAP`. The squeeze may take bounds
-/// `w_lo <= w <= w_hi` of the weights ([`bracket_within`]); the exact test asks for the
+/// `w_lo <= w <= w_hi` of the weights ([`bracket`]); the exact test asks for the
 /// weights themselves (`w()`), only then.
 #[inline]
 pub fn accept(
@@ -75,7 +71,7 @@ pub fn accept(
     ey: impl FnOnce() -> f64,
     w: impl FnOnce() -> [f64; 2],
 ) -> bool {
-    let (lo, hi) = bracket_within(w_lo, w_hi, e_hi, e_lo);
+    let (lo, hi) = bracket(w_lo, w_hi, e_hi, e_lo);
     match squeeze(ub, lo, hi) {
         Some(decided) => decided,
         None => {

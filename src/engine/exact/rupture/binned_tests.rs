@@ -91,7 +91,7 @@ fn bounds_decide_as_the_exact_weights() {
         let y_hi = if i % 4 == 0 { y_lo } else { y_lo + rng.uniform() / a };
         let y = y_lo + (y_hi - y_lo) * rng.uniform();
         let (e_hi, e_lo) = ((a * y_hi).exp(), (-a * y_lo).exp());
-        let (lo, hi) = bracket(w, e_hi, e_lo);
+        let (lo, hi) = bracket(w, w, e_hi, e_lo);
         let rates = [(a * (y - c).abs()).exp(), tilted.law.tension(y - c).exp()];
         let mut ubs = vec![rng.uniform() * hi * 1.2];
         for x in [lo, hi, rates[0], rates[1]] {

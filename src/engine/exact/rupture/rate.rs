@@ -5,13 +5,13 @@
 //! - [`LinearRate`]: `f = kappa |x|`, the rate is the envelope itself,
 //!   `r / k0 = e^{a |y - c|} = max(exp(a y) w0, w1 / exp(a y))` ([`accept`]).
 //! - [`TiltedRate`]: `f(x) = kappa (sqrt(x^2 + l0^2) - l0)`, so `|x| - l0 <= f / kappa <= |x|`
-//!   and `max(1, e^{-a l0} lo) <= r / k0 <= hi` with `lo`, `hi` the envelope's [`bracket`](super::accept::bracket):
+//!   and `max(1, e^{-a l0} lo) <= r / k0 <= hi` with `lo`, `hi` the envelope's [`bracket`]:
 //!   the squeeze decides most candidates without the plate's position, the junction or an
 //!   exponential; the rest take `exp(beta dx f(y - c))`.
 
 use serde::{Deserialize, Serialize};
 
-use super::accept::{EXPONENT_CAP, accept, bracket_within, squeeze};
+use super::accept::{EXPONENT_CAP, accept, bracket, squeeze};
 use crate::physics::{ForceLaw, Tilted};
 
 /// The acceptance of a weak-bond rupture candidate (units of `k0`).
@@ -106,7 +106,7 @@ impl RuptureRate for TiltedRate {
         c: impl FnOnce() -> f64,
         _w: impl FnOnce() -> [f64; 2],
     ) -> bool {
-        let (lo, hi) = bracket_within(w_lo, w_hi, e_hi, e_lo);
+        let (lo, hi) = bracket(w_lo, w_hi, e_hi, e_lo);
         if hi <= SQUEEZE_RATE_MAX {
             if let Some(decided) = squeeze(ub, (self.shrink * lo).max(1.0), hi) {
                 return decided;
@@ -119,7 +119,6 @@ impl RuptureRate for TiltedRate {
 
 #[cfg(test)]
 mod tests {
-    use super::super::accept::bracket;
     use super::*;
     use crate::rng::{UniformSource, pcg};
 
@@ -140,7 +139,7 @@ mod tests {
                 let y_lo = (rng.uniform() - 0.5) * 4.0 / a;
                 let y_hi = y_lo + rng.uniform() / a;
                 let (e_hi, e_lo) = ((a * y_hi).exp(), (-a * y_lo).exp());
-                let (lo, hi) = bracket(w, e_hi, e_lo);
+                let (lo, hi) = bracket(w, w, e_hi, e_lo);
                 for j in 0..=16 {
                     let y = y_lo + (y_hi - y_lo) * j as f64 / 16.0;
                     let rate = (beta_dx * r.law.tension(y - c)).exp();
