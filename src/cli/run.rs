@@ -9,6 +9,7 @@ use super::stdout::emit;
 use crate::output::Summary;
 use crate::runner::{RunOptions, run_scene_with};
 use crate::scene::Scene;
+use crate::scene::error::compact;
 
 pub(crate) fn run(
     args: &SceneArgs,
@@ -98,11 +99,11 @@ pub(crate) fn summary_lines(s: &Summary, out: &Path) -> String {
         s.engine_name(),
         s.seed,
         s.n,
-        s.t_end,
+        compact(s.t_end.to_string()),
         s.friction_per_junction,
         s.friction_std,
-        s.t_warmup,
-        s.t_end,
+        compact(s.t_warmup.to_string()),
+        compact(s.t_end.to_string()),
         s.attached_fraction_mean,
         regime_text(s),
         s.counters.ruptures,

@@ -27,7 +27,18 @@ pub enum SceneError {
 
 impl SceneError {
     pub(crate) fn invalid(field: &'static str, value: impl std::fmt::Display, allowed: impl Into<String>) -> Self {
-        SceneError::Invalid { field, value: value.to_string(), allowed: allowed.into() }
+        SceneError::Invalid { field, value: compact(value.to_string()), allowed: allowed.into() }
+    }
+}
+
+/// A number's text as a message shows it: as `{}` writes it (the shortest text that reads
+/// back as the same `f64`), unless that is over 20 characters (magnitudes from `1e21`, or
+/// small ones with many digits), then in exponent form (`1e300`, `-2.5e-308`). Every
+/// integer of up to 20 digits (every `u64`) and every other text stay as they are.
+pub fn compact(s: String) -> String {
+    match s.parse::<f64>() {
+        Ok(x) if s.len() > 20 => format!("{x:e}"),
+        _ => s,
     }
 }
 
@@ -54,4 +65,23 @@ fn needs_escape(c: char) -> bool {
 /// Collapses a multi-line message into one line.
 pub(crate) fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::compact;
+
+    /// Long decimals read back as the same number in exponent form; integers of up to 20
+    /// digits, short decimals and other text are kept.
+    #[test]
+    fn long_numbers_are_shown_in_exponent_form() {
+        for x in [1e300, -1e300, 1e-300, 2.5e-308, 1.234_567_890_123_4e21, 1e-7_f64 / 3.0] {
+            let s = compact(x.to_string());
+            assert!(s.len() <= 24 && s.contains('e'), "{x}: {s}");
+            assert_eq!(s.parse::<f64>().unwrap().to_bits(), x.to_bits());
+        }
+        for s in ["18446744073709551615", "-9223372036854775808", "0.000001", "150", "1.5", "nan", "not a number"] {
+            assert_eq!(compact(s.to_string()), s);
+        }
+    }
 }

@@ -171,12 +171,22 @@ pub struct FixedParams {
 }
 
 impl FixedParams {
+    /// The fixed engine's slack, in steps: it steps while `n dt < t_stop - STEP_SLACK dt`, so
+    /// that `t_end = 150, dt = 1` is 150 steps, not 151.
+    pub const STEP_SLACK: f64 = 1e-9;
+
     /// Number of steps the fixed engine takes to cover `[0, t_end]`: `ceil(t_end/dt)`,
-    /// with a relative slack of 1e-9 so that `t_end = 150, dt = 1` is 150 steps, not 151.
+    /// with a relative slack of [`Self::STEP_SLACK`].
     pub fn steps_for(&self, t_end: f64) -> u64 {
         let ratio = t_end / self.dt;
         let r = ratio.round();
-        if (ratio - r).abs() <= 1e-9 * r.max(1.0) { r as u64 } else { ratio.ceil() as u64 }
+        if (ratio - r).abs() <= Self::STEP_SLACK * r.max(1.0) { r as u64 } else { ratio.ceil() as u64 }
+    }
+
+    /// The time up to which the engine, advancing to `t_stop`, takes its steps: it stops at
+    /// the first `n dt` at or past it.
+    pub fn step_limit(&self, t_stop: f64) -> f64 {
+        t_stop - Self::STEP_SLACK * self.dt
     }
 }
 

@@ -1,7 +1,7 @@
 //! Validation: [`SceneFile`] (what the user wrote) to [`Scene`] (typed, checked parameters).
 //! Defaults and allowed ranges here are the ones documented in `docs/scenes.md`.
 
-use super::error::SceneError;
+use super::error::{SceneError, compact};
 use super::file::SceneFile;
 use super::params::*;
 use super::thermal::{Coefficients, Reference, in_force};
@@ -123,7 +123,7 @@ impl SceneFile {
             return Err(SceneError::invalid(
                 "run.t_warmup",
                 t_warmup,
-                format!("must be less than run.t_end ({t_end})"),
+                format!("must be less than run.t_end ({})", compact(t_end.to_string())),
             ));
         }
         let run =
@@ -141,7 +141,33 @@ impl SceneFile {
                 return Err(SceneError::invalid(
                     "fixed.dt",
                     fixed.dt,
-                    format!("gives more than {STEPS_MAX:e} steps over run.t_end ({t_end})"),
+                    format!("gives more than {STEPS_MAX:e} steps over run.t_end ({})", compact(t_end.to_string())),
+                ));
+            }
+            // The engine steps up to `t_end - STEP_SLACK dt` (`FixedParams::step_limit`): a
+            // window that ends before its first step, or starts after its last, holds no
+            // step, and its averages would be 0 / 0.
+            let limit = fixed.step_limit(t_end);
+            if limit <= 0.0 {
+                return Err(SceneError::invalid(
+                    "run.t_end",
+                    t_end,
+                    format!(
+                        "must be more than {:e} fixed.dt = {} with run.engine = \"fixed\" (the engine steps up to run.t_end less that, so a shorter run takes no step)",
+                        FixedParams::STEP_SLACK,
+                        compact((FixedParams::STEP_SLACK * fixed.dt).to_string())
+                    ),
+                ));
+            }
+            if t_warmup >= limit {
+                return Err(SceneError::invalid(
+                    "run.t_warmup",
+                    t_warmup,
+                    format!(
+                        "must be less than run.t_end - {:e} fixed.dt = {} with run.engine = \"fixed\" (the engine steps up to that time, so a later window holds no step)",
+                        FixedParams::STEP_SLACK,
+                        compact(limit.to_string())
+                    ),
                 ));
             }
             // The relaxation step `x *= 1 - lambda dt` of detached junctions amplifies their
@@ -189,7 +215,7 @@ impl SceneFile {
             return Err(SceneError::invalid(
                 "output.sample_dt",
                 sample_dt,
-                format!("gives more than {SAMPLES_MAX:e} samples over run.t_end ({t_end})"),
+                format!("gives more than {SAMPLES_MAX:e} samples over run.t_end ({})", compact(t_end.to_string())),
             ));
         }
         // Last: a cost check across sections (plate, junctions, run), after every field is

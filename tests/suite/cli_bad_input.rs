@@ -176,6 +176,33 @@ fn warmup_not_before_the_end() {
     expect_bad_scene(&good_with("run", "t_warmup = 50.0"), &["run.t_warmup", "50"]);
 }
 
+/// A fixed-step run steps up to `t_end - 1e-9 dt`: a shorter run, or a window that starts
+/// after that, holds no step (its averages would be 0 / 0, a NaN), and is refused; just
+/// inside the bounds the run takes its step.
+#[test]
+fn fixed_step_window_without_a_step() {
+    let short = |t: &str| GOOD.replace("t_end = 10.0", &format!("t_end = {t}"));
+    expect_bad_scene(&short("1e-300"), &["run.t_end = 1e-300", "fixed.dt", "no step"]);
+    expect_bad_scene(&short("1e-9"), &["run.t_end = 0.000000001", "fixed.dt"]);
+    let late = good_with("run", "t_warmup = 9.9999999995");
+    expect_bad_scene(&late, &["run.t_warmup = 9.9999999995", "9.999999999", "no step"]);
+    for text in [short("2e-9"), good_with("run", "t_warmup = 9.9999999985")] {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("scene.toml"), text).unwrap();
+        let out = Command::new(BIN).args(["run", "scene.toml", "--out", "o"]).current_dir(dir.path()).output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let summary = std::fs::read_to_string(dir.path().join("o/summary.json")).unwrap();
+        assert!(summary.contains("\"friction_std\": 0"), "{summary}");
+    }
+}
+
+/// A value too long for `{}` (beyond 20 characters) is shown in exponent form.
+#[test]
+fn huge_and_tiny_values_are_shown_short() {
+    expect_bad_scene(&GOOD.replace("mass = 75.0", "mass = -1e300"), &["plate.mass = -1e300:"]);
+    expect_bad_scene(&good_with("run", "t_warmup = 1e300"), &["run.t_warmup = 1e300:", "(10)"]);
+}
+
 #[test]
 fn massless_plate_without_damping() {
     let text = GOOD.replace("mass = 75.0", "mass = 0.0").replace("eta = 75.0", "eta = 0.0");
