@@ -97,8 +97,8 @@ impl Fit {
         if !(1..=10_000).contains(&replicas) {
             return Err(bad_input(format!("--replicas {replicas}: must be from 1 to 10000")));
         }
-        if !(friction_scale.is_finite() && friction_scale > 0.0) {
-            return Err(bad_input(format!("--friction-scale {friction_scale}: must be a finite number > 0")));
+        if !stickslip::fit::data::scale_allowed(friction_scale) {
+            return Err(bad_input(format!("--friction-scale {friction_scale}: must be a number from 1e-100 to 1e100")));
         }
         if !(1..=1_000_000).contains(&max_evaluations) {
             return Err(bad_input(format!("--max-evaluations {max_evaluations}: must be from 1 to 1000000")));

@@ -141,11 +141,13 @@ pub(crate) fn bench(args: &BenchArgs) -> ExitCode {
 fn line(r: &Row) -> String {
     let engine = scaling::engine_name(r.engine);
     let measured = r.measured_bytes_per_junction.map_or(String::new(), |m| format!(", {m:.1} measured"));
+    // No event (rates of zero) or no time measured: no figure per unit.
+    let per = r.ns_per_unit();
+    let per =
+        if per.is_finite() { format!("{per:.2} ns per {}", r.unit()) } else { format!("no {} to time", r.unit()) };
     format!(
-        "{engine} N = {}: {:.2} ns per {} ({} in {:.3} s, t_end = {}), set-up {:.3} s, {:.1} bytes per junction estimated{measured}",
+        "{engine} N = {}: {per} ({} in {:.3} s, t_end = {}), set-up {:.3} s, {:.1} bytes per junction estimated{measured}",
         r.n,
-        r.ns_per_unit(),
-        r.unit(),
         r.work,
         r.run_seconds,
         crate::studies::format::sig(r.t_end, 4),

@@ -46,8 +46,8 @@ pub struct FitArgs {
 
 fn parse_scale(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err("must be a finite number > 0".into()),
+        Ok(v) if crate::fit::data::scale_allowed(v) => Ok(v),
+        _ => Err("must be a number from 1e-100 to 1e100".into()),
     }
 }
 

@@ -62,6 +62,16 @@ pub fn check_field(scene: &Scene, field: &str) -> Result<(), String> {
     }
 }
 
+/// Widest magnitude of a friction or a sigma as read (times `--friction-scale`), and of the
+/// scale itself; `1 / VALUE_MAX` is the smallest sigma and scale. Within these the misfit's
+/// terms `((F_sim - F) / sigma)^2` stay finite.
+pub const VALUE_MAX: f64 = 1e100;
+
+/// Whether `--friction-scale` `scale` is within `[1 / VALUE_MAX, VALUE_MAX]`.
+pub fn scale_allowed(scale: f64) -> bool {
+    (1.0 / VALUE_MAX..=VALUE_MAX).contains(&scale)
+}
+
 impl DataSet {
     /// Reads `text` (the contents of the file `origin`), each friction and sigma multiplied
     /// by `scale`, and checks every condition against `base`: each row's conditions applied
@@ -134,13 +144,19 @@ impl DataSet {
                             cells[c]
                         )));
                     }
+                    if !(1.0 / VALUE_MAX..=VALUE_MAX).contains(&s) {
+                        return Err(fail(format!(
+                            "line {line}: {SIGMA} = {} (times --friction-scale {scale}): must be from 1e-100 to 1e100",
+                            cells[c]
+                        )));
+                    }
                     Some(s)
                 }
                 None => None,
             };
-            if !f.is_finite() {
+            if f.abs() > VALUE_MAX {
                 return Err(fail(format!(
-                    "line {line}: {FRICTION} = {} times --friction-scale {scale} is not finite",
+                    "line {line}: {FRICTION} = {} (times --friction-scale {scale}): must be from -1e100 to 1e100",
                     cells[friction]
                 )));
             }
@@ -204,6 +220,9 @@ mod tests {
             ("plate.v,friction\n-1,2\n", "line 2: plate.v = -1"),
             ("plate.v,friction\n1\n", "line 2: 1 fields"),
             ("plate.v,friction,sigma\n1,2,0\n", "line 2: sigma = 0"),
+            ("plate.v,friction,sigma\n1,2,1e-320\n", "line 2: sigma = 1e-320 (times --friction-scale 1): must be from"),
+            ("plate.v,friction,sigma\n1,2,1e101\n", "line 2: sigma = 1e101"),
+            ("plate.v,friction\n1,-1e300\n", "line 2: friction = -1e300 (times --friction-scale 1): must be from"),
             ("plate.v,friction\n", "no data rows"),
             ("", "no header"),
         ] {

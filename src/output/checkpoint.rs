@@ -208,6 +208,12 @@ impl<H> Loaded<H> {
 
 /// Reads and verifies `path` (magic, version, length, checksum) and decodes its header.
 pub fn read<H: DeserializeOwned>(path: &Path) -> Result<Loaded<H>, CheckpointError> {
+    // A checkpoint is a regular file (a link to a device such as /dev/zero would be read
+    // without end).
+    let meta = std::fs::metadata(path).map_err(|source| CheckpointError::Io { path: path.to_path_buf(), source })?;
+    if !meta.is_file() {
+        return Err(CheckpointError::NotACheckpoint { path: path.to_path_buf() });
+    }
     let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io { path: path.to_path_buf(), source })?;
     let path = path.to_path_buf();
     if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
@@ -311,6 +317,9 @@ mod tests {
         }
         std::fs::write(&path, b"{\"json\": true}").unwrap();
         assert!(matches!(read::<Head>(&path), Err(CheckpointError::NotACheckpoint { .. })));
+        // Not a regular file: a directory, and a device read without end.
+        assert!(matches!(read::<Head>(dir.path()), Err(CheckpointError::NotACheckpoint { .. })));
+        assert!(matches!(read::<Head>(Path::new("/dev/zero")), Err(CheckpointError::NotACheckpoint { .. })));
     }
 
     #[test]

@@ -118,7 +118,7 @@ fn notes(study: &Study) -> Vec<String> {
     ];
     for p in study.points.iter().filter(|p| p.status != Status::Ok) {
         let dt = sig(p.dt.unwrap_or(f64::NAN), 3);
-        let g = sig(p.plate_growth.unwrap_or(f64::NAN), 3);
+        let g = crate::studies::compare::report::growth_text(p.plate_growth);
         v.push(match p.status {
             Status::Diverged => format!(
                 "Not drawn: fixed dt = {dt} diverged in {} of {} replicas (plate growth {g} per step).",
@@ -153,7 +153,8 @@ fn panel<DB: DrawingBackend>(
     let ymin = ys.fold(f64::INFINITY, f64::min);
     let ymax = all.iter().flat_map(|d| [d.hi, d.y, d.floor]).filter(|y| y.is_finite()).fold(0.0, f64::max);
     let (ylo, yhi) = if ymin.is_finite() && ymax > 0.0 { (ymin / 3.0, ymax * 2.0) } else { (1e-3, 1.0) };
-    let (xlo, xhi) = (xmin / 1.6, xmax * 1.6);
+    let (xlo, xhi) = super::drawable(true, xmin / 1.6, xmax * 1.6);
+    let (ylo, yhi) = super::drawable(true, ylo, yhi);
     let mut chart = ChartBuilder::on(area)
         .caption(caption, (FONT, 17))
         .margin(12)

@@ -182,9 +182,30 @@ pub fn render_svg(panels: &[Panel], width: u32, panel_height: u32) -> Result<Str
     Ok(buf)
 }
 
+/// Widest range a drawn axis spans: 300 decades on a log scale (`1e-300` to `1e300` at
+/// most), `+-1e300` on a linear one.
+const AXIS_SPAN: f64 = 1e300;
+
+/// `[lo, hi]` narrowed to what an axis can draw ([`AXIS_SPAN`]): a log axis within
+/// `[1e-300, 1e300]` and at most 300 decades wide, its lower end raised if wider; a linear
+/// one within `+-1e300`. plotters' tick search on a log axis never ends when `hi / lo` is
+/// infinite (a range from `1e-300` to `1e300` with its margin), and a range of non-finite
+/// width has no ticks; values outside are drawn at the edge or not at all.
+pub(crate) fn drawable(log: bool, lo: f64, hi: f64) -> (f64, f64) {
+    if log {
+        let hi = hi.clamp(1.0 / AXIS_SPAN, AXIS_SPAN);
+        let lo = lo.clamp(1.0 / AXIS_SPAN, hi).max(hi / AXIS_SPAN);
+        if lo < hi { (lo, hi) } else { (hi / 10.0, hi * 10.0) }
+    } else {
+        let (lo, hi) = (lo.clamp(-AXIS_SPAN, AXIS_SPAN), hi.clamp(-AXIS_SPAN, AXIS_SPAN));
+        if lo < hi { (lo, hi) } else { (lo - 1.0 - lo.abs(), lo + 1.0 + lo.abs()) }
+    }
+}
+
 fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> Result<(), PlotError> {
     let (x0, x1) = p.x.resolve(p.x_values());
     let (y0, y1) = p.y.resolve(p.y_values());
+    let ((x0, x1), (y0, y1)) = (drawable(p.x.log, x0, x1), drawable(p.y.log, y0, y1));
     match (p.x.log, p.y.log) {
         (false, false) => draw_in(area, p, x0..x1, y0..y1, (y0, y1)),
         (true, false) => draw_in(area, p, (x0..x1).log_scale(), y0..y1, (y0, y1)),
@@ -342,6 +363,37 @@ mod tests {
         let b = bands_from_classes(&xs, &l, |i| (i == 1).then(|| ("B".to_string(), BLACK)));
         assert_eq!(b.len(), 1);
         assert!((b[0].from - 10.0).abs() < 1e-12 && (b[0].to - 1000.0).abs() < 1e-9);
+    }
+
+    /// Data from `1e-300` to `1e300` on log axes (whose 5 % margins overflow and underflow)
+    /// and from `-1.7e308` to `1.7e308` on a linear one: drawn in narrowed ranges, in finite
+    /// time (plotters' tick search did not end on a log axis of infinite ratio).
+    #[test]
+    fn extreme_ranges_are_drawn() {
+        for (log, lo, hi) in [(true, 0.0, f64::INFINITY), (true, 1e-320, 1e300), (false, -f64::MAX, f64::MAX)] {
+            let (a, b) = drawable(log, lo, hi);
+            assert!(a.is_finite() && b.is_finite() && a < b, "{log} {lo} {hi}: {a} {b}");
+            if log {
+                assert!(a > 0.0 && b / a <= AXIS_SPAN * (1.0 + 1e-15), "{a} {b}");
+            } else {
+                assert!((b - a).is_finite(), "{a} {b}");
+            }
+        }
+        assert_eq!(drawable(true, 0.5, 20.0), (0.5, 20.0));
+        assert_eq!(drawable(false, -1.0, 3.0), (-1.0, 3.0));
+        let p = |x: Axis, y: Axis, points: Vec<(f64, f64)>| Panel {
+            title: "t".into(),
+            x,
+            y,
+            series: vec![Series::line("s", points, PALETTE[0])],
+            bands: vec![],
+        };
+        let wide = vec![(1e-300, 1e-300), (1.0, 1.0), (1e300, 1e300)];
+        let svg = render_svg(&[p(Axis::log("x"), Axis::log("y"), wide)], 400, 300).unwrap();
+        assert!(svg.trim_end().ends_with("</svg>"));
+        let huge = vec![(-f64::MAX, -f64::MAX), (f64::MAX, f64::MAX)];
+        let svg = render_svg(&[p(Axis::linear("x"), Axis::linear("y"), huge)], 400, 300).unwrap();
+        assert!(svg.trim_end().ends_with("</svg>"));
     }
 
     #[test]

@@ -42,6 +42,27 @@ pub fn compact(s: String) -> String {
     }
 }
 
+/// `s` with every number in it (a run of digits, with an optional sign, point and
+/// fraction) shown as [`compact`] shows it: a message quoting a value by `{}` (serde's type
+/// errors, for one) stays short.
+pub fn compact_numbers(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut rest = s;
+    while let Some(start) = rest.find(|c: char| c.is_ascii_digit()) {
+        let (before, from) = rest.split_at(start);
+        let sign = before.ends_with('-') as usize;
+        out.push_str(&before[..before.len() - sign]);
+        let mut end = from.find(|c: char| !c.is_ascii_digit()).unwrap_or(from.len());
+        if from[end..].starts_with('.') && from[end + 1..].starts_with(|c: char| c.is_ascii_digit()) {
+            end += 1 + from[end + 1..].find(|c: char| !c.is_ascii_digit()).unwrap_or(from.len() - end - 1);
+        }
+        out.push_str(&compact(format!("{}{}", &before[before.len() - sign..], &from[..end])));
+        rest = &from[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
 /// `s` with control characters and line separators escaped (`\n`, `\u{2028}`), so that a
 /// user-supplied key, path or assignment cannot break a one-line message.
 pub fn printable(s: &str) -> String {
@@ -69,7 +90,7 @@ pub(crate) fn one_line(s: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::compact;
+    use super::{compact, compact_numbers};
 
     /// Long decimals read back as the same number in exponent form; integers of up to 20
     /// digits, short decimals and other text are kept.
@@ -83,5 +104,11 @@ mod tests {
         for s in ["18446744073709551615", "-9223372036854775808", "0.000001", "150", "1.5", "nan", "not a number"] {
             assert_eq!(compact(s.to_string()), s);
         }
+        // Inside a message: every number, and only numbers.
+        let long = format!("invalid type: floating point `{}`, expected usize; x-2.5 at 1.5e3", 1e300);
+        assert_eq!(compact_numbers(&long), "invalid type: floating point `1e300`, expected usize; x-2.5 at 1.5e3");
+        let neg = format!("a -{} b 12.", 1e25);
+        assert_eq!(compact_numbers(&neg), "a -1e25 b 12.");
+        assert_eq!(compact_numbers("no numbers"), "no numbers");
     }
 }

@@ -30,7 +30,7 @@ impl Scene {
             SceneError::Schema {
                 origin: origin.to_string(),
                 path: if path == "." { "scene".to_string() } else { error::printable(&path) },
-                message: error::one_line(&e.into_inner().to_string()),
+                message: error::compact_numbers(&error::one_line(&e.into_inner().to_string())),
             }
         })?;
         file.validate(name)

@@ -15,6 +15,9 @@ pub const N_MAX: usize = u32::MAX as usize;
 pub const SAMPLES_MAX: f64 = 1e9;
 /// Largest number of fixed steps a run may ask for.
 pub const STEPS_MAX: f64 = 1e15;
+/// Largest number of junction events a run may be expected to take
+/// ([`crate::estimate::work::expected`]; at 1e7 events per second, three years).
+pub const EVENTS_MAX: f64 = 1e15;
 /// Largest lower bound on the exact engine's plate-integrator steps (tilted law) a run may
 /// need: beyond it the run would take days (docs/scenes.md).
 pub const TILTED_STEPS_MAX: f64 = 1e9;
@@ -113,6 +116,21 @@ impl SceneFile {
                 "plate.eta",
                 0,
                 "must be > 0 when plate.mass = 0 (an overdamped plate needs damping)",
+            ));
+        }
+
+        // The plate's stiffness with every junction attached, `K + kappa N`, is a number.
+        let kappa_n = junctions.kappa * n as f64;
+        if !(plate.k + kappa_n).is_finite() {
+            let (field, value) =
+                if kappa_n.is_finite() { ("plate.k", plate.k) } else { ("junctions.kappa", junctions.kappa) };
+            return Err(SceneError::invalid(
+                field,
+                value,
+                format!(
+                    "makes plate.k + junctions.kappa N overflow (N = {n}; {:e} + {:e}): the plate's stiffness with every junction attached must be a finite number",
+                    plate.k, kappa_n
+                ),
             ));
         }
 
@@ -266,7 +284,20 @@ impl SceneFile {
                 "needs output.trace = true (trace.svg is drawn from trace.csv after the run)",
             ));
         }
-        Ok(Scene { name: name.to_string(), junctions, plate, run, fixed, exact, output, reference })
+        let scene = Scene { name: name.to_string(), junctions, plate, run, fixed, exact, output, reference };
+        // A run of more junction events than `EVENTS_MAX` would take years (docs/scenes.md).
+        let events = crate::estimate::work::expected(&scene).events;
+        if events.is_nan() || events > EVENTS_MAX {
+            return Err(SceneError::invalid(
+                "run.t_end",
+                compact(scene.run.t_end.to_string()),
+                format!(
+                    "expects about {events:.1e} junction events (N = {n} at the rates k0 = {:e}, kon0 g(V) at zero force; more than {EVENTS_MAX:e}, years of run time): shorten the run or lower the rates",
+                    scene.junctions.k0
+                ),
+            ));
+        }
+        Ok(scene)
     }
 }
 

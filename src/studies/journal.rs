@@ -194,13 +194,22 @@ pub fn path_in(dir: &Path) -> PathBuf {
     dir.join(FILE)
 }
 
+/// `Ok` if `f` is a regular file: a journal that is a link to a device (such as /dev/zero)
+/// would be read without end.
+fn regular(f: &File) -> io::Result<()> {
+    if f.metadata()?.is_file() { Ok(()) } else { Err(io::Error::other("not a regular file")) }
+}
+
 /// Reads the header of the journal in `dir` (for `stickslip resume`). `Ok(None)` if there is
 /// no journal, or only a header cut short while it was being created.
 pub fn read_header(dir: &Path) -> Result<Option<Header>, JournalError> {
     let path = path_in(dir);
     let mut text = Vec::new();
     match File::open(&path) {
-        Ok(mut f) => f.read_to_end(&mut text).map_err(io_error("read", &path))?,
+        Ok(mut f) => {
+            regular(&f).map_err(io_error("read", &path))?;
+            f.read_to_end(&mut text).map_err(io_error("read", &path))?
+        }
         Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(io_error("open", &path)(e)),
     };
@@ -280,6 +289,7 @@ impl Journal {
             .truncate(false)
             .open(&path)
             .map_err(io_error("open", &path))?;
+        regular(&file).map_err(io_error("read", &path))?;
         lock(&file, &path)?;
         let mut text = Vec::new();
         file.read_to_end(&mut text).map_err(io_error("read", &path))?;
@@ -377,6 +387,19 @@ mod tests {
 
     fn open(dir: &Path, h: &Header) -> Result<Opened<String>, JournalError> {
         Journal::open(dir, h, &[10, 11, 12])
+    }
+
+    /// A journal that is a link to a device (read without end) is refused when read and
+    /// when opened, in one error.
+    #[test]
+    fn a_journal_that_is_not_a_file_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        std::os::unix::fs::symlink("/dev/zero", path_in(dir.path())).unwrap();
+        let e = read_header(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+        let Err(e) = open(dir.path(), &header("a")) else { panic!("a device as the journal was opened") };
+        let e = e.to_string();
+        assert!(e.contains("not a regular file"), "{e}");
     }
 
     #[test]

@@ -196,6 +196,20 @@ fn fixed_step_window_without_a_step() {
     }
 }
 
+/// Totals over the junctions must be numbers: the plate's stiffness with every junction
+/// attached (`K + kappa N` overflowed into a panic of the closed-form plate), and the
+/// expected junction events (a run of `inf` events never ends).
+#[test]
+fn totals_over_the_junctions_are_finite() {
+    let exact = GOOD.replace("engine = \"fixed\"", "engine = \"exact\"");
+    let kappa = good_with("junctions", "kappa = 1e308").replace("engine = \"fixed\"", "engine = \"exact\"");
+    expect_bad_scene(&kappa, &["junctions.kappa = 1e308", "plate.k + junctions.kappa N", "N = 30"]);
+    let rates = exact.replace("[junctions]\n", "[junctions]\nk0 = 1e300\nkon0 = 1e300\n");
+    expect_bad_scene(&rates, &["run.t_end = 10", "junction events", "1e15"]);
+    let long = exact.replace("t_end = 10.0", "t_end = 1e16").replace("[junctions]\n", "[junctions]\nk0 = 10.0\n");
+    expect_bad_scene(&long, &["run.t_end = 10000000000000000", "5.9e16 junction events"]);
+}
+
 /// A value too long for `{}` (beyond 20 characters) is shown in exponent form.
 #[test]
 fn huge_and_tiny_values_are_shown_short() {

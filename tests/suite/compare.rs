@@ -216,6 +216,11 @@ fn other_bad_arguments_are_refused() {
     expect_bad(&["--replicas", "1"], &["--replicas", "1"]);
     expect_bad(&["--replicas", "x"], &["--replicas"]);
     expect_bad(&["--ref-replicas", "0"], &["--ref-replicas", "0"]);
+    // More replicas than a plan holds (each job keeps its scene).
+    expect_bad(&["--replicas", "100000000"], &["--replicas", "100000000", "10000"]);
+    expect_bad(&["--ref-replicas", "100000000000"], &["--ref-replicas", "100000000000", "40000"]);
+    // A step too long or too short for the run, shown short.
+    expect_bad(&["--dts", "1e300"], &["--dts: 1e300: run.t_end"]);
     expect_bad(&["--threads", "0"], &["--threads", "0"]);
     expect_bad(&["--exact-rtol", "0"], &["--exact-rtol", "exact.rtol", "0"]);
     expect_bad(&["--exact-rtol", "0.5"], &["--exact-rtol", "exact.rtol", "0.5"]);

@@ -122,6 +122,10 @@ pub fn default_dts(scene: &Scene) -> Vec<f64> {
     (0..=8).map(|k| scene.fixed.dt / f64::from(1u32 << k)).collect()
 }
 
+/// Most replicas of a point (`--replicas`); the reference may have four times as many
+/// (every job holds its scene, so a plan's memory grows with them).
+pub const REPLICAS_MAX: usize = 10_000;
+
 /// Replica counts of the exact engine's points: `1, 2, 4, ..` up to `replicas` (which is
 /// always the last).
 pub fn exact_counts(replicas: usize) -> Vec<usize> {
@@ -207,14 +211,15 @@ impl Plan {
         }
         for &dt in &dts {
             if !(dt.is_finite() && dt > 0.0) {
+                let dt = crate::scene::error::compact(dt.to_string());
                 return Err(PlanError(format!("--dts: {dt} is not allowed: each step must be a finite number > 0")));
             }
         }
-        if replicas < 2 {
-            return Err(PlanError(format!("--replicas = {replicas}: must be at least 2")));
+        if !(2..=REPLICAS_MAX).contains(&replicas) {
+            return Err(PlanError(format!("--replicas = {replicas}: must be from 2 to {REPLICAS_MAX}")));
         }
-        if ref_replicas < 2 {
-            return Err(PlanError(format!("--ref-replicas = {ref_replicas}: must be at least 2")));
+        if !(2..=4 * REPLICAS_MAX).contains(&ref_replicas) {
+            return Err(PlanError(format!("--ref-replicas = {ref_replicas}: must be from 2 to {}", 4 * REPLICAS_MAX)));
         }
         let base = scene.run.seed;
         let mut jobs = Vec::new();
@@ -248,7 +253,7 @@ impl Plan {
             // The seed is replaced below; 1 is valid for every generator.
             let set_dt = format!("fixed.dt={}", ryu::Buffer::new().format(dt));
             let fixed = quiet(scene, &["run.engine=fixed".into(), "run.seed=1".into(), set_dt])
-                .map_err(|e| PlanError(format!("--dts: {dt}: {e}")))?;
+                .map_err(|e| PlanError(format!("--dts: {}: {e}", crate::scene::error::compact(dt.to_string()))))?;
             plate_growth.push(crate::engine::fixed::stability::analyse(&fixed).selected().radius_all);
             let seeds: Vec<u64> = match fixed.fixed.rng {
                 RngKind::Pcg => (0..replicas).map(|r| seeds::pcg_seed(base, Role::Fixed, j as u64, r as u64)).collect(),

@@ -372,7 +372,7 @@ pub fn markdown(study: &Study, command: &str) -> String {
         .iter()
         .filter(|p| p.status != Status::Ok)
         .map(|p| {
-            let g = sig(p.plate_growth.unwrap_or(f64::NAN), 3);
+            let g = growth_text(p.plate_growth);
             match p.status {
                 Status::Diverged => format!(
                     "dt = {}: diverged in {} of {} replicas (plate growth factor {g} per step)",
@@ -434,6 +434,17 @@ pub fn markdown(study: &Study, command: &str) -> String {
         md.push('\n');
     }
     md
+}
+
+/// A point's plate growth factor per step as the reports print it: three significant
+/// digits, "beyond 1e308" when it overflows (a plate constant near the floating-point
+/// limit), "unknown" when it was not computed.
+pub(crate) fn growth_text(growth: Option<f64>) -> String {
+    match growth {
+        Some(g) if g.is_finite() => sig(g, 3),
+        Some(g) if g > 0.0 => "beyond 1e308".to_string(),
+        _ => "unknown".to_string(),
+    }
 }
 
 #[cfg(test)]

@@ -52,9 +52,17 @@ pub struct Scales {
 pub enum ScaleError {
     #[error("{option}: missing; {why} (give {example})")]
     Missing { option: &'static str, why: &'static str, example: &'static str },
-    #[error("{option} {value}: must be a finite number > 0 ({unit})")]
+    #[error("{option} {}: must be a number from 1e-150 to 1e150 ({unit})", crate::scene::error::compact(value.to_string()))]
     NotPositive { option: &'static str, value: f64, unit: &'static str },
+    /// A unit made of the scales (the force unit `kB T_ref / l0`, the velocity unit `l0 /
+    /// t0`, the friction coefficient's `force unit / normal load`) outside the same window.
+    #[error("{options}: make {what} = {value:e}, outside 1e-150 to 1e150 (every law value would be scaled by it)")]
+    Derived { options: &'static str, what: &'static str, value: f64 },
 }
+
+/// Widest factor a scale, or a unit made of them, may be: within `[1/SCALE_MAX, SCALE_MAX]`
+/// the model's values, scaled, stay finite and normal numbers.
+const SCALE_MAX: f64 = 1e150;
 
 impl ScaleArgs {
     /// The scales, each checked: the first missing or bad one is the error.
@@ -93,14 +101,25 @@ impl ScaleArgs {
         )?;
         let (force_unit, derived) = match self.force_unit {
             Some(f) => (positive(f, "--force-unit", "newtons")?, false),
-            None => (positive(BOLTZMANN * t_ref / l0, "--force-unit", "newtons; kB T_ref / l0")?, true),
+            None => (derived_unit(BOLTZMANN * t_ref / l0, "--t-ref and --l0", "the force unit kB T_ref / l0")?, true),
         };
+        derived_unit(l0 / t0, "--l0 and --t0", "the velocity unit l0 / t0")?;
+        let options = if derived { "--t-ref, --l0 and --normal-load" } else { "--force-unit and --normal-load" };
+        derived_unit(force_unit / normal_load, options, "the friction coefficient's unit (force unit / normal load)")?;
         Ok(Scales { l0, t0, t_ref, normal_load, force_unit, force_unit_derived: derived })
     }
 }
 
+fn within(value: f64) -> bool {
+    (1.0 / SCALE_MAX..=SCALE_MAX).contains(&value)
+}
+
 fn positive(value: f64, option: &'static str, unit: &'static str) -> Result<f64, ScaleError> {
-    if value.is_finite() && value > 0.0 { Ok(value) } else { Err(ScaleError::NotPositive { option, value, unit }) }
+    if within(value) { Ok(value) } else { Err(ScaleError::NotPositive { option, value, unit }) }
+}
+
+fn derived_unit(value: f64, options: &'static str, what: &'static str) -> Result<f64, ScaleError> {
+    if within(value) { Ok(value) } else { Err(ScaleError::Derived { options, what, value }) }
 }
 
 impl Scales {
@@ -147,6 +166,28 @@ mod tests {
         let mut a = full();
         a.force_unit = Some(f64::NAN);
         assert!(a.resolve().unwrap_err().to_string().starts_with("--force-unit NaN"));
+        // A scale beyond the window, and units made of scales within it that are not.
+        let mut a = full();
+        a.t_ref = Some(1e308);
+        assert_eq!(
+            a.resolve().unwrap_err().to_string(),
+            "--t-ref 1e308: must be a number from 1e-150 to 1e150 (kelvin)"
+        );
+        let mut a = full();
+        (a.l0, a.t0) = (Some(1e100), Some(1e-100));
+        assert!(
+            a.resolve().unwrap_err().to_string().starts_with("--l0 and --t0: make the velocity unit l0 / t0 = 1e200")
+        );
+        let mut a = full();
+        (a.t_ref, a.normal_load) = (Some(1e149), Some(1e-20));
+        let e = a.resolve().unwrap_err().to_string();
+        assert!(e.starts_with("--t-ref, --l0 and --normal-load: make the friction coefficient's unit"), "{e}");
+        let mut a = full();
+        (a.force_unit, a.normal_load) = (Some(1e100), Some(1e-100));
+        assert!(a.resolve().unwrap_err().to_string().starts_with("--force-unit and --normal-load: make"));
+        let mut a = full();
+        (a.t_ref, a.l0) = (Some(1e-140), Some(1e100));
+        assert!(a.resolve().unwrap_err().to_string().starts_with("--t-ref and --l0: make the force unit"));
     }
 
     #[test]
