@@ -41,14 +41,16 @@ pub struct BenchArgs {
 
 /// Checks the options that clap does not; one line naming the option.
 fn check(args: &BenchArgs) -> Result<(), String> {
-    if args.n_min == 0 {
-        return Err("--n-min = 0: must be at least 1".into());
+    use crate::scene::validate::{EVENTS_MAX, N_MAX};
+    if args.n_min == 0 || args.n_min > N_MAX {
+        return Err(format!("--n-min = {}: must be from 1 to {N_MAX} junctions", args.n_min));
     }
-    if let Some(n) = args.n_max.filter(|&n| n < args.n_min) {
-        return Err(format!("--n-max = {n}: must be at least --n-min ({})", args.n_min));
+    if let Some(n) = args.n_max.filter(|&n| n < args.n_min || n > N_MAX) {
+        return Err(format!("--n-max = {n}: must be from --n-min ({}) to {N_MAX} junctions", args.n_min));
     }
-    if !(args.work.is_finite() && args.work >= 1.0) {
-        return Err(format!("--work = {}: must be a number of events or junction-steps >= 1", args.work));
+    if !(args.work >= 1.0 && args.work <= EVENTS_MAX) {
+        let work = crate::scene::error::compact(args.work.to_string());
+        return Err(format!("--work = {work}: must be a number of events or junction-steps from 1 to {EVENTS_MAX:e}"));
     }
     if let Some(t) = args.t_end.filter(|t| !(t.is_finite() && *t > 0.0)) {
         return Err(format!("--t-end = {t}: must be a finite time > 0"));

@@ -92,8 +92,14 @@ fn bad_bench_options_are_refused_in_one_line() {
     let out_s = out.to_str().unwrap().to_string();
     // (arguments, what the error line mentions, environment)
     type Case<'a> = (&'a [&'a str], &'a str, Vec<(&'a str, String)>);
-    let cases: [Case; 9] = [
+    let cases: [Case; 11] = [
         (&["--n-min", "0"], "--n-min = 0", vec![]),
+        (
+            &["--n-max", "1000000000000000"],
+            "--n-max = 1000000000000000: must be from --n-min (1000) to 4294967295",
+            vec![],
+        ),
+        (&["--work", "1e300"], "--work = 1e300: must be a number of events or junction-steps from 1 to 1e15", vec![]),
         (&["--n-min", "1000", "--n-max", "999"], "--n-max = 999", vec![]),
         (&["--work", "nan"], "--work = NaN", vec![]),
         (&["--work", "0"], "--work = 0", vec![]),
