@@ -11,6 +11,7 @@ use std::process::ExitCode;
 
 use super::args::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
 use super::sweep::{AxisArgs, Finished, SweepArgs, run_study};
+use crate::studies::format::fixed;
 use crate::studies::law::{
     self, DEFAULT_DEGREE, FrictionLaw, LawInput, PointRuns, ScaleArgs, T_FIELD, V_FIELD, from_outcome, read_sweep_dir,
     vt_axes,
@@ -151,17 +152,17 @@ fn report(law: &FrictionLaw, out: &Path) {
     );
     for p in &law.points {
         let mu = match p.mu {
-            Some(m) if m.ci95.is_finite() => format!("mu = {:.6} +- {:.6}", m.mean, m.ci95),
-            Some(m) => format!("mu = {:.6}", m.mean),
+            Some(m) if m.ci95.is_finite() => format!("mu = {} +- {}", fixed(m.mean, 6), fixed(m.ci95, 6)),
+            Some(m) => format!("mu = {}", fixed(m.mean, 6)),
             None => format!("no steady mu ({}: left out of abaqus.inp and ansys.mac)", p.regime.as_str()),
         };
         println!(
-            "  V = {:<10} T = {:<8} {:.4e} m/s {:>8.2} K  F/N = {:.6}  {mu}",
+            "  V = {:<10} T = {:<8} {:.4e} m/s {:>8.2} K  F/N = {}  {mu}",
             format!("{}", p.v),
             format!("{}", p.t),
             p.slip_rate,
             p.kelvin,
-            p.friction_per_junction.mean
+            fixed(p.friction_per_junction.mean, 6)
         );
     }
     match &law.fit {

@@ -10,6 +10,7 @@ use crate::output::Summary;
 use crate::runner::{RunOptions, run_scene_with};
 use crate::scene::Scene;
 use crate::scene::error::compact;
+use crate::studies::format::fixed;
 
 pub(crate) fn run(
     args: &SceneArgs,
@@ -92,7 +93,7 @@ pub(crate) fn summary_lines(s: &Summary, out: &Path) -> String {
     };
     format!(
         "scene {} ({} engine, seed {}, N = {}, t_end = {})\n\
-         friction per junction {:.6} (std of total {:.6}) over [{}, {}]\n\
+         friction per junction {} (std of total {}) over [{}, {}]\n\
          attached fraction {:.4}; {}\n\
          {work}, {} ruptures, {} formations in {:.3} s; output in {}\n",
         s.scene,
@@ -100,8 +101,8 @@ pub(crate) fn summary_lines(s: &Summary, out: &Path) -> String {
         s.seed,
         s.n,
         compact(s.t_end.to_string()),
-        s.friction_per_junction,
-        s.friction_std,
+        fixed(s.friction_per_junction, 6),
+        fixed(s.friction_std, 6),
         compact(s.t_warmup.to_string()),
         compact(s.t_end.to_string()),
         s.attached_fraction_mean,

@@ -19,6 +19,7 @@ use super::out_dir::{OutDir, prepare_out_dir};
 use super::study;
 use crate::output::Summary;
 use crate::scene::error::printable;
+use crate::studies::format::fixed;
 use crate::studies::journal::{Header, StudyKind};
 use crate::studies::sweep::{MAX_AXES, Sweep, SweepAxis, SweepError, SweepOutcome, SweepSpec, ValueSpec, parse_values};
 
@@ -245,14 +246,16 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
     );
     for r in &outcome.rows {
         let (m, c) = r.friction_per_junction;
-        let ci = if c.is_finite() { format!(" +- {c:.6}") } else { String::new() };
+        let ci = if c.is_finite() { format!(" +- {}", fixed(c, 6)) } else { String::new() };
         let at: Vec<String> =
             sweep.axes.iter().zip(&r.values).map(|(a, v)| format!("{} = {:<12}", a.param, v.text)).collect();
         let amplitude = r.oscillation_amplitude.0 / r.n as f64;
         println!(
-            "  {} F/N = {m:.6}{ci}  attached {:.4}  amplitude/N {amplitude:.4}  {} ({}/{} stick-slip)",
+            "  {} F/N = {}{ci}  attached {:.4}  amplitude/N {}  {} ({}/{} stick-slip)",
             at.join(" "),
+            fixed(m, 6),
             r.attached_fraction_mean.0,
+            fixed(amplitude, 4),
             r.regime.as_str(),
             (r.stick_slip_fraction * r.replicas as f64).round(),
             r.replicas

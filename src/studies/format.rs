@@ -16,6 +16,12 @@ pub fn sig(v: f64, sig: usize) -> String {
     format!("{v:.decimals$}")
 }
 
+/// `v` with `decimals` decimals (`{:.decimals$}`), or in exponent form from `1e15` in
+/// magnitude, where the fixed form would print every digit of the integer part.
+pub fn fixed(v: f64, decimals: usize) -> String {
+    if v.abs() < 1e15 { format!("{v:.decimals$}") } else { format!("{v:.decimals$e}") }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -27,5 +33,13 @@ mod tests {
         assert_eq!(sig(-1.5, 2), "-1.5");
         assert_eq!(sig(1.23e-7, 2), "1.2e-7");
         assert_eq!(sig(f64::NAN, 2), "-");
+    }
+
+    #[test]
+    fn fixed_keeps_large_numbers_short() {
+        assert_eq!(fixed(0.5, 6), "0.500000");
+        assert_eq!(fixed(-123.25, 2), "-123.25");
+        assert_eq!(fixed(7.1e299, 6), "7.100000e299");
+        assert_eq!(fixed(f64::NAN, 3), "NaN");
     }
 }
