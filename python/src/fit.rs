@@ -97,7 +97,7 @@ impl Fit {
         if !(1..=10_000).contains(&replicas) {
             return Err(bad_input(format!("--replicas {replicas}: must be from 1 to 10000")));
         }
-        if !stickslip::fit::data::scale_allowed(friction_scale) {
+        if !stickslip::fit::data::in_window(friction_scale) {
             return Err(bad_input(format!("--friction-scale {friction_scale}: must be a number from 1e-100 to 1e100")));
         }
         if !(1..=1_000_000).contains(&max_evaluations) {

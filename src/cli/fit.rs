@@ -46,7 +46,7 @@ pub struct FitArgs {
 
 fn parse_scale(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
-        Ok(v) if crate::fit::data::scale_allowed(v) => Ok(v),
+        Ok(v) if crate::fit::data::in_window(v) => Ok(v),
         _ => Err("must be a number from 1e-100 to 1e100".into()),
     }
 }

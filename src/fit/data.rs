@@ -67,9 +67,9 @@ pub fn check_field(scene: &Scene, field: &str) -> Result<(), String> {
 /// terms `((F_sim - F) / sigma)^2` stay finite.
 pub const VALUE_MAX: f64 = 1e100;
 
-/// Whether `--friction-scale` `scale` is within `[1 / VALUE_MAX, VALUE_MAX]`.
-pub fn scale_allowed(scale: f64) -> bool {
-    (1.0 / VALUE_MAX..=VALUE_MAX).contains(&scale)
+/// Whether `v` (`--friction-scale`, or a scaled sigma) is within `[1 / VALUE_MAX, VALUE_MAX]`.
+pub fn in_window(v: f64) -> bool {
+    (1.0 / VALUE_MAX..=VALUE_MAX).contains(&v)
 }
 
 impl DataSet {
@@ -144,7 +144,7 @@ impl DataSet {
                             cells[c]
                         )));
                     }
-                    if !(1.0 / VALUE_MAX..=VALUE_MAX).contains(&s) {
+                    if !in_window(s) {
                         return Err(fail(format!(
                             "line {line}: {SIGMA} = {} (times --friction-scale {scale}): must be from 1e-100 to 1e100",
                             cells[c]

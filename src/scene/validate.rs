@@ -290,7 +290,7 @@ impl SceneFile {
         if events.is_nan() || events > EVENTS_MAX {
             return Err(SceneError::invalid(
                 "run.t_end",
-                compact(scene.run.t_end.to_string()),
+                scene.run.t_end,
                 format!(
                     "expects about {events:.1e} junction events (N = {n} at the rates k0 = {:e}, kon0 g(V) at zero force; more than {EVENTS_MAX:e}, years of run time): shorten the run or lower the rates",
                     scene.junctions.k0
