@@ -141,13 +141,28 @@ fn row<const K: usize>(pw: &mut Powers, t: &[f64; ORDER + 1]) -> (f64, f64) {
     (c, e2)
 }
 
+/// `q_k = (u_k - c [k = 0]) s^k` for `k < L`, zero above `order`. A fixed trip count, so
+/// that the terms stay in registers for [`quad`]: written one at a time to memory and read
+/// back two at a time, they would wait on the stores (no store-to-load forwarding).
+#[inline(always)]
+fn scaled<const L: usize>(u: &[f64; ORDER + 1], order: usize, s: f64, c: f64) -> [f64; L] {
+    let mut q = [0.0; L];
+    let mut sk = 1.0;
+    for k in 0..L {
+        q[k] = if k <= order { u[k] * sk } else { 0.0 };
+        sk *= s;
+    }
+    q[0] -= c;
+    q
+}
+
 /// `sum_(k<L) q_k / (k + 1)` and `sum_(i,j<L) q_i q_j / (i + j + 1)` (the upper triangle,
 /// doubled off the diagonal). Each row `sum_(j>i) q_j / (i + j + 1)` is summed in order of
 /// `j`, all rows side by side (the loop over `j` outside): the rows' additions are
 /// independent, so they run as vector operations instead of one chain per row, with the
 /// same sums bit for bit (unit test `quad_is_the_row_by_row_sum`).
 #[inline(always)]
-fn quad<const L: usize>(q: &[f64; ORDER + 1]) -> (f64, f64) {
+fn quad<const L: usize>(q: &[f64; L]) -> (f64, f64) {
     let mut row = [0.0; L];
     for j in 1..L {
         for i in 0..j {
@@ -357,25 +372,19 @@ impl TimeSeries {
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // an iterator's `Zip::new` is an out-of-line call in `release`
     fn integrals_in(&self, s: f64, c: f64) -> (f64, f64) {
-        let mut q = [0.0; ORDER + 1];
-        let mut sk = 1.0;
-        for k in 0..=self.order.min(ORDER) {
-            q[k] = self.u[k] * sk;
-            sk *= s;
-        }
-        q[0] -= c;
         // Fixed trip counts (unrolled), one size per order from MIN_ORDER: the terms a
         // larger size would add are zeros, which leave both sums as they are.
-        let (i1, i2) = match self.order {
-            0..=4 => quad::<5>(&q),
-            5 => quad::<6>(&q),
-            6 => quad::<7>(&q),
-            7 => quad::<8>(&q),
-            8 => quad::<9>(&q),
-            9 => quad::<10>(&q),
-            10 => quad::<11>(&q),
-            11 => quad::<12>(&q),
-            _ => quad::<{ ORDER + 1 }>(&q),
+        let (u, n) = (&self.u, self.order);
+        let (i1, i2) = match n {
+            0..=4 => quad::<5>(&scaled(u, n, s, c)),
+            5 => quad::<6>(&scaled(u, n, s, c)),
+            6 => quad::<7>(&scaled(u, n, s, c)),
+            7 => quad::<8>(&scaled(u, n, s, c)),
+            8 => quad::<9>(&scaled(u, n, s, c)),
+            9 => quad::<10>(&scaled(u, n, s, c)),
+            10 => quad::<11>(&scaled(u, n, s, c)),
+            11 => quad::<12>(&scaled(u, n, s, c)),
+            _ => quad::<{ ORDER + 1 }>(&scaled(u, n, s, c)),
         };
         (i1 * s, i2 * s)
     }
@@ -553,15 +562,18 @@ mod tests {
                 *qk = rng.random_range(-1.0..1.0) * 10f64.powf(rng.random_range(-12.0..3.0));
             }
             let bits = |(a, b): (f64, f64)| (a.to_bits(), b.to_bits());
-            assert_eq!(bits(quad::<5>(&q)), bits(quad_rowwise::<5>(&q)));
-            assert_eq!(bits(quad::<6>(&q)), bits(quad_rowwise::<6>(&q)));
-            assert_eq!(bits(quad::<7>(&q)), bits(quad_rowwise::<7>(&q)));
-            assert_eq!(bits(quad::<8>(&q)), bits(quad_rowwise::<8>(&q)));
-            assert_eq!(bits(quad::<9>(&q)), bits(quad_rowwise::<9>(&q)));
-            assert_eq!(bits(quad::<10>(&q)), bits(quad_rowwise::<10>(&q)));
-            assert_eq!(bits(quad::<11>(&q)), bits(quad_rowwise::<11>(&q)));
-            assert_eq!(bits(quad::<12>(&q)), bits(quad_rowwise::<12>(&q)));
-            assert_eq!(bits(quad::<{ ORDER + 1 }>(&q)), bits(quad_rowwise::<{ ORDER + 1 }>(&q)));
+            fn head<const L: usize>(q: &[f64; ORDER + 1]) -> [f64; L] {
+                q[..L].try_into().expect("L <= ORDER + 1")
+            }
+            assert_eq!(bits(quad::<5>(&head(&q))), bits(quad_rowwise::<5>(&q)));
+            assert_eq!(bits(quad::<6>(&head(&q))), bits(quad_rowwise::<6>(&q)));
+            assert_eq!(bits(quad::<7>(&head(&q))), bits(quad_rowwise::<7>(&q)));
+            assert_eq!(bits(quad::<8>(&head(&q))), bits(quad_rowwise::<8>(&q)));
+            assert_eq!(bits(quad::<9>(&head(&q))), bits(quad_rowwise::<9>(&q)));
+            assert_eq!(bits(quad::<10>(&head(&q))), bits(quad_rowwise::<10>(&q)));
+            assert_eq!(bits(quad::<11>(&head(&q))), bits(quad_rowwise::<11>(&q)));
+            assert_eq!(bits(quad::<12>(&head(&q))), bits(quad_rowwise::<12>(&q)));
+            assert_eq!(bits(quad::<{ ORDER + 1 }>(&head(&q))), bits(quad_rowwise::<{ ORDER + 1 }>(&q)));
         }
     }
 
