@@ -16,16 +16,18 @@ pub(crate) fn validate(args: &SceneArgs) -> ExitCode {
     let mut text = String::new();
     // Writing to a String cannot fail.
     let _ = writeln!(text, "# scene {} is valid; resolved parameters:", scene.name);
-    text.push_str(&toml);
+    text.push_str(&short_numbers(&toml));
     let j = &scene.junctions;
     let p = &scene.plate;
-    let _ = writeln!(text, "# derived: V0 = alpha/tau0 = {}, beta dx = {}", j.v0(), j.beta_dx());
-    let _ = writeln!(text, "{}", in_force_line(&scene));
+    let short = crate::scene::error::compact_numbers;
+    let _ = writeln!(text, "{}", short(&format!("# derived: V0 = alpha/tau0 = {}, beta dx = {}", j.v0(), j.beta_dx())));
+    let _ = writeln!(text, "{}", short(&in_force_line(&scene)));
     if p.mass > 0.0 {
         let k_tot = p.k;
         let omega = (k_tot / p.mass).sqrt();
         let zeta = if k_tot > 0.0 { p.eta / (2.0 * (k_tot * p.mass).sqrt()) } else { f64::INFINITY };
-        let _ = writeln!(text, "# plate (no junctions attached): omega = sqrt(K/M) = {omega}, damping ratio = {zeta}");
+        let line = format!("# plate (no junctions attached): omega = sqrt(K/M) = {omega}, damping ratio = {zeta}");
+        let _ = writeln!(text, "{}", short(&line));
     }
     for line in super::stability::validate_block(&crate::engine::fixed::stability::analyse(&scene), scene.run.engine) {
         let _ = writeln!(text, "{line}");
@@ -35,6 +37,26 @@ pub(crate) fn validate(args: &SceneArgs) -> ExitCode {
         let _ = writeln!(text, "{line}");
     }
     emit(&text)
+}
+
+/// The scene file `toml` with each long number shown in exponent form
+/// ([`compact`](crate::scene::error::compact): `k_slope = 1e300`, not 301 digits). Only a
+/// whole value (`key = number`) is rewritten, so a string is never touched; a long number is
+/// always a float (an integer field has at most 20 digits), and the exponent form is a TOML
+/// float of the same value, so the file reads back to the same scene.
+fn short_numbers(toml: &str) -> String {
+    let mut out = String::with_capacity(toml.len());
+    for line in toml.lines() {
+        match line.split_once(" = ") {
+            Some((key, value)) if value.parse::<f64>().is_ok() => {
+                let _ = writeln!(out, "{key} = {}", crate::scene::error::compact(value.to_string()));
+            }
+            _ => {
+                let _ = writeln!(out, "{line}");
+            }
+        }
+    }
+    out
 }
 
 /// The temperature-dependent parameters in force at the scene's temperature (the file above

@@ -50,6 +50,31 @@ fn every_bundled_scene_validates_and_prints_its_resolved_parameters() {
     }
 }
 
+/// Huge and tiny values are printed in exponent form (not hundreds of digits), and the
+/// printed parameters still read back to the same scene.
+#[test]
+fn long_numbers_are_printed_short_and_read_back() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios").join("fig1.toml");
+    let sets = ["plate.k_slope=1e300", "plate.k=1e250", "junctions.kon0=1e-30", "exact.atol=2.5e-300"];
+    let mut cmd = Command::new(BIN);
+    cmd.arg("validate").arg(&path);
+    for s in sets {
+        cmd.args(["--set", s]);
+    }
+    let out = cmd.output().expect("the binary runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for line in ["k_slope = 1e300", "k = 1e250", "kon0 = 1e-30", "atol = 2.5e-300"] {
+        assert!(stdout.lines().any(|l| l == line), "no line {line:?} in\n{stdout}");
+    }
+    assert!(stdout.lines().all(|l| l.len() < 200), "a long line in\n{stdout}");
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let from_file = Scene::from_file(&path, &sets).unwrap();
+    let printed = Scene::from_toml_str(&stdout, "validate output", "fig1", &[])
+        .unwrap_or_else(|e| panic!("printed parameters do not read back: {e}\n{stdout}"));
+    assert_eq!(printed, from_file);
+}
+
 #[test]
 fn fig1_is_the_letters_figure_1() {
     let s = scenario("fig1.toml");
