@@ -49,7 +49,7 @@ fn check(args: &BenchArgs) -> Result<(), String> {
         return Err(format!("--n-max = {n}: must be from --n-min ({}) to {N_MAX} junctions", args.n_min));
     }
     if !(args.work >= 1.0 && args.work <= EVENTS_MAX) {
-        let work = crate::scene::error::compact(args.work.to_string());
+        let work = crate::scene::error::compact(args.work);
         return Err(format!("--work = {work}: must be a number of events or junction-steps from 1 to {EVENTS_MAX:e}"));
     }
     if let Some(t) = args.t_end.filter(|t| !(t.is_finite() && *t > 0.0)) {

@@ -49,7 +49,7 @@ fn short_numbers(toml: &str) -> String {
     for line in toml.lines() {
         match line.split_once(" = ") {
             Some((key, value)) if value.parse::<f64>().is_ok() => {
-                let _ = writeln!(out, "{key} = {}", crate::scene::error::compact(value.to_string()));
+                let _ = writeln!(out, "{key} = {}", crate::scene::error::compact(value));
             }
             _ => {
                 let _ = writeln!(out, "{line}");

@@ -27,15 +27,17 @@ pub enum SceneError {
 
 impl SceneError {
     pub(crate) fn invalid(field: &'static str, value: impl std::fmt::Display, allowed: impl Into<String>) -> Self {
-        SceneError::Invalid { field, value: compact(value.to_string()), allowed: allowed.into() }
+        SceneError::Invalid { field, value: compact(value), allowed: allowed.into() }
     }
 }
 
-/// A number's text as a message shows it: as `{}` writes it (the shortest text that reads
-/// back as the same `f64`), unless that is over 20 characters (magnitudes from `1e21`, or
-/// small ones with many digits), then in exponent form (`1e300`, `-2.5e-308`). Every
-/// integer of up to 20 digits (every `u64`) and every other text stay as they are.
-pub fn compact(s: String) -> String {
+/// A value as a message shows it: as `{}` writes it (for a number, the shortest text that
+/// reads back as the same `f64`), unless that is a number over 20 characters (magnitudes
+/// from `1e21`, or small ones with many digits), then in exponent form (`1e300`,
+/// `-2.5e-308`). Every integer of up to 20 digits (every `u64`) and every other text stay
+/// as they are.
+pub fn compact(v: impl std::fmt::Display) -> String {
+    let s = v.to_string();
     match s.parse::<f64>() {
         Ok(x) if s.len() > 20 => format!("{x:e}"),
         _ => s,
@@ -97,12 +99,12 @@ mod tests {
     #[test]
     fn long_numbers_are_shown_in_exponent_form() {
         for x in [1e300, -1e300, 1e-300, 2.5e-308, 1.234_567_890_123_4e21, 1e-7_f64 / 3.0] {
-            let s = compact(x.to_string());
+            let s = compact(x);
             assert!(s.len() <= 24 && s.contains('e'), "{x}: {s}");
             assert_eq!(s.parse::<f64>().unwrap().to_bits(), x.to_bits());
         }
         for s in ["18446744073709551615", "-9223372036854775808", "0.000001", "150", "1.5", "nan", "not a number"] {
-            assert_eq!(compact(s.to_string()), s);
+            assert_eq!(compact(s), s);
         }
         // Inside a message: every number, and only numbers.
         let long = format!("invalid type: floating point `{}`, expected usize; x-2.5 at 1.5e3", 1e300);

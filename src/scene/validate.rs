@@ -141,7 +141,7 @@ impl SceneFile {
             return Err(SceneError::invalid(
                 "run.t_warmup",
                 t_warmup,
-                format!("must be less than run.t_end ({})", compact(t_end.to_string())),
+                format!("must be less than run.t_end ({})", compact(t_end)),
             ));
         }
         let run =
@@ -159,7 +159,7 @@ impl SceneFile {
                 return Err(SceneError::invalid(
                     "fixed.dt",
                     fixed.dt,
-                    format!("gives more than {STEPS_MAX:e} steps over run.t_end ({})", compact(t_end.to_string())),
+                    format!("gives more than {STEPS_MAX:e} steps over run.t_end ({})", compact(t_end)),
                 ));
             }
             // The engine steps up to `t_end - STEP_SLACK dt` (`FixedParams::step_limit`): a
@@ -173,7 +173,7 @@ impl SceneFile {
                     format!(
                         "must be more than {:e} fixed.dt = {} with run.engine = \"fixed\" (the engine steps up to run.t_end less that, so a shorter run takes no step)",
                         FixedParams::STEP_SLACK,
-                        compact((FixedParams::STEP_SLACK * fixed.dt).to_string())
+                        compact(FixedParams::STEP_SLACK * fixed.dt)
                     ),
                 ));
             }
@@ -184,7 +184,7 @@ impl SceneFile {
                     format!(
                         "must be less than run.t_end - {:e} fixed.dt = {} with run.engine = \"fixed\" (the engine steps up to that time, so a later window holds no step)",
                         FixedParams::STEP_SLACK,
-                        compact(limit.to_string())
+                        compact(limit)
                     ),
                 ));
             }
@@ -233,7 +233,7 @@ impl SceneFile {
             return Err(SceneError::invalid(
                 "output.sample_dt",
                 sample_dt,
-                format!("gives more than {SAMPLES_MAX:e} samples over run.t_end ({})", compact(t_end.to_string())),
+                format!("gives more than {SAMPLES_MAX:e} samples over run.t_end ({})", compact(t_end)),
             ));
         }
         // Last: a cost check across sections (plate, junctions, run), after every field is

@@ -52,7 +52,7 @@ pub struct Scales {
 pub enum ScaleError {
     #[error("{option}: missing; {why} (give {example})")]
     Missing { option: &'static str, why: &'static str, example: &'static str },
-    #[error("{option} {}: must be a number from 1e-150 to 1e150 ({unit})", crate::scene::error::compact(value.to_string()))]
+    #[error("{option} {}: must be a number from 1e-150 to 1e150 ({unit})", crate::scene::error::compact(value))]
     NotPositive { option: &'static str, value: f64, unit: &'static str },
     /// A unit made of the scales (the force unit `kB T_ref / l0`, the velocity unit `l0 /
     /// t0`, the friction coefficient's `force unit / normal load`) outside the same window.
