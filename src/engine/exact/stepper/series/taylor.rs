@@ -370,7 +370,6 @@ impl TimeSeries {
 
     /// [`TimeSeries::integrals`].
     #[inline(always)]
-    #[allow(clippy::needless_range_loop)] // an iterator's `Zip::new` is an out-of-line call in `release`
     fn integrals_in(&self, s: f64, c: f64) -> (f64, f64) {
         // Fixed trip counts (unrolled), one size per order from MIN_ORDER: the terms a
         // larger size would add are zeros, which leave both sums as they are.
