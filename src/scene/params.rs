@@ -183,10 +183,10 @@ impl FixedParams {
         if (ratio - r).abs() <= Self::STEP_SLACK * r.max(1.0) { r as u64 } else { ratio.ceil() as u64 }
     }
 
-    /// The time up to which the engine, advancing to `t_stop`, takes its steps: it stops at
-    /// the first `n dt` at or past it.
-    pub fn step_limit(&self, t_stop: f64) -> f64 {
-        t_stop - Self::STEP_SLACK * self.dt
+    /// The time up to which the engine, advancing to `t_stop` in steps of `dt`, takes its
+    /// steps: it stops at the first `n dt` at or past it.
+    pub fn step_limit(dt: f64, t_stop: f64) -> f64 {
+        t_stop - Self::STEP_SLACK * dt
     }
 }
 

@@ -165,7 +165,7 @@ impl SceneFile {
             // The engine steps up to `t_end - STEP_SLACK dt` (`FixedParams::step_limit`): a
             // window that ends before its first step, or starts after its last, holds no
             // step, and its averages would be 0 / 0.
-            let limit = fixed.step_limit(t_end);
+            let limit = FixedParams::step_limit(fixed.dt, t_end);
             if limit <= 0.0 {
                 return Err(SceneError::invalid(
                     "run.t_end",

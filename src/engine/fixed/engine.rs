@@ -461,7 +461,7 @@ where
 
     /// Takes steps while `n dt < t_stop - 1e-9 dt`.
     fn advance<O: Observer>(&mut self, t_stop: f64, obs: &mut O) -> Result<(), EngineError> {
-        let limit = t_stop - crate::scene::FixedParams::STEP_SLACK * self.dt;
+        let limit = crate::scene::FixedParams::step_limit(self.dt, t_stop);
         while (self.steps as f64) * self.dt < limit {
             self.step(obs)?;
         }

@@ -69,6 +69,7 @@ use crate::engine::EngineError;
 use crate::observe::regime::Regime;
 use crate::output::Summary;
 use crate::runner::{RunError, RunOptions, run_scene_with};
+use crate::scene::error::compact;
 use crate::scene::{BondKind, EngineKind, RngKind, Scene};
 
 /// An observable compared between the engines.
@@ -211,7 +212,7 @@ impl Plan {
         }
         for &dt in &dts {
             if !(dt.is_finite() && dt > 0.0) {
-                let dt = crate::scene::error::compact(dt);
+                let dt = compact(dt);
                 return Err(PlanError(format!("--dts: {dt} is not allowed: each step must be a finite number > 0")));
             }
         }
@@ -253,7 +254,7 @@ impl Plan {
             // The seed is replaced below; 1 is valid for every generator.
             let set_dt = format!("fixed.dt={}", ryu::Buffer::new().format(dt));
             let fixed = quiet(scene, &["run.engine=fixed".into(), "run.seed=1".into(), set_dt])
-                .map_err(|e| PlanError(format!("--dts: {}: {e}", crate::scene::error::compact(dt))))?;
+                .map_err(|e| PlanError(format!("--dts: {}: {e}", compact(dt))))?;
             plate_growth.push(crate::engine::fixed::stability::analyse(&fixed).selected().radius_all);
             let seeds: Vec<u64> = match fixed.fixed.rng {
                 RngKind::Pcg => (0..replicas).map(|r| seeds::pcg_seed(base, Role::Fixed, j as u64, r as u64)).collect(),

@@ -53,7 +53,7 @@ pub enum ScaleError {
     #[error("{option}: missing; {why} (give {example})")]
     Missing { option: &'static str, why: &'static str, example: &'static str },
     #[error("{option} {}: must be a number from 1e-150 to 1e150 ({unit})", crate::scene::error::compact(value))]
-    NotPositive { option: &'static str, value: f64, unit: &'static str },
+    OutOfRange { option: &'static str, value: f64, unit: &'static str },
     /// A unit made of the scales (the force unit `kB T_ref / l0`, the velocity unit `l0 /
     /// t0`, the friction coefficient's `force unit / normal load`) outside the same window.
     #[error("{options}: make {what} = {value:e}, outside 1e-150 to 1e150 (every law value would be scaled by it)")]
@@ -69,7 +69,7 @@ impl ScaleArgs {
     pub fn resolve(&self) -> Result<Scales, ScaleError> {
         let need = |v: Option<f64>, option, why, example, unit| match v {
             None => Err(ScaleError::Missing { option, why, example }),
-            Some(value) => positive(value, option, unit),
+            Some(value) => in_range(value, option, unit),
         };
         let l0 = need(
             self.l0,
@@ -100,7 +100,7 @@ impl ScaleArgs {
             "newtons",
         )?;
         let (force_unit, derived) = match self.force_unit {
-            Some(f) => (positive(f, "--force-unit", "newtons")?, false),
+            Some(f) => (in_range(f, "--force-unit", "newtons")?, false),
             None => (derived_unit(BOLTZMANN * t_ref / l0, "--t-ref and --l0", "the force unit kB T_ref / l0")?, true),
         };
         derived_unit(l0 / t0, "--l0 and --t0", "the velocity unit l0 / t0")?;
@@ -114,8 +114,9 @@ fn within(value: f64) -> bool {
     (1.0 / SCALE_MAX..=SCALE_MAX).contains(&value)
 }
 
-fn positive(value: f64, option: &'static str, unit: &'static str) -> Result<f64, ScaleError> {
-    if within(value) { Ok(value) } else { Err(ScaleError::NotPositive { option, value, unit }) }
+/// `value` if within the window ([`SCALE_MAX`]), else the option named.
+fn in_range(value: f64, option: &'static str, unit: &'static str) -> Result<f64, ScaleError> {
+    if within(value) { Ok(value) } else { Err(ScaleError::OutOfRange { option, value, unit }) }
 }
 
 fn derived_unit(value: f64, options: &'static str, what: &'static str) -> Result<f64, ScaleError> {
