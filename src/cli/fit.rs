@@ -160,9 +160,11 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
             if flags.is_empty() { String::new() } else { format!("  ({})", flags.join("; ")) }
         );
     }
-    let p = r
-        .p_value
-        .map_or_else(|| "no p-value (sigma estimated from the residuals)".to_string(), |p| format!("p-value {p:.4}"));
+    let p = match (r.p_value, r.sigma_estimate) {
+        (Some(p), _) => format!("p-value {p:.4}"),
+        (None, Some(_)) => "no p-value (sigma estimated from the residuals)".to_string(),
+        (None, None) => "no p-value (no degrees of freedom)".to_string(),
+    };
     println!("  misfit chi2 = {:.4} with {} degrees of freedom; {p}", r.chi2, r.dof);
     if let Some(w) = crate::fit::report::noise_warning(&r) {
         eprintln!("warning: {w}");

@@ -74,6 +74,12 @@ pub enum EngineError {
     /// The engine cannot run this scene.
     #[error("the {engine} engine cannot run this scene: {reason}")]
     Unsupported { engine: &'static str, reason: &'static str },
+    /// Weak-bond thinning rejects nearly every candidate: its envelope bounds the rates far
+    /// too loosely for the run to finish ([`crate::engine::exact::rupture::stalled`]).
+    #[error(
+        "the weak-bond rupture thinning drew {candidates} candidates for {events} events by t = {t}: its envelope exp(beta dx kappa |x|) exceeds the tilted law's rates by up to exp(beta dx kappa l0), too loose to finish at this temperature; run it with run.engine = \"fixed\", or at a higher junctions.temperature"
+    )]
+    ThinningStalled { t: f64, candidates: u64, events: u64 },
 }
 
 /// A method that advances a scene in time. (`Send + 'static`: an engine can be kept behind a

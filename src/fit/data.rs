@@ -62,9 +62,10 @@ pub fn check_field(scene: &Scene, field: &str) -> Result<(), String> {
     }
 }
 
-/// Widest magnitude of a friction or a sigma as read (times `--friction-scale`), and of the
-/// scale itself; `1 / VALUE_MAX` is the smallest sigma and scale. Within these the misfit's
-/// terms `((F_sim - F) / sigma)^2` stay finite.
+/// Widest magnitude of a friction or a sigma as read (times `--friction-scale`), of a
+/// friction over its sigma, and of the scale itself; `1 / VALUE_MAX` is the smallest sigma
+/// and scale. Within these the data's part of the misfit's terms `((F_sim - F) / sigma)^2`
+/// stays finite (a simulated friction that overflows them is refused at its evaluation).
 pub const VALUE_MAX: f64 = 1e100;
 
 /// Whether `v` (`--friction-scale`, or a scaled sigma) is within `[1 / VALUE_MAX, VALUE_MAX]`.
@@ -158,6 +159,12 @@ impl DataSet {
                 return Err(fail(format!(
                     "line {line}: {FRICTION} = {} (times --friction-scale {scale}): must be from -1e100 to 1e100",
                     cells[friction]
+                )));
+            }
+            if let Some(s) = s.filter(|s| f.abs() / s > VALUE_MAX) {
+                return Err(fail(format!(
+                    "line {line}: {FRICTION} / {SIGMA} = {}: must be from -1e100 to 1e100 (the misfit's terms ((F_sim - F) / sigma)^2 must stay finite)",
+                    crate::scene::error::compact(f / s)
                 )));
             }
             let mut text = Vec::new();

@@ -203,39 +203,53 @@ pub fn crossing(inner: (f64, f64), outer: (f64, f64), threshold: f64) -> f64 {
     inner.0 + frac * (outer.0 - inner.0)
 }
 
-/// The interval from the two sides of a profile whose optimum is at `y_best`: the raw
-/// crossings, replaced by the smoothing parabola's where it can be fitted.
+/// The interval from the two sides of a profile whose optimum is at `y_best`. A side that
+/// stays below the threshold up to its bound ends at the bound, flagged. A side that
+/// crosses it ends at the smoothing parabola's crossing ([`parabola`]) where that is
+/// consistent with the side's own points ([`smoothed_end`]), else at its raw crossing.
 pub fn interval(y_best: f64, threshold: f64, low: Side, high: Side) -> Interval {
+    let smooth = parabola(low.points.iter().chain(&high.points), y_best, threshold);
+    let end = |side: &Side, dir: f64| match &side.end {
+        None => End { y: if dir < 0.0 { 0.0 } else { 1.0 }, at_bound: true },
+        Some(raw) => smooth
+            .and_then(|(vertex, half)| smoothed_end(&side.points, y_best, vertex + dir * half, dir, threshold))
+            .map_or_else(|| raw.clone(), |y| End { y, at_bound: false }),
+    };
+    let (lo, hi) = (end(&low, -1.0), end(&high, 1.0));
     let mut points = low.points;
     points.extend(high.points);
-    let mut low = low.end.unwrap_or(End { y: 0.0, at_bound: true });
-    let mut high = high.end.unwrap_or(End { y: 1.0, at_bound: true });
-    if let Some((vertex, half)) = parabola(&points, y_best, threshold) {
-        let (lo, hi) = (vertex - half, vertex + half);
-        low = if lo <= 0.0 || low.at_bound && lo < low.y {
-            End { y: 0.0, at_bound: true }
-        } else {
-            End { y: lo.min(y_best), at_bound: false }
-        };
-        high = if hi >= 1.0 || high.at_bound && hi > high.y {
-            End { y: 1.0, at_bound: true }
-        } else {
-            End { y: hi.max(y_best), at_bound: false }
-        };
-    }
     let max_rise = points.iter().map(|p| p.1).fold(0.0, f64::max);
     let min_rise = points.iter().map(|p| p.1).fold(0.0, f64::min);
-    Interval { low, high, profile: points, max_rise, min_rise }
+    Interval { low: lo, high: hi, profile: points, max_rise, min_rise }
 }
+
+/// The parabola's crossing `e` as the end of the side towards `dir` (`points` its profile
+/// points `(y, rise)`), kept in the box, if it agrees with them: on that side of the
+/// optimum, beyond every point whose rise is below the threshold (the profile has shown
+/// those inside the interval), and not beyond any point whose rise exceeds
+/// [`SMOOTH_OUTSIDE`] thresholds (far above what the misfit's noise can explain). `None`
+/// otherwise: a profile that is not parabola-like over the side (flat on one side of the
+/// optimum, say) is given its raw crossing.
+fn smoothed_end(points: &[(f64, f64)], y_best: f64, e: f64, dir: f64, threshold: f64) -> Option<f64> {
+    let off = |y: f64| dir * (y - y_best);
+    let inside = points.iter().filter(|p| p.1 < threshold).map(|p| off(p.0)).fold(0.0, f64::max);
+    let outside =
+        points.iter().filter(|p| p.1 > SMOOTH_OUTSIDE * threshold).map(|p| off(p.0)).fold(f64::INFINITY, f64::min);
+    (off(e) > 0.0 && off(e) >= inside && off(e) <= outside).then(|| e.clamp(0.0, 1.0))
+}
+
+/// A profile point rising more than this many thresholds lies outside the interval, whatever
+/// the smoothing parabola says.
+pub const SMOOTH_OUTSIDE: f64 = 2.0;
 
 /// The profile smoothed: a parabola `a + b d + c d^2` in `d = y - y_best` fitted by least
 /// squares to the profile points with a rise below [`SMOOTH_CAP`] times the threshold and
 /// the optimum itself (rise 0). Returns its vertex and the half-width `sqrt(threshold / c)`
 /// at which it rises by the threshold; `None` without at least [`SMOOTH_MIN_POINTS`] such
 /// points on each side, or without upward curvature.
-fn parabola(points: &[(f64, f64)], y_best: f64, threshold: f64) -> Option<(f64, f64)> {
+fn parabola<'p>(points: impl Iterator<Item = &'p (f64, f64)>, y_best: f64, threshold: f64) -> Option<(f64, f64)> {
     let used: Vec<(f64, f64)> = std::iter::once((0.0, 0.0))
-        .chain(points.iter().filter(|p| p.1 <= SMOOTH_CAP * threshold).map(|&(y, d)| (y - y_best, d)))
+        .chain(points.filter(|p| p.1 <= SMOOTH_CAP * threshold).map(|&(y, d)| (y - y_best, d)))
         .collect();
     let side = |below: bool| used.iter().filter(|p| if below { p.0 < 0.0 } else { p.0 > 0.0 }).count();
     if side(true) < SMOOTH_MIN_POINTS || side(false) < SMOOTH_MIN_POINTS {
@@ -305,6 +319,73 @@ mod tests {
         let h = |y: &[f64]| Some(if y[0] < 0.5 { ((y[0] - 0.5) / 0.05).powi(2) } else { 0.0 });
         let iv = profile(&h, &[0.5], 0.0, 1.0, t, 0).unwrap();
         assert!(!iv.low.at_bound && iv.high.at_bound && iv.determined(), "{iv:?}");
+    }
+
+    /// A side as [`side`] leaves it, from points `(offset, rise)` in the order of their
+    /// offsets: cut after the first point at or above the threshold, whose bracket gives
+    /// the raw crossing; without one, the side reaches its bound.
+    fn made_side(y_best: f64, dir: f64, pts: &[(f64, f64)], t: f64) -> Side {
+        let to_y = |off: f64| (y_best + dir * off).clamp(0.0, 1.0);
+        let (mut points, mut inner, mut end) = (Vec::new(), (0.0, 0.0), None);
+        for &(off, rise) in pts {
+            points.push((to_y(off), rise));
+            if rise >= t {
+                end = Some(End { y: to_y(crossing(inner, (off, rise), t)), at_bound: false });
+                break;
+            }
+            inner = (off, rise);
+        }
+        Side { end, points }
+    }
+
+    #[test]
+    fn every_interval_agrees_with_its_own_profile_points() {
+        // Random profiles, noisy and lopsided (one side flat, the other steep, as a
+        // parameter near a bound gives): the end of a side that reaches its bound below the
+        // threshold is that bound, flagged; a side that crosses ends beyond every point of
+        // it below the threshold and short of every point above two thresholds, whatever
+        // the smoothing parabola fitted through both sides says.
+        use rand::RngExt;
+        let t = 3.841458820694124;
+        let mut rng = crate::rng::pcg(20261129);
+        let (mut smoothed, mut crossed, mut bounded) = (0, 0, 0);
+        for _ in 0..20_000 {
+            let y_best: f64 = rng.random_range(0.05..0.95);
+            let noise = rng.random_range(0.0..1.5);
+            let mut sides = Vec::new();
+            for dir in [-1.0, 1.0] {
+                let room = if dir < 0.0 { y_best } else { 1.0 - y_best };
+                let c = 10f64.powf(rng.random_range(-1.0..3.0));
+                let k = rng.random_range(2..6);
+                let mut offs: Vec<f64> = (0..k).map(|_| rng.random_range(0.0..1.0) * room).collect();
+                offs.sort_by(f64::total_cmp);
+                let pts: Vec<(f64, f64)> =
+                    offs.iter().map(|&o| (o, c * o * o + noise * rng.random_range(-1.0..1.0))).collect();
+                sides.push(made_side(y_best, dir, &pts, t));
+            }
+            let (low, high) = (sides[0].clone(), sides[1].clone());
+            let iv = interval(y_best, t, low.clone(), high.clone());
+            for (side, end, dir) in [(&low, &iv.low, -1.0), (&high, &iv.high, 1.0)] {
+                let off = |y: f64| dir * (y - y_best);
+                match &side.end {
+                    None => {
+                        bounded += 1;
+                        assert_eq!((end.y, end.at_bound), (if dir < 0.0 { 0.0 } else { 1.0 }, true), "{side:?} {iv:?}");
+                    }
+                    Some(raw) => {
+                        crossed += 1;
+                        smoothed += usize::from(end.y != raw.y);
+                        assert!(!end.at_bound && off(end.y) > 0.0, "{side:?} {iv:?}");
+                        for &(y, rise) in &side.points {
+                            assert!(rise >= t || off(y) <= off(end.y), "{side:?} {iv:?}");
+                            assert!(rise <= SMOOTH_OUTSIDE * t || off(y) >= off(end.y), "{side:?} {iv:?}");
+                        }
+                    }
+                }
+            }
+        }
+        // Every case was met, and the parabola placed many ends.
+        assert!(smoothed > 1000 && crossed > 5000 && bounded > 1000, "{smoothed} {crossed} {bounded}");
     }
 
     /// Counts the evaluations of `f`.

@@ -277,6 +277,16 @@ impl<'a> Objective<'a> {
             });
         }
         let e = p.evaluation(values, &friction);
+        let score = p.score(&e);
+        if !score.is_finite() {
+            return Err(FitError::Run {
+                at: p.assignments(values).join(", "),
+                message: format!(
+                    "the misfit is {} (a simulated friction's distance from the data, over its sigma, overflows)",
+                    crate::scene::error::compact(score)
+                ),
+            });
+        }
         let mut c = self.state.lock().unwrap_or_else(|p| p.into_inner());
         // Made meanwhile by another search (the same values give the same evaluation):
         // kept once.
@@ -288,7 +298,7 @@ impl<'a> Objective<'a> {
         if let Some(j) = self.journal {
             j.append(n, p.base.run.seed, &e).map_err(|err| FitError::Journal(err.to_string()))?;
         }
-        c.best = c.best.min(p.score(&e));
+        c.best = c.best.min(score);
         c.index.insert(k, n);
         c.list.push(e.clone());
         c.asked.push(true);

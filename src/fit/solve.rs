@@ -1,6 +1,7 @@
 //! The whole fit: the optimum (Nelder–Mead from the scene's values, restarted once from its
-//! best point), the goodness of fit, the profile interval of every free parameter (the 2p
-//! sides of the profiles followed at the same time), and the band of the fitted curve.
+//! best point, and again from a lower point a profile finds), the goodness of fit, the
+//! profile interval of every free parameter (the 2p sides of the profiles followed at the
+//! same time), and the band of the fitted curve.
 
 use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor};
 
@@ -8,8 +9,16 @@ use super::intervals::{Interval, Side, interval, side};
 use super::model::{Evaluation, FitError, Objective, Stage};
 use super::optimise::{Settings, minimise};
 
-/// Nelder–Mead iterations per free parameter, for each of the two searches of the optimum.
+/// Nelder–Mead iterations per free parameter, for each search of the optimum.
 pub const ITERS_PER_PARAMETER: u64 = 80;
+
+/// A profile point this far (chi2 units) below the optimum, and beyond the misfit's
+/// simulation noise, restarts the search for the optimum from it (the report's flag "the
+/// optimum may be local" uses the same level).
+pub const RESTART_RISE: f64 = 0.5;
+
+/// Restarts of the search for the optimum, at most.
+pub const RESTARTS: usize = 2;
 
 /// The optimiser's tolerance is at least this many times the misfit's simulation noise
 /// ([`super::model::Problem::score_noise`]): a simplex at the bottom of a misfit with
@@ -62,9 +71,17 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
     let (n, p) = (prob.data.len(), prob.free.len());
     let has_sigma = prob.data.has_sigma;
     let stopped = || obj.take_error().unwrap_or(FitError::Stopped { done: obj.evaluations() });
+    // The lowest misfit asked for so far and its point (ties to the lesser point, so that
+    // the record does not depend on which profile side asked first).
+    let lowest = std::sync::Mutex::new((f64::INFINITY, Vec::new()));
     let score_y = |y: &[f64]| -> Option<f64> {
         let values: Vec<f64> = prob.free.iter().zip(y).map(|(f, &v)| f.value(v)).collect();
-        obj.score(&values)
+        let s = obj.score(&values)?;
+        let mut low = lowest.lock().unwrap_or_else(|p| p.into_inner());
+        if s < low.0 || (s == low.0 && y.partial_cmp(&low.1[..]) == Some(std::cmp::Ordering::Less)) {
+            *low = (s, y.to_vec());
+        }
+        Some(s)
     };
     let start: Vec<f64> = prob.free.iter().map(|f| f.unit(f.start)).collect();
     // The misfit's unit before sigma is estimated: a sum of squares is compared with the
@@ -83,15 +100,16 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
     let s1 = Settings { step: 0.1, tolerance: tolerance.max(noise_at(&start)?), max_iters: iters, unit: first_unit };
     let (y1, v1) = minimise(&score_y, &start, s1).ok_or_else(stopped)?;
     let dof = n - p;
-    let unit = if has_sigma { 1.0 } else { (v1 / dof as f64).max(f64::MIN_POSITIVE) };
-    let s2 = Settings { step: 0.05, tolerance: (1e-3 * unit).max(noise_at(&y1)?), max_iters: iters, unit };
-    let (mut best_y, mut score) = minimise(&score_y, &y1, s2).ok_or_else(stopped)?;
-    if v1 < score {
-        (best_y, score) = (y1, v1);
-    }
-    let unit = if has_sigma { 1.0 } else { (score / dof as f64).max(f64::MIN_POSITIVE) };
-    let search_evaluations = obj.asked();
-    obj.set_stage(Stage::Profiles);
+    let unit_of = |score: f64| if has_sigma { 1.0 } else { (score / dof as f64).max(f64::MIN_POSITIVE) };
+    // The second search, and a restart's: from `from`, the better of its result and `from`.
+    let refine = |from: Vec<f64>, at: f64| -> Result<(Vec<f64>, f64), FitError> {
+        let unit = unit_of(at);
+        let s2 = Settings { step: 0.05, tolerance: (1e-3 * unit).max(noise_at(&from)?), max_iters: iters, unit };
+        let (y, v) = minimise(&score_y, &from, s2).ok_or_else(stopped)?;
+        Ok(if at < v { (from, at) } else { (y, v) })
+    };
+    let (mut best_y, mut score) = refine(y1, v1)?;
+    let mut search_evaluations = obj.asked();
     let (threshold, band_threshold) = if has_sigma {
         (quantile95(ChiSquared::new(1.0).expect("1 > 0")), quantile95(ChiSquared::new(p as f64).expect("p > 0")))
     } else {
@@ -101,27 +119,44 @@ pub fn fit(obj: &Objective<'_>) -> Result<FitResult, FitError> {
             p as f64 * quantile95(FisherSnedecor::new(p as f64, d).expect("dof > 0")),
         )
     };
-    let noise = noise_at(&best_y)?;
-    // The 2p sides of the profiles are independent searches: each on its own thread, so
-    // that their evaluations run side by side (on the pool, or on a cluster). Each side's
-    // evaluations, and so the intervals, do not depend on what runs next to it.
-    let sides: Vec<Option<Side>> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..p)
-            .flat_map(|j| [(j, -1.0), (j, 1.0)])
-            .map(|(j, dir)| {
-                let (score_y, best_y) = (&score_y, &best_y);
-                s.spawn(move || side(score_y, best_y, score, unit, threshold, j, dir, noise))
-            })
-            .collect();
-        handles.into_iter().map(|h| h.join().unwrap_or(None)).collect()
-    });
-    let mut intervals = Vec::with_capacity(p);
-    let mut sides = sides.into_iter();
-    for &y in &best_y {
-        let (low, high) = (sides.next().flatten(), sides.next().flatten());
-        let (Some(low), Some(high)) = (low, high) else { return Err(stopped()) };
-        intervals.push(interval(y, threshold, low, high));
-    }
+    let mut restarts = 0;
+    let (intervals, unit) = loop {
+        obj.set_stage(Stage::Profiles);
+        let unit = unit_of(score);
+        let noise = noise_at(&best_y)?;
+        // The 2p sides of the profiles are independent searches: each on its own thread, so
+        // that their evaluations run side by side (on the pool, or on a cluster). Each
+        // side's evaluations, and so the intervals, do not depend on what runs next to it.
+        let sides: Vec<Option<Side>> = std::thread::scope(|s| {
+            let handles: Vec<_> = (0..p)
+                .flat_map(|j| [(j, -1.0), (j, 1.0)])
+                .map(|(j, dir)| {
+                    let (score_y, best_y) = (&score_y, &best_y);
+                    s.spawn(move || side(score_y, best_y, score, unit, threshold, j, dir, noise))
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap_or(None)).collect()
+        });
+        let mut intervals = Vec::with_capacity(p);
+        let mut sides = sides.into_iter();
+        for &y in &best_y {
+            let (low, high) = (sides.next().flatten(), sides.next().flatten());
+            let (Some(low), Some(high)) = (low, high) else { return Err(stopped()) };
+            intervals.push(interval(y, threshold, low, high));
+        }
+        // A profile that found a misfit lower than the optimum by more than the noise (and
+        // than RESTART_RISE) shows that the search stopped short: it is restarted there,
+        // and the profiles are followed again from its result.
+        let (low_score, low_y) = lowest.lock().unwrap_or_else(|p| p.into_inner()).clone();
+        if restarts == RESTARTS || low_score >= score - (RESTART_RISE * unit).max(noise) {
+            break (intervals, unit);
+        }
+        restarts += 1;
+        obj.set_stage(Stage::Search);
+        let asked = obj.asked();
+        (best_y, score) = refine(low_y, low_score)?;
+        search_evaluations += obj.asked() - asked;
+    };
     let values: Vec<f64> = prob.free.iter().zip(&best_y).map(|(f, &v)| f.value(v)).collect();
     let best = obj.evaluate(&values)?;
     let all = obj.all();

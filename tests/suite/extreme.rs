@@ -524,6 +524,41 @@ fn overflowing_weak_bonds_rupture_at_once() {
     }
 }
 
+/// Tilted weak bonds far below the reference temperature (`temperature = 0.001` on the
+/// Fig. 2 scene, `a l0 = beta dx kappa l0 = 100`): the thinning envelope `exp(a |x|)`
+/// exceeds the rate `exp(a (sqrt(x^2 + l0^2) - l0))` by up to `e^100`, so nearly every
+/// candidate is rejected. The run stops with `ThinningStalled` once its candidates pass the
+/// stall limit, instead of running without end; a temperature the envelope fits finishes
+/// with about one candidate per event.
+#[test]
+fn a_stalled_thinning_is_reported() {
+    let fig2 = include_str!("../../scenarios/fig2.toml");
+    let at = |t: &str, end: &str| {
+        scene(
+            fig2,
+            &[
+                "junctions.bond=weak",
+                "junctions.force_law=tilted",
+                t,
+                "run.t_warmup=0",
+                end,
+                "output.trace=false",
+                "output.plot=false",
+            ],
+        )
+    };
+    match try_run(&at("junctions.temperature=0.001", "run.t_end=1.5")) {
+        Err(EngineError::ThinningStalled { candidates, events, .. }) => {
+            assert!(stickslip::engine::exact::rupture::stalled(candidates, events), "{candidates} for {events}");
+        }
+        Err(e) => panic!("another error: {e}"),
+        Ok(r) => panic!("finished: {:?}", r.counters),
+    }
+    let r = run(&at("junctions.temperature=1", "run.t_end=50"));
+    let (cands, events) = (r.counters.candidates.unwrap(), r.counters.events.unwrap());
+    assert!(events > 1000 && cands < 2 * events, "{cands} candidates for {events} events");
+}
+
 // ---------------------------------------------------------------------------------------
 // Long runs
 

@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::junctions::{after_event, form, horizon, maybe_rebase, rebase, refresh_clocks, rupture};
 use super::state::{Core, FORMATION, HORIZON, RUPTURE};
-use crate::engine::exact::rupture::{RuptureModel, thin};
+use crate::engine::exact::rupture::{RuptureModel, stalled, thin};
 use crate::engine::exact::stepper::contract::{Moved, Stepper, Target, WeakRuptures};
 use crate::engine::{Counters, Engine, EngineError};
 use crate::observe::{Observer, Sample};
@@ -70,7 +70,13 @@ impl<S: Stepper, R: RuptureModel> Engine for Exact<S, R> {
                     let (mut cands, law, att) = (0, s.rate(), &core.bags.attached);
                     let (span, bounds) = ((step.s0, step.s1), (step.y_lo, step.y_hi));
                     let hit = thin(r, &mut core.rng, span, bounds, att, &law, |t| s.position(t), &mut cands)?;
-                    *core.counters.candidates.get_or_insert(0) += cands;
+                    let total = core.counters.candidates.get_or_insert(0);
+                    *total += cands;
+                    let (total, events) = (*total, core.counters.ruptures + core.counters.formations);
+                    if stalled(total, events) {
+                        let t = core.frame.time(step.s1);
+                        return Err(EngineError::ThinningStalled { t, candidates: total, events });
+                    }
                     hit
                 } else {
                     None

@@ -41,5 +41,5 @@ pub use contract::{Plan, RuptureModel};
 pub use hazard::Hazard;
 pub use rate::{LinearRate, RuptureRate, TiltedRate};
 pub use strong::StrongRupture;
-pub use thin::thin;
+pub use thin::{stalled, thin};
 pub use tree::TreeRupture;

@@ -13,6 +13,20 @@ use crate::engine::EngineError;
 use crate::engine::exact::core::bags::Attached;
 use crate::rng::Pcg64;
 
+/// Candidates drawn beyond which a run is stalled, whatever its events ([`stalled`]) ...
+pub const STALL_CANDIDATES: u64 = 100_000_000;
+/// ... plus this many per event.
+pub const STALL_PER_EVENT: u64 = 100_000;
+
+/// Whether a run that has drawn `candidates` thinning candidates for `events` events is
+/// stalled: more than [`STALL_CANDIDATES`] plus [`STALL_PER_EVENT`] per event. A scene the
+/// envelope fits draws about one candidate per event; the tilted law's envelope
+/// `exp(a |x|)` exceeds its rate `exp(a (sqrt(x^2 + l0^2) - l0))` by up to `exp(a l0)`,
+/// which at a low temperature (`a l0 >> 1`) leaves the acceptance near zero.
+pub fn stalled(candidates: u64, events: u64) -> bool {
+    candidates > STALL_CANDIDATES.saturating_add(STALL_PER_EVENT.saturating_mul(events))
+}
+
 /// The first accepted candidate `(time, slot)` of `model` over the step `[s0, s1]` with bounds
 /// `[y_lo, y_hi]`, if any; `y_at(s)` is the plate's position inside the step. The acceptance
 /// `r_i / b_i` is at most 1 only while the plate is within the bounds: checked wherever the
