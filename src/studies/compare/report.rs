@@ -13,7 +13,10 @@
 //!
 //! The ratio of the two costs is evaluated on a logarithmic grid of `e`, from twice the
 //! reference's standard error (smaller errors cannot be resolved against this reference) to
-//! the larger of one exact replica's spread and the largest measured bias.
+//! the larger of one exact replica's spread and the largest measured bias. The cost curves
+//! can cross more than once (when one exact replica costs less than one fixed-step replica,
+//! both engines need a single replica at large errors and the exact engine wins there
+//! again), so the reading names every range of the grid where each engine is cheaper.
 
 use std::fmt::Write as _;
 
@@ -135,10 +138,15 @@ impl CostModel {
 
 /// `error` and, in parentheses, as a percentage of `reference`.
 fn with_pct(error: f64, reference: f64) -> String {
+    with_pct_to(error, reference, 2)
+}
+
+/// [`with_pct`] to `digits` significant digits.
+fn with_pct_to(error: f64, reference: f64, digits: usize) -> String {
     if reference != 0.0 && reference.is_finite() {
-        format!("{} ({} %)", sig(error, 2), sig(100.0 * error / reference.abs(), 2))
+        format!("{} ({} %)", sig(error, digits), sig(100.0 * error / reference.abs(), digits))
     } else {
-        sig(error, 2)
+        sig(error, digits)
     }
 }
 
@@ -237,6 +245,133 @@ fn cost_line(study: &Study, fits: &[Option<BiasFit>]) -> String {
 /// A point of the reading's grid: error, exact cost, cheapest fixed cost and its step.
 type GridPoint = (f64, f64, Option<(f64, f64)>);
 
+/// Whether the fixed-step engine is the cheaper at `g`.
+fn fixed_wins(g: &GridPoint) -> bool {
+    g.2.is_some_and(|(c, _)| c < g.1)
+}
+
+/// Fixed cost over exact cost at `g` (infinite where no step gets there).
+fn ratio(g: &GridPoint) -> f64 {
+    g.2.map_or(f64::INFINITY, |(c, _)| c / g.1)
+}
+
+/// Both engines' costs at `g`, as text.
+fn costs_at(g: &GridPoint, reference: f64) -> String {
+    match g.2 {
+        Some((c, dt)) => format!(
+            "at error {}: exact {} s, fixed {} s at dt = {}",
+            with_pct(g.0, reference),
+            sig(g.1, 2),
+            sig(c, 2),
+            dt_label(dt)
+        ),
+        None => format!("at error {}: exact {} s, no step tried gets there", with_pct(g.0, reference), sig(g.1, 2)),
+    }
+}
+
+/// The maximal runs of consecutive grid points on which the same engine is the cheaper:
+/// (fixed-step cheaper, first index, last index).
+fn runs(grid: &[GridPoint]) -> Vec<(bool, usize, usize)> {
+    let mut out: Vec<(bool, usize, usize)> = Vec::new();
+    for (k, g) in grid.iter().enumerate() {
+        let fixed = fixed_wins(g);
+        match out.last_mut() {
+            Some(run) if run.0 == fixed => run.2 = k,
+            _ => out.push((fixed, k, k)),
+        }
+    }
+    out
+}
+
+/// Where on the grid one engine is the cheaper, by the errors that bound it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Range {
+    Below(f64),
+    Above(f64),
+    Between(f64, f64),
+    At(f64),
+}
+
+/// The ranges of the runs of one engine (`fixed`), of a grid on which each engine wins
+/// somewhere. Every bound is an end of a run of the fixed-step engine: its ranges include
+/// their bounds, the exact engine's exclude them.
+fn ranges(grid: &[GridPoint], runs: &[(bool, usize, usize)], fixed: bool) -> Vec<Range> {
+    let e = |k: usize| grid[k].0;
+    let last = grid.len() - 1;
+    let range = |&(_, s, t): &(bool, usize, usize)| match (fixed, s, t) {
+        (true, s, t) if s == t => Range::At(e(s)),
+        (true, 0, t) => Range::Below(e(t)),
+        (true, s, t) if t == last => Range::Above(e(s)),
+        (true, s, t) => Range::Between(e(s), e(t)),
+        (false, 0, t) => Range::Below(e(t + 1)),
+        (false, s, t) if t == last => Range::Above(e(s - 1)),
+        (false, s, t) => Range::Between(e(s - 1), e(t + 1)),
+    };
+    runs.iter().filter(|r| r.0 == fixed).map(range).collect()
+}
+
+/// The fewest significant digits, at least 2, at which distinct `values` print distinct.
+fn distinct_digits(values: &[f64]) -> usize {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    v.dedup();
+    (2..6).find(|&d| v.windows(2).all(|w| sig(w[0], d) != sig(w[1], d))).unwrap_or(6)
+}
+
+/// `ranges` as text, e.g. "below error A, between B and C and above D", the errors to
+/// `digits` significant digits.
+fn ranges_text(ranges: &[Range], reference: f64, digits: usize) -> String {
+    let e = |v: f64| with_pct_to(v, reference, digits);
+    let parts: Vec<String> = ranges
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let (one, two) = if i == 0 { ("error ", "errors ") } else { ("", "") };
+            match *r {
+                Range::Below(a) => format!("below {one}{}", e(a)),
+                Range::Above(a) => format!("above {one}{}", e(a)),
+                Range::At(a) => format!("at {one}{}", e(a)),
+                Range::Between(a, b) => format!("between {two}{} and {}", e(a), e(b)),
+            }
+        })
+        .collect();
+    match parts.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+        _ => parts.concat(),
+    }
+}
+
+/// The reading of a grid on which each engine is the cheaper somewhere: every range of
+/// each, an example of the exact engine's (the smallest error where it wins) and the
+/// fixed-step engine's largest factor.
+fn split_reading(grid: &[GridPoint], reference: f64) -> String {
+    let runs = runs(grid);
+    let (exact, fixed) = (ranges(grid, &runs, false), ranges(grid, &runs, true));
+    let bounds: Vec<f64> = exact
+        .iter()
+        .flat_map(|r| match *r {
+            Range::Below(a) | Range::Above(a) | Range::At(a) => vec![a],
+            Range::Between(a, b) => vec![a, b],
+        })
+        .collect();
+    let digits = distinct_digits(&bounds);
+    // With one crossing the fixed-step range is the other side of the exact engine's bound.
+    let fixed_text = match (runs.len(), fixed.as_slice()) {
+        (2, [Range::Below(_)]) => "below it".to_string(),
+        (2, [Range::Above(_)]) => "above it".to_string(),
+        _ => ranges_text(&fixed, reference, digits),
+    };
+    let example = grid.iter().find(|g| !fixed_wins(g)).unwrap();
+    let best = grid.iter().filter(|g| fixed_wins(g)).min_by(|a, b| ratio(a).total_cmp(&ratio(b))).unwrap();
+    format!(
+        "the exact engine is cheaper {} ({}); the fixed-step engine is cheaper {fixed_text}, by up to x{} ({}).",
+        ranges_text(&exact, reference, digits),
+        costs_at(example, reference),
+        sig(1.0 / ratio(best), 2),
+        costs_at(best, reference)
+    )
+}
+
 /// The reading: the per-replica cost line, then one line per observable saying where each
 /// engine is cheaper and by what factor.
 pub fn reading(study: &Study) -> Vec<String> {
@@ -253,41 +388,28 @@ pub fn reading(study: &Study) -> Vec<String> {
             continue;
         }
         let n = 60;
-        // (error, exact cost, fixed cost and step)
         let grid: Vec<GridPoint> = (0..=n)
             .map(|k| {
                 let e = lo * (hi / lo).powf(k as f64 / n as f64);
                 (e, m.exact(e), m.fixed(e))
             })
             .collect();
-        let fixed_wins = |g: &GridPoint| g.2.is_some_and(|(c, _)| c < g.1);
-        let fmt = |g: &GridPoint| match g.2 {
-            Some((c, dt)) => format!(
-                "at error {}: exact {} s, fixed {} s at dt = {}",
-                with_pct(g.0, reference),
-                sig(g.1, 2),
-                sig(c, 2),
-                dt_label(dt)
-            ),
-            None => format!("at error {}: exact {} s, no step tried gets there", with_pct(g.0, reference), sig(g.1, 2)),
-        };
-        let ratio = |g: &GridPoint| g.2.map_or(f64::INFINITY, |(c, _)| c / g.1);
         let mut line = format!("`{}`: ", o.key());
-        let first_fixed = grid.iter().position(fixed_wins);
+        let fixed_anywhere = grid.iter().any(fixed_wins);
         let exact_anywhere = grid.iter().any(|g| !fixed_wins(g));
-        match (first_fixed, exact_anywhere) {
-            (None, _) => {
+        match (fixed_anywhere, exact_anywhere) {
+            (false, _) => {
                 let at = grid.iter().min_by(|a, b| ratio(a).total_cmp(&ratio(b))).unwrap();
                 let _ = write!(
                     line,
                     "the exact engine is cheaper at every error from {} to {}; {}; {}.",
                     with_pct(lo, reference),
                     with_pct(hi, reference),
-                    fmt(&grid[0]),
-                    fmt(at)
+                    costs_at(&grid[0], reference),
+                    costs_at(at, reference)
                 );
             }
-            (Some(_), false) => {
+            (true, false) => {
                 let at = grid.iter().max_by(|a, b| ratio(a).total_cmp(&ratio(b))).unwrap();
                 let _ = write!(
                     line,
@@ -295,21 +417,10 @@ pub fn reading(study: &Study) -> Vec<String> {
                     with_pct(lo, reference),
                     with_pct(hi, reference),
                     sig(1.0 / ratio(at), 2),
-                    fmt(at)
+                    costs_at(at, reference)
                 );
             }
-            (Some(k), true) => {
-                let best = grid.iter().filter(|g| fixed_wins(g)).min_by(|a, b| ratio(a).total_cmp(&ratio(b))).unwrap();
-                let _ = write!(
-                    line,
-                    "the exact engine is cheaper below error {} ({}); the fixed-step engine is cheaper above it, \
-                     by up to x{} ({}).",
-                    with_pct(grid[k].0, reference),
-                    fmt(&grid[0]),
-                    sig(1.0 / ratio(best), 2),
-                    fmt(best)
-                );
-            }
+            (true, true) => line.push_str(&split_reading(&grid, reference)),
         }
         lines.push(line);
     }
@@ -450,7 +561,7 @@ pub(crate) fn growth_text(growth: Option<f64>) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::studies::compare::Reference;
+    use crate::studies::compare::{PointObs, Reference};
 
     /// The exact replica's cost counts the reference's replicas only when they ran at the
     /// points' tolerance.
@@ -479,5 +590,102 @@ mod tests {
         assert_eq!(exact_cost_per_replica(&study), 6.75 / 17.0);
         study.exact_rtol = Some(1e-6);
         assert_eq!(exact_cost_per_replica(&study), 1.75 / 7.0);
+    }
+
+    /// A study of `attached_fraction_mean` (reference 0.5, one replica's spread 0.01, standard
+    /// error 0.001, one exact replica 0.01 s) with one fixed step whose replica costs
+    /// `cost` s, spreads by `sd` and is biased by `bias`: the reading's grid runs from error
+    /// 0.002 to 0.01.
+    fn one_step(cost: f64, sd: f64, bias: f64) -> Study {
+        use crate::studies::stats::ReplicaStats;
+        let obs = PointObs { estimate: 0.5 + bias, se: sd / 4.0, error: bias, ci_low: 0.0, ci_high: 1.0, floor: 0.01 };
+        let fixed = Point {
+            engine: EngineKind::Fixed,
+            dt: Some(0.5),
+            replicas: 16,
+            wall_seconds: 16.0 * cost,
+            cpu_seconds: 16.0 * cost,
+            status: Status::Ok,
+            diverged_replicas: 0,
+            plate_growth: Some(0.5),
+            obs: vec![obs],
+        };
+        let stats = vec![ReplicaStats { n: 100, mean: 0.5, sd: 0.01, se: 0.001 }];
+        Study {
+            scene: crate::test_scenes::fig1(),
+            observables: vec![Observable::AttachedFraction],
+            replicas: 16,
+            exact_rtol: None,
+            reference: Reference { replicas: 100, wall_seconds: 1.0, cpu_seconds: 1.0, stats },
+            points: vec![fixed],
+            threads: 1,
+        }
+    }
+
+    /// The reading's line of the one observable of `one_step`.
+    fn line(cost: f64, sd: f64, bias: f64) -> String {
+        reading(&one_step(cost, sd, bias)).pop().unwrap()
+    }
+
+    /// A fixed-step replica dearer than an exact one but with less spread: the fixed-step
+    /// engine wins only between two crossings, and the exact engine below and above them.
+    #[test]
+    fn a_reading_names_both_crossings_of_cost_curves_that_cross_twice() {
+        assert_eq!(
+            line(0.011, 0.005, 0.003),
+            "`attached_fraction_mean`: the exact engine is cheaper below error 0.0036 (0.72 %) and above 0.0095 (1.9 \
+             %) (at error 0.0020 (0.40 %): exact 0.25 s, no step tried gets there); the fixed-step engine is cheaper \
+             between errors 0.0036 (0.72 %) and 0.0095 (1.9 %), by up to x2.7 (at error 0.0058 (1.2 %): exact 0.029 \
+             s, fixed 0.011 s at dt = 0.5)."
+        );
+    }
+
+    /// One crossing, either way round: the fixed-step engine's side is "above it" or
+    /// "below it".
+    #[test]
+    fn a_reading_of_cost_curves_that_cross_once_names_the_one_crossing() {
+        assert_eq!(
+            line(0.009, 0.005, 0.003),
+            "`attached_fraction_mean`: the exact engine is cheaper below error 0.0034 (0.68 %) (at error 0.0020 (0.40 \
+             %): exact 0.25 s, no step tried gets there); the fixed-step engine is cheaper above it, by up to x3.2 (at \
+             error 0.0058 (1.2 %): exact 0.029 s, fixed 0.0090 s at dt = 0.5)."
+        );
+        assert_eq!(
+            line(0.011, 0.001, 0.0),
+            "`attached_fraction_mean`: the exact engine is cheaper above error 0.0095 (1.9 %) (at error 0.0097 (1.9 \
+             %): exact 0.011 s, fixed 0.011 s at dt = 0.5); the fixed-step engine is cheaper below it, by up to x23 \
+             (at error 0.0020 (0.40 %): exact 0.25 s, fixed 0.011 s at dt = 0.5)."
+        );
+    }
+
+    /// Curves that never cross: one engine is cheaper at every error of the grid.
+    #[test]
+    fn a_reading_of_cost_curves_that_never_cross_names_one_engine() {
+        assert!(
+            line(0.02, 0.01, 0.003)
+                .starts_with("`attached_fraction_mean`: the exact engine is cheaper at every error from 0.0020 (0.40 %) to 0.010 (2.0 %); "),
+            "{}",
+            line(0.02, 0.01, 0.003)
+        );
+        assert!(
+            line(0.001, 0.005, 1e-4).starts_with(
+                "`attached_fraction_mean`: the fixed-step engine is cheaper at every error from 0.0020 (0.40 %) to 0.010 \
+                 (2.0 %), by at least x"
+            ),
+            "{}",
+            line(0.001, 0.005, 1e-4)
+        );
+    }
+
+    /// Bounds a grid step apart print with enough digits to tell them apart.
+    #[test]
+    fn bounds_print_distinct() {
+        assert_eq!(distinct_digits(&[0.0036, 0.0095]), 2);
+        assert_eq!(distinct_digits(&[0.001481, 0.001549, 0.001481]), 3);
+        assert_eq!(distinct_digits(&[0.5]), 2);
+        let r = [Range::Below(0.001481), Range::Above(0.001549)];
+        assert_eq!(ranges_text(&r, 0.5, 3), "below error 0.00148 (0.296 %) and above 0.00155 (0.310 %)");
+        let r = [Range::At(0.001), Range::Between(0.002, 0.003), Range::Above(0.004)];
+        assert_eq!(ranges_text(&r, 0.0, 2), "at error 0.0010, between 0.0020 and 0.0030 and above 0.0040");
     }
 }
