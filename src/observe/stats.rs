@@ -25,6 +25,9 @@ pub struct WindowStats {
     bond_force_integral: f64,
     viscous_integral: f64,
     attached_integral: f64,
+    /// `int (N - N_att) dt`: with `attached_integral`, `N` times the time covered, summed on
+    /// the same pieces ([`WindowStats::attached_fraction_mean`]).
+    detached_integral: f64,
     /// The stretch since the last stop (empty at a stop).
     #[serde(skip)]
     stretch: ShiftedSums,
@@ -40,6 +43,7 @@ impl WindowStats {
             bond_force_integral: 0.0,
             viscous_integral: 0.0,
             attached_integral: 0.0,
+            detached_integral: 0.0,
             stretch: ShiftedSums::default(),
         }
     }
@@ -65,8 +69,13 @@ impl WindowStats {
     pub fn viscous_mean(&self) -> f64 {
         self.viscous_integral / self.covered()
     }
+    /// The attached fraction's time average, `int N_att / (int N_att + int (N - N_att))`: both
+    /// sums over the same pieces, so it lies in `[0, 1]` by construction (rounding is monotone,
+    /// so the sum of the two is not below the first) and is exactly 1 when every junction
+    /// stayed attached, 0 when none did.
     pub fn attached_fraction_mean(&self) -> f64 {
-        self.attached_integral / self.covered() / self.n as f64
+        let (a, d) = (self.attached_integral, self.detached_integral);
+        a / (a + d)
     }
 }
 
@@ -86,6 +95,7 @@ impl Observer for WindowStats {
         self.bond_force_integral += w * s.bond_force;
         self.viscous_integral += w * s.viscous;
         self.attached_integral += w * s.attached as f64;
+        self.detached_integral += w * (self.n - s.attached) as f64;
     }
 
     /// A piece inside the window is summed as it is (no division); one before it costs a
@@ -101,6 +111,7 @@ impl Observer for WindowStats {
             self.bond_force_integral += p.bond;
             self.viscous_integral += p.viscous;
             self.attached_integral += p.h * p.attached as f64;
+            self.detached_integral += p.h * (self.n - p.attached) as f64;
         } else {
             self.straddling(p);
         }
@@ -126,6 +137,7 @@ impl Observer for WindowStats {
             self.bond_force_integral += s.bond;
             self.viscous_integral += s.viscous;
             self.attached_integral += s.attached;
+            self.detached_integral += s.detached;
         }
     }
 
@@ -194,6 +206,7 @@ impl Observer for RuptureForces {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rng::{UniformSource, pcg};
 
     #[test]
     fn window_clips_segments() {
@@ -206,5 +219,32 @@ mod tests {
         // weights: k=1 covers [1,1.5]=0.5, k=2 [1.5,2.25]=0.75, k=3 [2.25,3]=0.75
         assert!((w.friction_mean() - (0.5 * 1.0 + 0.75 * 2.0 + 0.75 * 3.0) / 2.0).abs() < 1e-15);
         assert!((w.attached_fraction_mean() - 0.5).abs() < 1e-15);
+    }
+
+    /// Segments of `0.1` (whose clipped lengths round differently) from `t = 0` to `100`,
+    /// with `attached(k)` of 300 junctions on the `k`-th, a stop after every `stride`-th.
+    fn tenths(attached: impl Fn(usize) -> u64, stride: usize) -> WindowStats {
+        let mut w = WindowStats::new(0.0, 100.0, 300);
+        for k in 0..1000 {
+            let t0 = k as f64 * 0.1;
+            w.segment(&Segment { t0, t1: t0 + 0.1, attached: attached(k), ..Default::default() });
+            if k % stride == 0 {
+                w.stop();
+            }
+        }
+        w
+    }
+
+    #[test]
+    fn attached_fraction_is_exactly_one_with_every_junction_attached_and_within_zero_and_one() {
+        for stride in [1, 7, 1000] {
+            assert_eq!(tenths(|_| 300, stride).attached_fraction_mean(), 1.0, "stride {stride}");
+            assert_eq!(tenths(|_| 0, stride).attached_fraction_mean(), 0.0, "stride {stride}");
+            // 299 or 300 attached: just below 1.
+            let mut rng = pcg(stride as u64);
+            let counts: Vec<u64> = (0..1000).map(|_| 299 + (rng.uniform() * 2.0) as u64).collect();
+            let f = tenths(|k| counts[k], stride).attached_fraction_mean();
+            assert!((0.99..=1.0).contains(&f), "stride {stride}: {f}");
+        }
     }
 }

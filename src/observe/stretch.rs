@@ -29,4 +29,6 @@ pub struct Stretch {
     pub viscous: f64,
     /// `int N_att dt`.
     pub attached: f64,
+    /// `int (N - N_att) dt`.
+    pub detached: f64,
 }

@@ -34,7 +34,7 @@ use super::state_codec;
 /// The checkpoint's file name in the output directory.
 pub const FILE: &str = "checkpoint.bin";
 /// Format version written, and the only one read.
-pub const VERSION: u32 = 11;
+pub const VERSION: u32 = 12;
 const MAGIC: &[u8; 21] = b"stickslip checkpoint\n";
 const TRAILER: usize = 16;
 const PREAMBLE: usize = MAGIC.len() + 4 + 8;

@@ -9,6 +9,7 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 
 use super::{Axis, PALETTE, Panel, PlotError, Series, render_svg};
+use crate::output::TRACE_SVG;
 use crate::output::atomic::{WriteFileError, write_files};
 use crate::scene::Scene;
 
@@ -125,7 +126,7 @@ pub fn write_trace_svg(dir: &Path, scene: &Scene) -> Result<(), TracePlotError> 
         a.push(cols[0], cols[5]);
     }
     let svg = render_svg(&trace_panels(scene, f.points(), a.points()), 1000, 380)?;
-    Ok(write_files(dir, &[("trace.svg", svg)])?)
+    Ok(write_files(dir, &[(TRACE_SVG, svg)])?)
 }
 
 #[cfg(test)]

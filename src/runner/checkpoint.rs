@@ -1,4 +1,5 @@
-//! Checkpoints of a run: writing and removing them ([`super::resume()`] reads them).
+//! Checkpoints of a run: writing and removing them ([`super::resume()`] reads them), and
+//! removing an earlier run's files when a new run starts.
 //!
 //! A checkpoint ([`crate::output::checkpoint`] for the file format) is taken at an
 //! output-grid stop, where the engine is between two advances. It records
@@ -23,8 +24,9 @@ use super::plan::RunPlan;
 use crate::engine::Engine;
 use crate::observe::regime::RegimeDetector;
 use crate::observe::stats::{RuptureForces, WindowStats};
+use crate::output::RUN_FILES;
 use crate::output::checkpoint::{self as file, FILE};
-use crate::output::csv::{EventWriter, FilePos, TraceWriter};
+use crate::output::csv::FilePos;
 use crate::scene::Scene;
 
 pub(super) const PROGRAM: &str = "stickslip";
@@ -64,12 +66,12 @@ pub(crate) fn remove(dir: &Path) -> Result<(), RunError> {
     remove_files(dir, &[FILE.to_string(), format!("{FILE}.part")])
 }
 
-/// Removes what an earlier run killed in `dir` left: its checkpoint and partial outputs
-/// (a new run would overwrite them; a checkpoint must never outlive the files it describes).
+/// Removes every file an earlier run left in `dir`, finished or partial ([`RUN_FILES`] and
+/// their `.part` files; `summary.json` first), and nothing else: a new run that fails or is
+/// killed then leaves nothing that looks complete, and no checkpoint of files it replaced.
 pub(crate) fn remove_stale(dir: &Path) -> Result<(), RunError> {
-    let parts = [TraceWriter::NAME, EventWriter::NAME].map(|n| format!("{n}.part"));
-    remove(dir)?;
-    remove_files(dir, &parts)
+    let names: Vec<String> = RUN_FILES.iter().flat_map(|n| [n.to_string(), format!("{n}.part")]).collect();
+    remove_files(dir, &names)
 }
 
 fn remove_files(dir: &Path, names: &[String]) -> Result<(), RunError> {

@@ -16,18 +16,19 @@ use super::progress;
 use crate::engine::{Engine, EngineError, EngineVisitor, with_engine};
 use crate::observe::Nothing;
 use crate::observe::stats::RuptureForces;
-use crate::output::Summary;
 use crate::output::atomic::write_whole;
+use crate::output::{SUMMARY, Summary};
 use crate::scene::{BondKind, Scene};
 
 /// Runs a scene to its end. With `out = Some(dir)` (an existing, writable directory) the
-/// files the scene asks for and `summary.json` are written there, each whole or not at all.
+/// files the scene asks for and `summary.json` are written there, each whole or not at all,
+/// in place of any an earlier run left.
 pub fn run_scene(scene: &Scene, out: Option<&Path>) -> Result<Summary, RunError> {
     run_scene_with(scene, out, &RunOptions::default())
 }
 
-/// As [`run_scene`], with checkpoints, progress and a stop flag as `opts` asks. A
-/// checkpoint and partial outputs left in `out` by an earlier, killed run are removed first.
+/// As [`run_scene`], with checkpoints, progress and a stop flag as `opts` asks. Every file
+/// an earlier run left in `out` (finished or partial, and its checkpoint) is removed first.
 pub fn run_scene_with(scene: &Scene, out: Option<&Path>, opts: &RunOptions) -> Result<Summary, RunError> {
     if let Some(dir) = out {
         checkpoint::remove_stale(dir)?;
@@ -127,7 +128,7 @@ fn run_engine<E: Engine, X: EventObservers>(
         obs.commit_files(dir)?;
         // summary.json comes last: its presence says the run is complete.
         let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
-        write_whole(dir, "summary.json", json.as_bytes()).map_err(output_error(dir, "summary.json"))?;
+        write_whole(dir, SUMMARY, json.as_bytes()).map_err(output_error(dir, SUMMARY))?;
         checkpoint::remove(dir)?;
     }
     Ok(summary)

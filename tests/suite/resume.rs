@@ -5,7 +5,9 @@
 //! and weak bonds, tilted law), and for kinematic plates and a thermally activated scene. Also: the progress display changes nothing, a finished run
 //! is not resumed, and bad `resume` inputs and bad `--checkpoint-every` values are refused
 //! with one line and exit code 2, with nothing changed on disk, as is a `resume` when less
-//! memory is available than the run needs.
+//! memory is available than the run needs. A new run first removes every file an earlier
+//! run left in its directory, and nothing else: one that fails, is killed before its first
+//! checkpoint or writes fewer files leaves none of the earlier run's.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -651,4 +653,86 @@ fn a_new_run_removes_a_stale_checkpoint() {
     assert!(!dir.join("checkpoint.bin").exists());
     let out = run(&strings(&["resume", dir.to_str().unwrap()]), &[]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("is finished"));
+}
+
+/// `run` of the letter's Fig. 1 (fixed engine) with `sets` into `out`, scene file in `tmp`.
+fn fig1_run(tmp: &Path, out: &Path, sets: &[&str]) -> Vec<String> {
+    let scene = tmp.join("scene.toml");
+    std::fs::write(&scene, FIG1).unwrap();
+    let mut a = strings(&["run", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    for s in sets {
+        a.extend(strings(&["--set", s]));
+    }
+    a
+}
+
+/// A finished run with every output file (trace, plot, events) in `tmp/name`, beside a file
+/// and a directory of the user's, which no run may remove.
+fn finished_run_with_every_file(tmp: &Path, name: &str) -> PathBuf {
+    let dir = tmp.join(name);
+    std::fs::create_dir_all(dir.join("mine")).unwrap();
+    std::fs::write(dir.join("notes.txt"), b"kept").unwrap();
+    run(&fig1_run(tmp, &dir, &["fixed.dt=0.1", "output.events=true", "output.plot=true"]), &[]);
+    for f in ["summary.json", "trace.csv", "trace.svg", "events.csv"] {
+        assert!(dir.join(f).is_file(), "{f}");
+    }
+    dir
+}
+
+/// The user's own file and directory are still in `dir`.
+fn assert_user_files_kept(dir: &Path) {
+    assert_eq!(std::fs::read(dir.join("notes.txt")).unwrap(), b"kept");
+    assert!(dir.join("mine").is_dir());
+}
+
+#[test]
+fn a_new_run_that_fails_leaves_no_output_of_an_earlier_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = finished_run_with_every_file(tmp.path(), "d");
+    // dt = 1.5 is beyond the plate step's stability limit: the plate diverges.
+    let args = fig1_run(tmp.path(), &dir, &["fixed.dt=1.5", "run.t_end=3000", "output.plot=true"]);
+    let out = Command::new(BIN).args(&args).env_remove("STICKSLIP_PROGRESS").output().unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("diverged"));
+    assert_eq!(files(&dir), ["mine", "notes.txt"]);
+    assert_user_files_kept(&dir);
+}
+
+#[test]
+fn a_new_run_with_fewer_files_leaves_none_of_an_earlier_runs_others() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = finished_run_with_every_file(tmp.path(), "d");
+    let old = std::fs::read(dir.join("summary.json")).unwrap();
+    run(&fig1_run(tmp.path(), &dir, &["fixed.dt=0.5", "run.t_end=20", "output.trace=false"]), &[]);
+    assert_eq!(files(&dir), ["mine", "notes.txt", "summary.json"]);
+    assert_ne!(std::fs::read(dir.join("summary.json")).unwrap(), old);
+    assert_user_files_kept(&dir);
+}
+
+#[test]
+fn a_new_run_killed_before_its_first_checkpoint_leaves_nothing_to_resume() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = finished_run_with_every_file(tmp.path(), "d");
+    let mut args = fig1_run(tmp.path(), &dir, &["fixed.dt=0.1", "run.t_end=1e7", "output.sample_dt=1000"]);
+    args.extend(strings(&["--checkpoint-every", "3600"]));
+    let mut child = Command::new(BIN)
+        .args(&args)
+        .env_remove("STICKSLIP_PROGRESS")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // The finished run left no `.part` file: this one is the new run's, begun.
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while !dir.join("trace.csv.part").exists() {
+        assert!(child.try_wait().unwrap().is_none(), "the run ended before it could be killed");
+        assert!(Instant::now() < deadline, "no trace.csv.part after 60 s");
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    assert_eq!(files(&dir), ["mine", "notes.txt", "trace.csv.part"]);
+    assert_user_files_kept(&dir);
+    let resume = strings(&["resume", dir.to_str().unwrap()]);
+    expect_bad_input(&resume, &dir, &["no checkpoint.bin"]);
 }

@@ -219,6 +219,7 @@ impl<Q: ChannelQueue, M: PlateMotion> LinearStepper<Q, M> {
                 y1,
                 v1,
                 n_att: core.bags.n_attached(),
+                n_det: core.bags.n_detached(),
                 terms,
             };
             if O::STRETCHES && O::SEGMENTS && self.window.sums(pc.tau0, tau1) {

@@ -13,7 +13,7 @@
 //! [`Sums`] keeps the lag's shifted sums about the lag `r` at its first piece,
 //! `S1 = sum int (lag - r)` and `S2 = sum int (lag - r)^2` (with `d = lag0 - r`, a piece adds
 //! `h d + int w` and `h d^2 + 2 d int w + int w^2`: multiply-adds alone), the time and the
-//! attached count's integral; the friction's sums are `-K` and `K^2` times the lag's, and
+//! attached and detached counts' integrals; the friction's sums are `-K` and `K^2` times the lag's, and
 //! the bond and viscous forces' integrals follow from the plate's state at the stretch's
 //! two ends ([`Stretch`]). A piece on the short path is kept with its polynomial's
 //! coefficients ([`Terms::Short`]) and summed in batches ([`BATCH`]), whose integrals are
@@ -27,8 +27,8 @@ use crate::observe::{Piece, Stretch};
 use crate::physics::Plate;
 
 /// A finished piece `[tau0, tau1]` (local times, length `h`): the plate's state `(y0, v0)`
-/// and lag `lag0` at its start, its state `(y1, v1)` at its end, the attached count (constant
-/// on the piece) and the propagator's integrals over it, or the terms to compute them from.
+/// and lag `lag0` at its start, its state `(y1, v1)` at its end, the attached and detached
+/// counts (constant on the piece) and the propagator's integrals over it, or the terms to compute them from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Span {
     pub tau0: f64,
@@ -40,6 +40,7 @@ pub(super) struct Span {
     pub y1: f64,
     pub v1: f64,
     pub n_att: usize,
+    pub n_det: usize,
     pub terms: Terms,
 }
 
@@ -117,7 +118,7 @@ const LANES: usize = 4;
 const _: () = assert!(BATCH % LANES == 0 && BATCH.is_power_of_two());
 
 /// Short-path pieces not yet summed, by field: the coefficients `c_1 .. c_7` (row 0
-/// unused), the length, the lag at the start, the attached count.
+/// unused), the length, the lag at the start, the attached and detached counts.
 #[derive(Clone, Debug, PartialEq)]
 struct Batch {
     len: usize,
@@ -125,11 +126,13 @@ struct Batch {
     h: [f64; BATCH],
     lag0: [f64; BATCH],
     n_att: [f64; BATCH],
+    n_det: [f64; BATCH],
 }
 
 impl Default for Batch {
     fn default() -> Batch {
-        Batch { len: 0, c: [[0.0; BATCH]; SHORT_LEN], h: [0.0; BATCH], lag0: [0.0; BATCH], n_att: [0.0; BATCH] }
+        let row = [0.0; BATCH];
+        Batch { len: 0, c: [row; SHORT_LEN], h: row, lag0: row, n_att: row, n_det: row }
     }
 }
 
@@ -153,6 +156,8 @@ struct Acc {
     s2: f64,
     /// `sum h N_att`.
     attached: f64,
+    /// `sum h (N - N_att)`.
+    detached: f64,
     /// Absolute end time of the last piece.
     t1: f64,
     /// The plate's local position and velocity at the start and at the end.
@@ -183,7 +188,7 @@ impl Sums {
             for n in 1..SHORT_LEN {
                 b.c[n][i] = c[n];
             }
-            (b.h[i], b.lag0[i], b.n_att[i]) = (p.h, p.lag0, p.n_att as f64);
+            (b.h[i], b.lag0[i], b.n_att[i], b.n_det[i]) = (p.h, p.lag0, p.n_att as f64, p.n_det as f64);
             b.len = i + 1;
             if b.len == BATCH {
                 self.flush(v);
@@ -191,7 +196,7 @@ impl Sums {
         } else {
             let ints = p.terms.integrals(p.h, v);
             self.flush(v);
-            self.sum([p.h], [p.lag0], [p.n_att as f64], [ints.i1], [ints.i2], v, 1);
+            self.sum([p.h], [p.lag0], [p.n_att as f64], [p.n_det as f64], [ints.i1], [ints.i2], v, 1);
         }
     }
 
@@ -207,7 +212,7 @@ impl Sums {
             let b = &self.batch;
             let lanes =
                 |row: &[f64; BATCH]| -> [f64; LANES] { row[k..k + LANES].try_into().expect("within the batch") };
-            let (h, lag0, n_att) = (lanes(&b.h), lanes(&b.lag0), lanes(&b.n_att));
+            let (h, lag0, n_att, n_det) = (lanes(&b.h), lanes(&b.lag0), lanes(&b.n_att), lanes(&b.n_det));
             // Indexed loops: `array::map` and `Zip::new` are out-of-line calls in `release`.
             let mut c = [[0.0; LANES]; SHORT_LEN];
             #[allow(clippy::needless_range_loop)]
@@ -215,13 +220,13 @@ impl Sums {
                 c[n] = lanes(&b.c[n]);
             }
             let (i1, i2) = integrals_in_lanes(&c, &h, v);
-            self.sum(h, lag0, n_att, i1, i2, v, len - k);
+            self.sum(h, lag0, n_att, n_det, i1, i2, v, len - k);
         }
         self.batch.len = 0;
     }
 
     /// Adds the first `used` (all if more) of `L` pieces of lengths `h`, starting lags `lag0`, attached
-    /// counts `n_att` and integrals `i1`, `i2`, in order. `d = lag0 - r`, `w1 = i1 - V h^2/2`;
+    /// and detached counts `n_att`, `n_det` and integrals `i1`, `i2`, in order. `d = lag0 - r`, `w1 = i1 - V h^2/2`;
     /// each piece adds `h d + w1` to `S1` and `h d^2 + 2 d w1 + i2` to `S2`.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
@@ -230,12 +235,13 @@ impl Sums {
         h: [f64; L],
         lag0: [f64; L],
         n_att: [f64; L],
+        n_det: [f64; L],
         i1: [f64; L],
         i2: [f64; L],
         v: f64,
         used: usize,
     ) {
-        let (mut e1, mut e2, mut e3) = ([0.0; L], [0.0; L], [0.0; L]);
+        let (mut e1, mut e2, mut e3, mut e4) = ([0.0; L], [0.0; L], [0.0; L], [0.0; L]);
         for l in 0..L {
             let d = lag0[l] - self.acc.lag_ref;
             let w1 = i1[l] - 0.5 * v * h[l] * h[l];
@@ -243,12 +249,14 @@ impl Sums {
             e1[l] = hd + w1;
             e2[l] = hd * d + (2.0 * d * w1 + i2[l]);
             e3[l] = h[l] * n_att[l];
+            e4[l] = h[l] * n_det[l];
         }
         for l in 0..L.min(used) {
             self.acc.weight += h[l];
             self.acc.s1 += e1[l];
             self.acc.s2 += e2[l];
             self.acc.attached += e3[l];
+            self.acc.detached += e4[l];
         }
     }
 
@@ -279,6 +287,7 @@ impl Sums {
             bond: int_f - viscous - p.mass * (s.v1 - s.v0),
             viscous,
             attached: s.attached,
+            detached: s.detached,
         }
     }
 }
@@ -338,8 +347,19 @@ mod tests {
                     Terms::Short(_) => batched += 1,
                     Terms::Integrals(_) => off_short += 1,
                 }
-                let span =
-                    Span { tau0: tau, tau1: tau + h, h, y0: y, v0: v, lag0: frame.lag(y, tau), y1, v1, n_att, terms };
+                let span = Span {
+                    tau0: tau,
+                    tau1: tau + h,
+                    h,
+                    y0: y,
+                    v0: v,
+                    lag0: frame.lag(y, tau),
+                    y1,
+                    v1,
+                    n_att,
+                    n_det: 40 - n_att,
+                    terms,
+                };
                 many.add(&span, &frame, p.v);
                 one.add(&Span { terms: Terms::Integrals(ints), ..span }, &frame, p.v);
                 assert_eq!(one.batch.len, 0);
@@ -413,8 +433,19 @@ mod tests {
                 let a = p.k * (p.v * tau - lag_ref) + kappa * anchor_sum;
                 let tr = LinearPlate::new(p.mass, p.eta, k_eff).trajectory(y, v, a, p.k * p.v);
                 let (y1, v1, terms) = tr.at_maybe_terms(h, p.v, true);
-                let span =
-                    Span { tau0: tau, tau1: tau + h, h, y0: y, v0: v, lag0: frame.lag(y, tau), y1, v1, n_att, terms };
+                let span = Span {
+                    tau0: tau,
+                    tau1: tau + h,
+                    h,
+                    y0: y,
+                    v0: v,
+                    lag0: frame.lag(y, tau),
+                    y1,
+                    v1,
+                    n_att,
+                    n_det: 40 - n_att,
+                    terms,
+                };
                 let inside = frame.time(tau) >= t_lo && frame.time(tau + h) <= t_hi;
                 stats.piece(&piece(&span, &frame, anchor_sum, &p, kappa));
                 if inside {
