@@ -1,5 +1,6 @@
 //! Files that appear whole or not at all: written to `NAME.part`, renamed to `NAME` on
-//! [`PartFile::commit`]. A run that is killed leaves `NAME.part` holding every line
+//! [`PartFile::commit`]; a set of files written at once ([`write_files`]) is renamed into
+//! place only when every file of it is written. A run that is killed leaves `NAME.part` holding every line
 //! flushed so far (writers hand the operating system whole lines only); a run that fails
 //! removes it with [`PartFile::discard`]; `stickslip resume` reopens it with
 //! [`PartFile::reopen`], cut back to the length its checkpoint recorded.
@@ -123,11 +124,43 @@ impl PartFile {
     }
 }
 
-/// Writes `bytes` to `dir/name` atomically.
+/// Writes `bytes` to `dir/name` atomically: on failure `dir/name` is unchanged and no
+/// `dir/name.part` is left.
 pub fn write_whole(dir: &Path, name: &str, bytes: &[u8]) -> io::Result<PathBuf> {
+    let (part, target) = write_part(dir, name, bytes)?;
+    if let Err(e) = std::fs::rename(&part, &target) {
+        let _ = std::fs::remove_file(&part);
+        return Err(e);
+    }
+    Ok(target)
+}
+
+/// Writes `bytes` to `dir/name.part` and syncs it, returning `(part, target)` for the
+/// rename; on failure removes it. Refuses a target that is a directory (a rename cannot
+/// replace it), before writing anything.
+fn write_part(dir: &Path, name: &str, bytes: &[u8]) -> io::Result<(PathBuf, PathBuf)> {
+    let (part, target) = PartFile::names(dir, name);
+    if std::fs::symlink_metadata(&target).is_ok_and(|m| m.is_dir()) {
+        return Err(io::Error::from_raw_os_error(libc::EISDIR));
+    }
     let mut f = PartFile::create(dir, name)?;
-    f.writer().write_all(bytes)?;
-    f.commit()
+    let written =
+        f.writer.write_all(bytes).and_then(|()| f.writer.flush()).and_then(|()| f.writer.get_ref().sync_all());
+    match written {
+        Ok(()) => Ok((part, target)),
+        Err(e) => {
+            f.discard();
+            Err(e)
+        }
+    }
+}
+
+/// Removes the part files of `(part, target)` pairs, ignoring failures (best effort on a
+/// path that already failed).
+fn remove_parts(parts: &[(PathBuf, PathBuf)]) {
+    for (part, _) in parts {
+        let _ = std::fs::remove_file(part);
+    }
 }
 
 /// A file of a study's or run's outputs could not be written.
@@ -139,12 +172,29 @@ pub struct WriteFileError {
     pub source: io::Error,
 }
 
-/// Writes each `(name, text)` to `dir/name` atomically, in order; the first failure names
-/// its path. Used for the whole-file outputs (figures, tables, reports).
+/// Writes each `(name, text)` to `dir/name` as one set: every file is written to its
+/// `.part` first, and only when all are written are they renamed into place, in order. A
+/// failed write removes every `.part` and leaves the old files untouched; a failed rename
+/// (a target turned into a directory meanwhile) removes the `.part` files not yet renamed.
+/// The error names the failing path. Used for the whole-file outputs (figures, tables,
+/// reports).
 pub fn write_files<S: AsRef<str>>(dir: &Path, files: &[(&str, S)]) -> Result<(), WriteFileError> {
+    let fail = |path: &Path, source| WriteFileError { path: path.display().to_string(), source };
+    let mut parts = Vec::with_capacity(files.len());
     for (name, text) in files {
-        write_whole(dir, name, text.as_ref().as_bytes())
-            .map_err(|source| WriteFileError { path: dir.join(name).display().to_string(), source })?;
+        match write_part(dir, name, text.as_ref().as_bytes()) {
+            Ok(pair) => parts.push(pair),
+            Err(source) => {
+                remove_parts(&parts);
+                return Err(fail(&dir.join(name), source));
+            }
+        }
+    }
+    for (k, (part, target)) in parts.iter().enumerate() {
+        if let Err(source) = std::fs::rename(part, target) {
+            remove_parts(&parts[k..]);
+            return Err(fail(target, source));
+        }
     }
     Ok(())
 }
@@ -203,5 +253,43 @@ mod tests {
         assert!(!d.join("a.csv").exists());
         f.commit().unwrap();
         assert_eq!(std::fs::read(d.join("a.csv")).unwrap(), b"h\n1\n");
+    }
+
+    /// The names in `dir`, sorted.
+    fn listing(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> =
+            std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn a_set_with_a_target_that_is_a_directory_replaces_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        write_files(d, &[("a.csv", "old a"), ("c.json", "old c")]).unwrap();
+        std::fs::create_dir(d.join("b.inp")).unwrap();
+        let err = write_files(d, &[("a.csv", "new a"), ("b.inp", "new b"), ("c.json", "new c")]).unwrap_err();
+        assert_eq!(err.path, d.join("b.inp").display().to_string());
+        assert_eq!(std::fs::read_to_string(d.join("a.csv")).unwrap(), "old a");
+        assert_eq!(std::fs::read_to_string(d.join("c.json")).unwrap(), "old c");
+        assert!(d.join("b.inp").is_dir());
+        assert_eq!(listing(d), ["a.csv", "b.inp", "c.json"], "no .part left");
+        // A single file likewise.
+        assert!(write_whole(d, "b.inp", b"new b").is_err());
+        assert_eq!(listing(d), ["a.csv", "b.inp", "c.json"], "no .part left");
+    }
+
+    #[test]
+    fn a_set_whose_write_fails_removes_the_parts_already_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        write_files(d, &[("a.csv", "old a")]).unwrap();
+        // A directory where b.inp's part file would go: creating it fails.
+        std::fs::create_dir(d.join("b.inp.part")).unwrap();
+        let err = write_files(d, &[("a.csv", "new a"), ("b.inp", "new b")]).unwrap_err();
+        assert_eq!(err.path, d.join("b.inp").display().to_string());
+        assert_eq!(std::fs::read_to_string(d.join("a.csv")).unwrap(), "old a");
+        assert_eq!(listing(d), ["a.csv", "b.inp.part"], "a.csv.part removed");
     }
 }

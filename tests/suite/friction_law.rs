@@ -11,6 +11,8 @@
 //! - the fitted form recovers known coefficients from exact synthetic data, and on data with
 //!   Gaussian noise of known standard deviation its 95 % intervals cover the truth 95 % of the
 //!   time and its chi-square averages its degrees of freedom;
+//! - a law that cannot be written (a file's name taken by a directory) replaces none of the
+//!   old law's files and leaves no `.part`;
 //! - bad input (a missing scale, a bad scale, a sweep not over V and T, an unfinished sweep,
 //!   an empty directory, fields not V and T when it runs the map) is one line on stderr naming
 //!   the option or the directory, exit code 2, and nothing written.
@@ -297,17 +299,53 @@ fn law_files_in(dir: &Path) -> Vec<PathBuf> {
     ["law.csv", "abaqus.inp", "ansys.mac", "law.json"].iter().map(|f| dir.join(f)).filter(|p| p.exists()).collect()
 }
 
+/// A finished 2-D sweep of two short runs in `out`.
+fn vt_sweep(out: &Path) -> PathBuf {
+    let o = out.display().to_string();
+    let mut args = vec!["sweep", fig2_static()];
+    args.extend(SET);
+    args.extend(["--param", "plate.v", "--values", "0.1,10", "--param", "junctions.temperature", "--values", "1"]);
+    args.extend(["--out", &o]);
+    assert!(stickslip(&args).status.success());
+    out.to_path_buf()
+}
+
+#[test]
+fn a_law_that_cannot_be_written_leaves_the_old_one_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let vt = vt_sweep(&dir.path().join("vt"));
+    let vt_s = vt.display().to_string();
+    let mut args = vec!["friction-law", "--from", &vt_s];
+    args.extend(SCALES);
+    assert!(stickslip(&args).status.success());
+    let old: Vec<Vec<u8>> =
+        ["law.csv", "ansys.mac", "law.json"].iter().map(|f| std::fs::read(vt.join(f)).unwrap()).collect();
+    // abaqus.inp replaced by a directory, and a law of other scales asked for.
+    std::fs::remove_file(vt.join("abaqus.inp")).unwrap();
+    std::fs::create_dir(vt.join("abaqus.inp")).unwrap();
+    let i = args.iter().position(|a| *a == "--l0").unwrap();
+    args[i + 1] = "5e-9";
+    let o = stickslip(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.lines().count() == 1 && err.contains("abaqus.inp"), "{err}");
+    for (f, bytes) in ["law.csv", "ansys.mac", "law.json"].iter().zip(&old) {
+        assert_eq!(&std::fs::read(vt.join(f)).unwrap(), bytes, "{f} unchanged");
+    }
+    let parts: Vec<_> = std::fs::read_dir(&vt)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".part"))
+        .collect();
+    assert!(parts.is_empty(), "left behind: {parts:?}");
+}
+
 #[test]
 fn bad_input_is_one_line_and_nothing_is_written() {
     let dir = tempfile::tempdir().unwrap();
     // A finished 2-D sweep to read from, and a 1-D one.
-    let vt = dir.path().join("vt");
+    let vt = vt_sweep(&dir.path().join("vt"));
     let vt_s = vt.display().to_string();
-    let mut args = vec!["sweep", fig2_static()];
-    args.extend(SET);
-    args.extend(["--param", "plate.v", "--values", "0.1,10", "--param", "junctions.temperature", "--values", "1"]);
-    args.extend(["--out", &vt_s]);
-    assert!(stickslip(&args).status.success());
     let v1 = dir.path().join("v1");
     let v1_s = v1.display().to_string();
     let mut args = vec!["sweep", fig2_static()];

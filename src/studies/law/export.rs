@@ -12,14 +12,15 @@
 //!   number `1` is the contact pair's (change it to yours).
 //!
 //! Points that are not steady are left out ([`super::tables::LEFT_OUT`]) and listed in
-//! the comments. Numbers are written in the shortest form that reads back to the same
-//! double, the same text as `law.csv`.
+//! the comments, which escape control characters ([`printable`]). Numbers are written in
+//! the shortest form that reads back to the same double, the same text as `law.csv`.
 
 use std::fmt::Write as _;
 
 use super::FrictionLaw;
 use super::tables::LEFT_OUT;
 use crate::output::csv::push_f64;
+use crate::scene::error::printable;
 
 fn num(x: f64) -> String {
     let mut s = String::new();
@@ -47,7 +48,9 @@ fn wrap(line: &str, width: usize) -> Vec<String> {
 }
 
 impl FrictionLaw {
-    /// The comment lines both exports start with, each after `mark`.
+    /// The comment lines both exports start with, each after `mark`. Every line is
+    /// escaped ([`printable`]): a control character in the scene's name cannot start a
+    /// line that the code would read as input.
     fn preamble(&self, mark: &str, what: &str) -> String {
         let sc = &self.scales;
         let steady = self.steady().count();
@@ -88,7 +91,7 @@ impl FrictionLaw {
         if steady == 0 {
             lines.push("no steady point: no table is given".to_string());
         }
-        lines.iter().flat_map(|l| wrap(l, 96)).map(|l| format!("{mark} {l}\n")).collect()
+        lines.iter().flat_map(|l| wrap(&printable(l), 96)).map(|l| format!("{mark} {l}\n")).collect()
     }
 
     /// The steady points as `(mu, slip rate in m/s, temperature in K)`, in table order.
@@ -131,5 +134,41 @@ impl FrictionLaw {
             let _ = writeln!(s, "TBFIELD,SLRV,{}\nTBDATA,1,{}", num(v), num(mu));
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{LawInput, PointRuns, RunRecord, ScaleArgs};
+    use super::*;
+    use crate::observe::regime::Regime;
+
+    /// A law of a scene named `scene`: one steady point and one in stick-slip.
+    fn law(scene: &str) -> FrictionLaw {
+        let scales =
+            ScaleArgs { l0: Some(1e-9), t0: Some(1e-6), t_ref: Some(300.0), normal_load: Some(1e-9), force_unit: None };
+        let run = |regime| RunRecord { friction_mean: 3.0, friction_per_junction: 0.1, regime };
+        let points = vec![
+            PointRuns { v: 0.1, t: 1.0, runs: vec![run(Regime::Smooth)] },
+            PointRuns { v: 1.0, t: 1.0, runs: vec![run(Regime::StickSlip)] },
+        ];
+        let input = LawInput { scene: scene.into(), replicas: 1, points };
+        FrictionLaw::new(&input, scales.resolve().unwrap(), 1).unwrap()
+    }
+
+    #[test]
+    fn control_characters_in_the_scene_name_stay_inside_comments() {
+        let law = law("nl\nTBDATA,1,9\r*FRICTION\u{b}\u{2028}x");
+        for (mark, text) in [("**", law.abaqus_inp()), ("!", law.ansys_mac())] {
+            let preamble = law.preamble(mark, "test");
+            for line in preamble.split_terminator('\n') {
+                assert!(line.starts_with(mark), "{line:?}");
+                assert!(!line.chars().any(|c| c.is_control() || matches!(c, '\u{2028}' | '\u{2029}')), "{line:?}");
+            }
+            assert!(preamble.contains(r"scene nl\nTBDATA,1,9\r*FRICTION\u{b}\u{2028}x,"), "{preamble}");
+            // Past the comments: the table's header and its one steady row only.
+            let input: Vec<&str> = text.lines().filter(|l| !l.starts_with(mark)).collect();
+            assert_eq!(input.len(), if mark == "**" { 2 } else { 4 }, "{input:?}");
+        }
     }
 }

@@ -15,7 +15,7 @@
 //! - `law.json`: the scales, the smooth form fitted to the steady points ([`fit`]) with
 //!   its parameters, standard errors, residuals and chi-square, and what was left out.
 //!
-//! Every file is written whole or not at all ([`crate::output::atomic`]).
+//! The files are written as one set, whole or not at all ([`crate::output::atomic::write_files`]).
 
 pub mod export;
 pub mod fit;
@@ -83,7 +83,7 @@ impl FrictionLaw {
         self.points.iter().filter(|p| p.steady)
     }
 
-    /// Writes [`FILES`] into `dir`, each atomically.
+    /// Writes [`FILES`] into `dir` as one set: a failed write replaces none of them.
     pub fn write(&self, dir: &Path) -> Result<(), WriteFileError> {
         let files = [
             (FILES[0], self.law_csv()),
