@@ -300,6 +300,20 @@ mod tests {
     use crate::observe::stats::WindowStats;
     use crate::rng::{UniformSource, pcg};
 
+    /// The span `[tau, tau + h]` from `(y, v)` to `(y1, v1)` with `n_att` of 40 junctions
+    /// attached.
+    fn span_of(
+        frame: &Frame,
+        (tau, h): (f64, f64),
+        (y, v): (f64, f64),
+        (y1, v1): (f64, f64),
+        n_att: usize,
+        terms: Terms,
+    ) -> Span {
+        let lag0 = frame.lag(y, tau);
+        Span { tau0: tau, tau1: tau + h, h, y0: y, v0: v, lag0, y1, v1, n_att, n_det: 40 - n_att, terms }
+    }
+
     /// Gauss-Legendre nodes and weights on `[-1, 1]`, five points (exact to degree 9).
     const GL5: [(f64, f64); 5] = [
         (0.0, 0.568_888_888_888_888_9),
@@ -347,19 +361,7 @@ mod tests {
                     Terms::Short(_) => batched += 1,
                     Terms::Integrals(_) => off_short += 1,
                 }
-                let span = Span {
-                    tau0: tau,
-                    tau1: tau + h,
-                    h,
-                    y0: y,
-                    v0: v,
-                    lag0: frame.lag(y, tau),
-                    y1,
-                    v1,
-                    n_att,
-                    n_det: 40 - n_att,
-                    terms,
-                };
+                let span = span_of(&frame, (tau, h), (y, v), (y1, v1), n_att, terms);
                 many.add(&span, &frame, p.v);
                 one.add(&Span { terms: Terms::Integrals(ints), ..span }, &frame, p.v);
                 assert_eq!(one.batch.len, 0);
@@ -433,19 +435,7 @@ mod tests {
                 let a = p.k * (p.v * tau - lag_ref) + kappa * anchor_sum;
                 let tr = LinearPlate::new(p.mass, p.eta, k_eff).trajectory(y, v, a, p.k * p.v);
                 let (y1, v1, terms) = tr.at_maybe_terms(h, p.v, true);
-                let span = Span {
-                    tau0: tau,
-                    tau1: tau + h,
-                    h,
-                    y0: y,
-                    v0: v,
-                    lag0: frame.lag(y, tau),
-                    y1,
-                    v1,
-                    n_att,
-                    n_det: 40 - n_att,
-                    terms,
-                };
+                let span = span_of(&frame, (tau, h), (y, v), (y1, v1), n_att, terms);
                 let inside = frame.time(tau) >= t_lo && frame.time(tau + h) <= t_hi;
                 stats.piece(&piece(&span, &frame, anchor_sum, &p, kappa));
                 if inside {
