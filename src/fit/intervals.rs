@@ -205,8 +205,8 @@ pub fn crossing(inner: (f64, f64), outer: (f64, f64), threshold: f64) -> f64 {
 
 /// The interval from the two sides of a profile whose optimum is at `y_best`. A side that
 /// stays below the threshold up to its bound ends at the bound, flagged. A side that
-/// crosses it ends at the smoothing parabola's crossing ([`parabola`]) where that is
-/// consistent with the side's own points ([`smoothed_end`]), else at its raw crossing.
+/// crosses it ends at the smoothing parabola's crossing (`parabola`) where that is
+/// consistent with the side's own points (`smoothed_end`), else at its raw crossing.
 pub fn interval(y_best: f64, threshold: f64, low: Side, high: Side) -> Interval {
     let smooth = parabola(low.points.iter().chain(&high.points), y_best, threshold);
     let end = |side: &Side, dir: f64| match &side.end {

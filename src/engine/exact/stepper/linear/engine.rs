@@ -219,7 +219,6 @@ impl<Q: ChannelQueue, M: PlateMotion> LinearStepper<Q, M> {
                 y1,
                 v1,
                 n_att: core.bags.n_attached(),
-                n_det: core.bags.n_detached(),
                 terms,
             };
             if O::STRETCHES && O::SEGMENTS && self.window.sums(pc.tau0, tau1) {
@@ -377,6 +376,7 @@ impl<Q: ChannelQueue, M: PlateMotion> Stepper for LinearStepper<Q, M> {
     #[inline]
     fn begin<O: Observer>(&mut self, core: &Core<Q>, obs: &O) {
         self.window = report::Window::new(obs.integrals_after(), obs.stretch_until(), &core.frame);
+        self.sums.set_junctions(core.n);
     }
 
     /// Reports the pieces summed in this advance as one stretch.

@@ -40,7 +40,6 @@ pub(super) struct Span {
     pub y1: f64,
     pub v1: f64,
     pub n_att: usize,
-    pub n_det: usize,
     pub terms: Terms,
 }
 
@@ -118,7 +117,7 @@ const LANES: usize = 4;
 const _: () = assert!(BATCH % LANES == 0 && BATCH.is_power_of_two());
 
 /// Short-path pieces not yet summed, by field: the coefficients `c_1 .. c_7` (row 0
-/// unused), the length, the lag at the start, the attached and detached counts.
+/// unused), the length, the lag at the start, the attached count.
 #[derive(Clone, Debug, PartialEq)]
 struct Batch {
     len: usize,
@@ -126,13 +125,12 @@ struct Batch {
     h: [f64; BATCH],
     lag0: [f64; BATCH],
     n_att: [f64; BATCH],
-    n_det: [f64; BATCH],
 }
 
 impl Default for Batch {
     fn default() -> Batch {
         let row = [0.0; BATCH];
-        Batch { len: 0, c: [row; SHORT_LEN], h: row, lag0: row, n_att: row, n_det: row }
+        Batch { len: 0, c: [row; SHORT_LEN], h: row, lag0: row, n_att: row }
     }
 }
 
@@ -142,6 +140,9 @@ impl Default for Batch {
 pub(super) struct Sums {
     acc: Acc,
     batch: Batch,
+    /// The number of junctions `N` ([`Sums::set_junctions`]), for the detached count's
+    /// integral `sum (h N - h N_att)`.
+    n: f64,
 }
 
 /// The sums (lag units, local positions): empty when `weight = 0`.
@@ -168,6 +169,12 @@ struct Acc {
 }
 
 impl Sums {
+    /// Sets the number of junctions `n` (constant over a run).
+    #[inline]
+    pub(super) fn set_junctions(&mut self, n: usize) {
+        self.n = n as f64;
+    }
+
     /// Adds the span `p` in `frame`, with drift `v`: to the batch if it is on the short path
     /// (summed when the batch is full), else summed now, after the batch.
     #[inline(always)]
@@ -188,7 +195,7 @@ impl Sums {
             for n in 1..SHORT_LEN {
                 b.c[n][i] = c[n];
             }
-            (b.h[i], b.lag0[i], b.n_att[i], b.n_det[i]) = (p.h, p.lag0, p.n_att as f64, p.n_det as f64);
+            (b.h[i], b.lag0[i], b.n_att[i]) = (p.h, p.lag0, p.n_att as f64);
             b.len = i + 1;
             if b.len == BATCH {
                 self.flush(v);
@@ -196,7 +203,7 @@ impl Sums {
         } else {
             let ints = p.terms.integrals(p.h, v);
             self.flush(v);
-            self.sum([p.h], [p.lag0], [p.n_att as f64], [p.n_det as f64], [ints.i1], [ints.i2], v, 1);
+            self.sum([p.h], [p.lag0], [p.n_att as f64], [ints.i1], [ints.i2], v, 1);
         }
     }
 
@@ -212,7 +219,7 @@ impl Sums {
             let b = &self.batch;
             let lanes =
                 |row: &[f64; BATCH]| -> [f64; LANES] { row[k..k + LANES].try_into().expect("within the batch") };
-            let (h, lag0, n_att, n_det) = (lanes(&b.h), lanes(&b.lag0), lanes(&b.n_att), lanes(&b.n_det));
+            let (h, lag0, n_att) = (lanes(&b.h), lanes(&b.lag0), lanes(&b.n_att));
             // Indexed loops: `array::map` and `Zip::new` are out-of-line calls in `release`.
             let mut c = [[0.0; LANES]; SHORT_LEN];
             #[allow(clippy::needless_range_loop)]
@@ -220,13 +227,13 @@ impl Sums {
                 c[n] = lanes(&b.c[n]);
             }
             let (i1, i2) = integrals_in_lanes(&c, &h, v);
-            self.sum(h, lag0, n_att, n_det, i1, i2, v, len - k);
+            self.sum(h, lag0, n_att, i1, i2, v, len - k);
         }
         self.batch.len = 0;
     }
 
     /// Adds the first `used` (all if more) of `L` pieces of lengths `h`, starting lags `lag0`, attached
-    /// and detached counts `n_att`, `n_det` and integrals `i1`, `i2`, in order. `d = lag0 - r`, `w1 = i1 - V h^2/2`;
+    /// counts `n_att` and integrals `i1`, `i2`, in order. `d = lag0 - r`, `w1 = i1 - V h^2/2`;
     /// each piece adds `h d + w1` to `S1` and `h d^2 + 2 d w1 + i2` to `S2`.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
@@ -235,7 +242,6 @@ impl Sums {
         h: [f64; L],
         lag0: [f64; L],
         n_att: [f64; L],
-        n_det: [f64; L],
         i1: [f64; L],
         i2: [f64; L],
         v: f64,
@@ -249,7 +255,9 @@ impl Sums {
             e1[l] = hd + w1;
             e2[l] = hd * d + (2.0 * d * w1 + i2[l]);
             e3[l] = h[l] * n_att[l];
-            e4[l] = h[l] * n_det[l];
+            // `h N - h N_att`, each product rounded: at least 0 (rounding is monotone),
+            // exactly 0 with every junction attached.
+            e4[l] = h[l] * self.n - e3[l];
         }
         for l in 0..L.min(used) {
             self.acc.weight += h[l];
@@ -311,7 +319,7 @@ mod tests {
         terms: Terms,
     ) -> Span {
         let lag0 = frame.lag(y, tau);
-        Span { tau0: tau, tau1: tau + h, h, y0: y, v0: v, lag0, y1, v1, n_att, n_det: 40 - n_att, terms }
+        Span { tau0: tau, tau1: tau + h, h, y0: y, v0: v, lag0, y1, v1, n_att, terms }
     }
 
     /// Gauss-Legendre nodes and weights on `[-1, 1]`, five points (exact to degree 9).
@@ -348,6 +356,8 @@ mod tests {
             let p = Plate { mass: 0.1 + 5.0 * u(), eta: 0.01 + 3.0 * u(), k: 0.5 + 10.0 * u(), v: 0.5 * u() };
             let frame = Frame { epoch: u(), x_ref: 0.0, lag_ref: u() - 0.5, v: p.v };
             let (mut one, mut many) = (Sums::default(), Sums::default());
+            one.set_junctions(40);
+            many.set_junctions(40);
             let (mut tau, mut y, mut v) = (0.0, u() - 0.5, u() - 0.5);
             for _ in 0..(case * 7) % 200 + 1 {
                 let n_att = (u() * 40.0) as usize;
@@ -424,6 +434,7 @@ mod tests {
             let mut stats = WindowStats::new(t_lo, t_hi, 40);
             // The same pieces summed in the kernel's way, reported at random stops.
             let (mut summed, mut sums) = (WindowStats::new(t_lo, t_hi, 40), Sums::default());
+            sums.set_junctions(40);
             let (mut tau, mut y, mut v) = (0.0, 2.0 * (u() - 0.5), u() - 0.5);
             let (mut want_f, mut want_f2, mut want_b, mut want_v, mut want_a, mut covered) =
                 (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
