@@ -7,6 +7,7 @@ use serde_json::{Map, Value, json};
 
 use super::model::Problem;
 use super::solve::FitResult;
+use crate::scene::error::compact;
 
 /// The method of the intervals, as `fit.json` states it.
 pub const METHOD: &str = "profile likelihood: 95 % interval where the misfit, re-optimised over the other free parameters, rises by the threshold above its minimum";
@@ -94,7 +95,13 @@ pub fn fit_json(prob: &Problem, r: &FitResult, data_path: &str) -> String {
     s
 }
 
-/// `fit.csv`: one row per data point.
+/// A number of `fit.csv`: the shortest text that reads back as the same `f64`, in exponent
+/// form beyond 20 characters ([`compact`]: `1e100`, not 101 digits); empty when not finite.
+fn csv_number(v: f64) -> String {
+    if v.is_finite() { compact(v) } else { String::new() }
+}
+
+/// `fit.csv`: one row per data point, numbers as [`csv_number`] writes them.
 pub fn fit_csv(prob: &Problem, r: &FitResult) -> String {
     let mut out = prob.data.columns.join(",");
     if !out.is_empty() {
@@ -109,7 +116,7 @@ pub fn fit_csv(prob: &Problem, r: &FitResult) -> String {
         let mut row: Vec<String> = p.text.clone();
         row.push(p.line.to_string());
         for v in [p.friction, s, r.best.mean[i], r.best.se[i], r.band[i].0, r.band[i].1, res, res / scale] {
-            row.push(if v.is_finite() { format!("{v}") } else { String::new() });
+            row.push(csv_number(v));
         }
         out.push_str(&row.join(","));
         out.push('\n');
@@ -128,4 +135,57 @@ pub fn fit_toml(prob: &Problem, r: &FitResult) -> Result<String, String> {
     );
     head.push_str(&toml::to_string(&scene.to_file()).map_err(|e| e.to_string())?);
     Ok(head)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::data::DataSet;
+    use crate::fit::free::parse_free;
+    use crate::fit::model::Evaluation;
+
+    /// Data, fitted values and band from `1e-100` to `1e100`: every number of `fit.csv` in
+    /// at most 24 characters, reading back as the same `f64`.
+    #[test]
+    fn fit_csv_writes_long_numbers_short_and_exact() {
+        let base = crate::test_scenes::fig1();
+        let data = DataSet::parse("plate.v,friction,sigma\n0.1,1e100,1e100\n1,1e-100,1e-100\n", "d.csv", &base, 1.0)
+            .expect("data in the window");
+        let free = parse_free(&["junctions.k0".to_string()], &base, &data).unwrap();
+        let prob = Problem::new(base, data, free, 1).unwrap();
+        let best = Evaluation { values: vec![0.1], mean: vec![1e100 / 3.0, 2e-100 / 3.0], se: vec![1e-100, 1e-100] };
+        let r = FitResult {
+            best_y: vec![0.5],
+            best,
+            score: 1.0,
+            sigma_estimate: None,
+            chi2: 1.0,
+            dof: 1,
+            p_value: None,
+            threshold: 3.84,
+            band_threshold: 3.84,
+            intervals: Vec::new(),
+            band: vec![(1e99, 1e100), (1e-100, 1e-99 / 3.0)],
+            noise_ratio: 0.0,
+            evaluations: 1,
+            search_evaluations: 1,
+        };
+        let csv = fit_csv(&prob, &r);
+        let rows: Vec<&str> = csv.lines().skip(1).collect();
+        assert!(rows[0].starts_with("0.1,2,1e100,1e100,3.333333333333333e99,1e-100,1e99,1e100,"), "{csv}");
+        assert!(rows[1].starts_with("1,3,1e-100,1e-100,6.666666666666667e-101,1e-100,1e-100,"), "{csv}");
+        for (i, row) in rows.iter().enumerate() {
+            let p = &prob.data.points[i];
+            let s = p.sigma.unwrap();
+            let res = p.friction - r.best.mean[i];
+            let scale = (s * s + r.best.se[i] * r.best.se[i]).sqrt();
+            let want = [p.friction, s, r.best.mean[i], r.best.se[i], r.band[i].0, r.band[i].1, res, res / scale];
+            let cells: Vec<&str> = row.split(',').skip(2).collect();
+            assert_eq!(cells.len(), want.len(), "{row}");
+            for (cell, v) in cells.iter().zip(want) {
+                assert!(cell.len() <= 24, "{cell}");
+                assert_eq!(cell.parse::<f64>().unwrap().to_bits(), v.to_bits(), "{cell}");
+            }
+        }
+    }
 }

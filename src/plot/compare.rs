@@ -6,7 +6,7 @@
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
-use super::{FONT, PlotError, err as e};
+use super::{FONT, PlotError, err as e, svg_text};
 use crate::scene::EngineKind;
 use crate::studies::compare::{Status, Study};
 use crate::studies::format::sig;
@@ -91,7 +91,10 @@ pub fn svg(study: &Study) -> Result<String, PlotError> {
                 &format!(
                     "{}: |error| against wall time (fixed-step: {} replicas per dt; exact: 1..{} replicas; reference: \
                      exact, {} replicas)",
-                    study.scene.name, study.replicas, study.replicas, study.reference.replicas
+                    svg_text(&study.scene.name),
+                    study.replicas,
+                    study.replicas,
+                    study.reference.replicas
                 ),
                 &(FONT, 18).into_font().color(&BLACK),
                 (16, 16),
@@ -201,4 +204,46 @@ fn panel<DB: DrawingBackend>(
             .map_err(e)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plot::tests::{AWKWARD, awkward_texts};
+    use crate::studies::compare::{Observable, Point, PointObs, Reference};
+    use crate::studies::stats::ReplicaStats;
+
+    /// A point of engine `engine` with one observable's error 0.01.
+    fn point(engine: EngineKind, dt: Option<f64>) -> Point {
+        let obs = PointObs { estimate: 0.51, se: 0.002, error: 0.01, ci_low: 0.006, ci_high: 0.014, floor: 0.002 };
+        Point {
+            engine,
+            dt,
+            replicas: 4,
+            wall_seconds: 1.0,
+            cpu_seconds: 1.0,
+            status: Status::Ok,
+            diverged_replicas: 0,
+            plate_growth: dt.map(|_| 0.5),
+            obs: vec![obs],
+        }
+    }
+
+    /// The scene's name in the figure's title: escaped as text, the SVG well-formed.
+    #[test]
+    fn the_scene_name_is_escaped() {
+        let mut scene = crate::test_scenes::fig1();
+        scene.name = AWKWARD.into();
+        let stats = vec![ReplicaStats { n: 16, mean: 0.5, sd: 0.01, se: 0.0025 }];
+        let study = Study {
+            scene,
+            observables: vec![Observable::AttachedFraction],
+            replicas: 4,
+            exact_rtol: None,
+            reference: Reference { replicas: 16, wall_seconds: 4.0, cpu_seconds: 4.0, stats },
+            points: vec![point(EngineKind::Exact, None), point(EngineKind::Fixed, Some(0.5))],
+            threads: 1,
+        };
+        assert_eq!(awkward_texts(&svg(&study).unwrap()), 1);
+    }
 }

@@ -10,7 +10,7 @@ use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, Ranged, Value
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::{Axis, FONT, PlotError, cell_edges, err};
+use super::{Axis, FONT, PlotError, cell_edges, err, svg_text};
 
 /// Viridis at 9 evenly spaced stops (matplotlib's table).
 const VIRIDIS: [(u8, u8, u8); 9] = [
@@ -167,7 +167,7 @@ fn draw_cells<DB: DrawingBackend>(
     ye: &[f64],
 ) -> Result<(), PlotError> {
     let mut chart = ChartBuilder::on(area)
-        .caption(&h.title, (FONT, 18))
+        .caption(svg_text(&h.title), (FONT, 18))
         .margin(12)
         .x_label_area_size(45)
         .y_label_area_size(70)
@@ -176,8 +176,8 @@ fn draw_cells<DB: DrawingBackend>(
     chart
         .configure_mesh()
         .disable_mesh()
-        .x_desc(h.x.label.as_str())
-        .y_desc(h.y.label.as_str())
+        .x_desc(svg_text(&h.x.label))
+        .y_desc(svg_text(&h.y.label))
         .label_style((FONT, 13))
         .axis_desc_style((FONT, 15))
         .draw()
@@ -218,7 +218,7 @@ fn draw_cells<DB: DrawingBackend>(
                 let style =
                     TextStyle::from((FONT, size).into_font()).color(&ink).pos(Pos::new(HPos::Center, VPos::Center));
                 chart
-                    .draw_series(std::iter::once(Text::new(h.classes[i][j].clone(), (h.xs[i], h.ys[j]), style)))
+                    .draw_series(std::iter::once(Text::new(svg_text(&h.classes[i][j]), (h.xs[i], h.ys[j]), style)))
                     .map_err(err)?;
             }
         }
@@ -238,7 +238,7 @@ fn draw_bar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, label: &str, top:
         .configure_mesh()
         .disable_mesh()
         .disable_x_axis()
-        .y_desc(label)
+        .y_desc(svg_text(label))
         .label_style((FONT, 12))
         .axis_desc_style((FONT, 13))
         .draw()
@@ -275,6 +275,25 @@ mod tests {
         assert_eq!(viridis(2.0), viridis(1.0));
         assert_eq!(viridis(f64::NAN), viridis(0.0));
         assert_eq!(viridis(0.5), RGBColor(33, 144, 141));
+    }
+
+    /// A name from the user in a heat map's title, axis labels, cell labels and colour bar:
+    /// escaped as text, the SVG well-formed.
+    #[test]
+    fn names_are_escaped_in_heat_maps() {
+        use crate::plot::tests::{AWKWARD, awkward_texts};
+        let h = HeatMap {
+            title: AWKWARD.into(),
+            x: Axis::linear(AWKWARD),
+            y: Axis::linear(AWKWARD),
+            xs: vec![1.0, 2.0],
+            ys: vec![1.0],
+            values: vec![vec![0.5], vec![1.0]],
+            classes: vec![vec![AWKWARD.into()], vec!["SI".into()]],
+            value_label: AWKWARD.into(),
+        };
+        let svg = render_heatmap(&h, 700, 400).unwrap();
+        assert_eq!(awkward_texts(&svg), 5, "{svg}");
     }
 
     #[test]

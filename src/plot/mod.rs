@@ -54,6 +54,26 @@ fn err(e: impl std::fmt::Display) -> PlotError {
     PlotError(e.to_string())
 }
 
+/// `s` as a figure shows it: control characters and line separators escaped as text
+/// ([`printable`](crate::scene::error::printable): a newline as `\n`, a vertical tab as
+/// `\u{b}`), and the two code points XML refuses in text (U+FFFE, U+FFFF) as `\u{fffe}`
+/// and `\u{ffff}`, so that a scene's name keeps the SVG well-formed and each text on one
+/// line. plotters escapes XML's markup characters (`&`, `<`, `>`, `"`, `'`) itself.
+pub(crate) fn svg_text(s: &str) -> String {
+    let s = crate::scene::error::printable(s);
+    if !s.contains(['\u{fffe}', '\u{ffff}']) {
+        return s;
+    }
+    s.chars().fold(String::with_capacity(s.len() + 8), |mut out, c| {
+        if matches!(c, '\u{fffe}' | '\u{ffff}') {
+            out.extend(c.escape_unicode());
+        } else {
+            out.push(c);
+        }
+        out
+    })
+}
+
 /// One axis: its label, scale and (optionally) fixed range.
 #[derive(Clone, Debug)]
 pub struct Axis {
@@ -229,7 +249,7 @@ where
     Y::CoordDescType: ValueFormatter<f64>,
 {
     let mut chart = ChartBuilder::on(area)
-        .caption(&p.title, (FONT, 18))
+        .caption(svg_text(&p.title), (FONT, 18))
         .margin(12)
         .x_label_area_size(45)
         .y_label_area_size(70)
@@ -237,8 +257,8 @@ where
         .map_err(err)?;
     chart
         .configure_mesh()
-        .x_desc(p.x.label.as_str())
-        .y_desc(p.y.label.as_str())
+        .x_desc(svg_text(&p.x.label))
+        .y_desc(svg_text(&p.y.label))
         .light_line_style(RGBColor(235, 235, 235))
         .bold_line_style(RGBColor(215, 215, 215))
         .label_style((FONT, 13))
@@ -254,7 +274,7 @@ where
         if !b.label.is_empty() {
             let style = TextStyle::from((FONT, 18).into_font()).color(&b.color).pos(Pos::new(HPos::Center, VPos::Top));
             chart
-                .draw_series(std::iter::once(Text::new(b.label.clone(), (p.x.mid(b.from, b.to), label_y), style)))
+                .draw_series(std::iter::once(Text::new(svg_text(&b.label), (p.x.mid(b.from, b.to), label_y), style)))
                 .map_err(err)?;
         }
     }
@@ -279,7 +299,7 @@ where
             let ann = chart.draw_series(LineSeries::new(s.points.iter().copied(), style)).map_err(err)?;
             if !s.label.is_empty() {
                 legend = true;
-                ann.label(s.label.as_str())
+                ann.label(svg_text(&s.label))
                     .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
             }
         }
@@ -350,6 +370,46 @@ pub fn bands_from_classes(xs: &[f64], axis: &Axis, class: impl Fn(usize) -> Opti
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A name with characters XML refuses (a vertical tab, U+FFFE), a newline and XML's
+    /// markup characters.
+    pub(super) const AWKWARD: &str = "a\u{b}b\nc & <d> \"e\" \u{fffe}";
+
+    /// [`AWKWARD`] as a figure's text must show it: escaped, on one line.
+    pub(super) const AWKWARD_SHOWN: &str = "a\\u{b}b\\nc &amp; &lt;d&gt; &quot;e&quot; \\u{fffe}";
+
+    /// Fails unless `svg` is well-formed XML as far as its texts go: no character XML
+    /// refuses (a control character other than tab, newline and carriage return; U+FFFE,
+    /// U+FFFF), every `&` an entity, every `<` a tag's; returns how often [`AWKWARD`] shows.
+    pub(super) fn awkward_texts(svg: &str) -> usize {
+        let refused = |c: char| (c < ' ' && !matches!(c, '\t' | '\n' | '\r')) || matches!(c, '\u{fffe}' | '\u{ffff}');
+        assert!(!svg.contains(refused), "a character XML refuses: {svg}");
+        for (i, _) in svg.match_indices('&') {
+            let entity = ["&amp;", "&lt;", "&gt;", "&quot;", "&apos;"].iter().any(|e| svg[i..].starts_with(e));
+            assert!(entity, "a bare &: {}", &svg[i..]);
+        }
+        for (i, _) in svg.match_indices('<') {
+            assert!(svg[i + 1..].starts_with(|c: char| c.is_ascii_alphabetic() || c == '/'), "a bare <: {}", &svg[i..]);
+        }
+        svg.matches(AWKWARD_SHOWN).count()
+    }
+
+    /// A name from the user in a panel's title, axis labels, band and legend: escaped as
+    /// text, the SVG well-formed.
+    #[test]
+    fn names_are_escaped_in_panels() {
+        let p = Panel {
+            title: AWKWARD.into(),
+            x: Axis::linear(AWKWARD),
+            y: Axis::linear(AWKWARD),
+            series: vec![Series::line(AWKWARD, vec![(1.0, 1.0), (2.0, 2.0)], PALETTE[0])],
+            bands: vec![Band { from: 1.0, to: 1.5, label: AWKWARD.into(), color: BAND_SMOOTH }],
+        };
+        let svg = render_svg(&[p], 600, 400).unwrap();
+        assert_eq!(awkward_texts(&svg), 5, "{svg}");
+        assert_eq!(svg_text("plain name"), "plain name");
+        assert_eq!(svg_text("\u{ffff}"), "\\u{ffff}");
+    }
 
     #[test]
     fn bands_split_halfway_between_classes() {

@@ -372,6 +372,15 @@ fn split_reading(grid: &[GridPoint], reference: f64) -> String {
     )
 }
 
+/// The examples of a grid on which the exact engine is cheaper everywhere: both engines'
+/// costs at the smallest error and where the fixed-step engine comes closest, or the first
+/// alone when that is where it comes closest (or no step gets to any error of the grid).
+fn exact_examples(grid: &[GridPoint], reference: f64) -> String {
+    let closest = (0..grid.len()).min_by(|&a, &b| ratio(&grid[a]).total_cmp(&ratio(&grid[b]))).unwrap_or(0);
+    let first = costs_at(&grid[0], reference);
+    if closest == 0 { first } else { format!("{first}; {}", costs_at(&grid[closest], reference)) }
+}
+
 /// The reading: the per-replica cost line, then one line per observable saying where each
 /// engine is cheaper and by what factor.
 pub fn reading(study: &Study) -> Vec<String> {
@@ -399,14 +408,12 @@ pub fn reading(study: &Study) -> Vec<String> {
         let exact_anywhere = grid.iter().any(|g| !fixed_wins(g));
         match (fixed_anywhere, exact_anywhere) {
             (false, _) => {
-                let at = grid.iter().min_by(|a, b| ratio(a).total_cmp(&ratio(b))).unwrap();
                 let _ = write!(
                     line,
-                    "the exact engine is cheaper at every error from {} to {}; {}; {}.",
+                    "the exact engine is cheaper at every error from {} to {}; {}.",
                     with_pct(lo, reference),
                     with_pct(hi, reference),
-                    costs_at(&grid[0], reference),
-                    costs_at(at, reference)
+                    exact_examples(&grid, reference)
                 );
             }
             (true, false) => {
@@ -674,6 +681,17 @@ mod tests {
             ),
             "{}",
             line(0.001, 0.005, 1e-4)
+        );
+    }
+
+    /// No fixed step gets to any error of the grid (its bias exceeds them all): the
+    /// exact engine's costs are given once.
+    #[test]
+    fn a_reading_where_no_step_gets_to_any_error_gives_one_example() {
+        assert_eq!(
+            line(0.02, 0.01, 0.02),
+            "`attached_fraction_mean`: the exact engine is cheaper at every error from 0.0020 (0.40 %) to 0.020 \
+             (4.0 %); at error 0.0020 (0.40 %): exact 0.25 s, no step tried gets there."
         );
     }
 
