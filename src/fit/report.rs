@@ -101,7 +101,8 @@ fn csv_number(v: f64) -> String {
     if v.is_finite() { compact(v) } else { String::new() }
 }
 
-/// `fit.csv`: one row per data point, numbers as [`csv_number`] writes them.
+/// `fit.csv`: one row per data point, numbers as `csv_number` writes them (the shortest
+/// text that reads back the same, in exponent form beyond 20 characters).
 pub fn fit_csv(prob: &Problem, r: &FitResult) -> String {
     let mut out = prob.data.columns.join(",");
     if !out.is_empty() {
