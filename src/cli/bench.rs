@@ -104,7 +104,7 @@ pub(crate) fn bench(args: &BenchArgs) -> ExitCode {
     };
     println!(
         "bench {}: N = {} to {} ({} sizes), exact and fixed engines, {}",
-        base.name,
+        crate::scene::error::printable(&base.name),
         sizes[0],
         sizes[sizes.len() - 1],
         sizes.len(),
@@ -135,7 +135,7 @@ pub(crate) fn bench(args: &BenchArgs) -> ExitCode {
             return fail(EXIT_RUN_FAILED, format!("cannot write {}: {e}", out.join(name).display()));
         }
     }
-    println!("output in {}", out.display());
+    println!("output in {}", crate::scene::error::printable(&out.display().to_string()));
     ExitCode::SUCCESS
 }
 

@@ -137,11 +137,12 @@ pub(crate) fn compare_as(args: &CompareArgs, command: &str) -> ExitCode {
         return study::write_failed(e, &out);
     }
     let study = result;
-    println!("compare {}: {} points, reference of {} exact replicas", scene.name, study.points.len(), ref_replicas);
+    let name = crate::scene::error::printable(&scene.name);
+    println!("compare {name}: {} points, reference of {} exact replicas", study.points.len(), ref_replicas);
     for line in report::reading(&study) {
         println!("{line}");
     }
-    println!("output in {}", out.display());
+    println!("output in {}", crate::scene::error::printable(&out.display().to_string()));
     ExitCode::SUCCESS
 }
 

@@ -169,6 +169,9 @@ pub(crate) fn fit(args: &FitArgs) -> ExitCode {
     if let Some(w) = crate::fit::report::noise_warning(&r) {
         eprintln!("warning: {w}");
     }
-    println!("output in {} (fit.json, fit.csv, fit.toml, fit.svg)", out.display());
+    println!(
+        "output in {} (fit.json, fit.csv, fit.toml, fit.svg)",
+        crate::scene::error::printable(&out.display().to_string())
+    );
     ExitCode::SUCCESS
 }

@@ -146,7 +146,7 @@ fn report(law: &FrictionLaw, out: &Path) {
     let steady = law.steady().count();
     println!(
         "friction law of scene {} over {V_FIELD} x {T_FIELD}: {} points, {steady} steady, {} replica(s) each",
-        law.scene,
+        crate::scene::error::printable(&law.scene),
         law.points.len(),
         law.replicas
     );
@@ -181,5 +181,8 @@ fn report(law: &FrictionLaw, out: &Path) {
         }
         Err(e) => println!("fit: none ({e}); the tables hold what the map gives"),
     }
-    println!("output in {} (law.csv, abaqus.inp, ansys.mac, law.json)", out.display());
+    println!(
+        "output in {} (law.csv, abaqus.inp, ansys.mac, law.json)",
+        crate::scene::error::printable(&out.display().to_string())
+    );
 }

@@ -96,7 +96,7 @@ pub(crate) fn summary_lines(s: &Summary, out: &Path) -> String {
          friction per junction {} (std of total {}) over [{}, {}]\n\
          attached fraction {:.4}; {}\n\
          {work}, {} ruptures, {} formations in {:.3} s; output in {}\n",
-        s.scene,
+        crate::scene::error::printable(&s.scene),
         s.engine_name(),
         s.seed,
         s.n,
@@ -110,6 +110,6 @@ pub(crate) fn summary_lines(s: &Summary, out: &Path) -> String {
         s.counters.ruptures,
         s.counters.formations,
         s.wall_seconds,
-        out.display()
+        crate::scene::error::printable(&out.display().to_string())
     )
 }

@@ -239,7 +239,7 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
     println!(
         "sweep of {fields} over {sizes} values x {} replicas of scene {} ({} runs on {} threads in {:.2} s)",
         sweep.replicas,
-        sweep.base.name,
+        printable(&sweep.base.name),
         sweep.len(),
         timing.threads,
         timing.wall_seconds
@@ -261,7 +261,7 @@ pub(crate) fn sweep(args: &SweepArgs) -> ExitCode {
             r.replicas
         );
     }
-    println!("output in {} (sweep.csv, runs.csv, sweep.svg, sweep.json)", out.display());
+    println!("output in {} (sweep.csv, runs.csv, sweep.svg, sweep.json)", printable(&out.display().to_string()));
     ExitCode::SUCCESS
 }
 

@@ -15,7 +15,7 @@ pub(crate) fn validate(args: &SceneArgs) -> ExitCode {
     let toml = toml::to_string(&scene.to_file()).expect("a scene always serializes");
     let mut text = String::new();
     // Writing to a String cannot fail.
-    let _ = writeln!(text, "# scene {} is valid; resolved parameters:", scene.name);
+    let _ = writeln!(text, "# scene {} is valid; resolved parameters:", crate::scene::error::printable(&scene.name));
     text.push_str(&short_numbers(&toml));
     let j = &scene.junctions;
     let p = &scene.plate;

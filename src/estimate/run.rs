@@ -85,7 +85,7 @@ impl Estimate {
             "# estimate: outputs {} = {}; free on the disk of {}: {free}",
             bytes(self.output_bytes()),
             files.join(", "),
-            out.display()
+            crate::scene::error::printable(&out.display().to_string())
         ));
         lines
     }

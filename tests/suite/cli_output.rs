@@ -122,3 +122,26 @@ fn other_write_errors_are_one_line_and_exit_code_1() {
     // The run itself succeeded: its files are there.
     assert!(d.join("run/summary.json").is_file());
 }
+
+/// A scene whose file name holds a newline: every command's report names it on one line,
+/// escaped (`a\nb`), and `validate`'s report (a scene file) still reads back as TOML.
+#[test]
+fn a_scene_name_with_a_newline_stays_on_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("a\nb.toml");
+    std::fs::copy(concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/fig1.toml"), &scene).unwrap();
+    let scene = scene.to_str().unwrap();
+    let run = |args: &[&str]| {
+        let out = command(args, dir.path()).output().expect("the binary runs");
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let validated = run(&["validate", scene]);
+    assert!(validated.starts_with("# scene a\\nb is valid"), "{validated}");
+    let _: toml::Table = toml::from_str(&validated).expect("validate's report reads back");
+    // The default output directory, out/a\nb, holds the newline too.
+    let ran = run(&["run", scene, "--set", "output.trace=false", "--set", "run.t_end=10"]);
+    assert!(ran.starts_with("scene a\\nb ("), "{ran}");
+    assert_eq!(ran.lines().count(), 4, "{ran}");
+    assert!(ran.trim_end().ends_with("output in out/a\\nb"), "{ran}");
+}
