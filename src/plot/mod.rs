@@ -54,25 +54,11 @@ fn err(e: impl std::fmt::Display) -> PlotError {
     PlotError(e.to_string())
 }
 
-/// `s` as a figure shows it: control characters and line separators escaped as text
-/// ([`printable`](crate::scene::error::printable): a newline as `\n`, a vertical tab as
-/// `\u{b}`), and the two code points XML refuses in text (U+FFFE, U+FFFF) as `\u{fffe}`
-/// and `\u{ffff}`, so that a scene's name keeps the SVG well-formed and each text on one
-/// line. plotters escapes XML's markup characters (`&`, `<`, `>`, `"`, `'`) itself.
-pub(crate) fn svg_text(s: &str) -> String {
-    let s = crate::scene::error::printable(s);
-    if !s.contains(['\u{fffe}', '\u{ffff}']) {
-        return s;
-    }
-    s.chars().fold(String::with_capacity(s.len() + 8), |mut out, c| {
-        if matches!(c, '\u{fffe}' | '\u{ffff}') {
-            out.extend(c.escape_unicode());
-        } else {
-            out.push(c);
-        }
-        out
-    })
-}
+/// `s` as a figure shows it: control characters, line separators, U+FFFE and U+FFFF
+/// escaped as text (a newline as `\n`, a vertical tab as `\u{b}`), so that a scene's name
+/// keeps the SVG well-formed and each text on one line. plotters escapes XML's markup
+/// characters (`&`, `<`, `>`, `"`, `'`) itself.
+pub(crate) use crate::scene::error::printable as svg_text;
 
 /// One axis: its label, scale and (optionally) fixed range.
 #[derive(Clone, Debug)]

@@ -65,8 +65,9 @@ pub fn compact_numbers(s: &str) -> String {
     out
 }
 
-/// `s` with control characters and line separators escaped (`\n`, `\u{2028}`), so that a
-/// user-supplied key, path or assignment cannot break a one-line message.
+/// `s` with control characters, line separators and the two code points XML refuses in
+/// text (U+FFFE, U+FFFF) escaped (`\n`, `\u{2028}`, `\u{fffe}`), so that a user-supplied
+/// key, path or assignment cannot break a one-line message, a comment line or an SVG.
 pub fn printable(s: &str) -> String {
     if !s.chars().any(needs_escape) {
         return s.to_string();
@@ -82,7 +83,7 @@ pub fn printable(s: &str) -> String {
 }
 
 fn needs_escape(c: char) -> bool {
-    c.is_control() || matches!(c, '\u{2028}' | '\u{2029}')
+    c.is_control() || matches!(c, '\u{2028}' | '\u{2029}' | '\u{fffe}' | '\u{ffff}')
 }
 
 /// Collapses a multi-line message into one line.
