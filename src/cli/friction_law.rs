@@ -13,8 +13,8 @@ use super::args::{EXIT_BAD_INPUT, EXIT_RUN_FAILED, SceneArgs, fail};
 use super::sweep::{AxisArgs, Finished, SweepArgs, run_study};
 use crate::studies::format::fixed;
 use crate::studies::law::{
-    self, DEFAULT_DEGREE, FrictionLaw, LawInput, PointRuns, ScaleArgs, T_FIELD, V_FIELD, from_outcome, read_sweep_dir,
-    vt_axes,
+    self, DEFAULT_DEGREE, FrictionLaw, LawInput, PointRuns, ScaleArgs, Scales, T_FIELD, V_FIELD, from_outcome,
+    read_sweep_dir, vt_axes,
 };
 
 #[derive(clap::Args, Debug)]
@@ -71,14 +71,15 @@ impl FrictionLawArgs {
     }
 }
 
-/// The grid of a prepared sweep, checked as a law checks it (`V`, `T` > 0, no point twice).
-fn check_grid(sweep: &crate::studies::sweep::Sweep) -> Result<(), String> {
+/// The grid of a prepared sweep, checked as a law checks it in `scales`
+/// ([`law::source::checked_points`]).
+fn check_grid(sweep: &crate::studies::sweep::Sweep, scales: &Scales) -> Result<(), String> {
     let params: Vec<&str> = sweep.axes.iter().map(|a| a.param.as_str()).collect();
     let (iv, it) = vt_axes(&params, "--param").map_err(|e| e.to_string())?;
     let points =
         sweep.points.iter().map(|p| PointRuns { v: p.values[iv].x, t: p.values[it].x, runs: Vec::new() }).collect();
     let input = LawInput { scene: sweep.base.name.clone(), replicas: sweep.replicas, points };
-    law::source::checked_points(&input).map(|_| ()).map_err(|e| e.to_string())
+    law::source::checked_points(&input, scales).map(|_| ()).map_err(|e| e.to_string())
 }
 
 pub(crate) fn friction_law(args: &FrictionLawArgs) -> ExitCode {
@@ -120,10 +121,11 @@ pub(crate) fn friction_law(args: &FrictionLawArgs) -> ExitCode {
             };
             let default_out =
                 |s: &crate::studies::sweep::Sweep| Path::new("out").join(format!("{}-friction-law", s.base.name));
-            let Finished { sweep, outcome, out, held } = match run_study(&sweep_args, default_out, check_grid) {
-                Ok(f) => f,
-                Err(code) => return code,
-            };
+            let Finished { sweep, outcome, out, held } =
+                match run_study(&sweep_args, default_out, |s| check_grid(s, &scales)) {
+                    Ok(f) => f,
+                    Err(code) => return code,
+                };
             match from_outcome(&sweep, &outcome) {
                 Ok(i) => (i, out, held),
                 Err(e) => return fail(EXIT_BAD_INPUT, e),

@@ -396,6 +396,19 @@ fn bad_input_is_one_line_and_nothing_is_written() {
     args.extend(SCALES);
     assert_refused(&stickslip(&args), "plate.v x plate.k");
     assert!(!out.exists());
+    // A grid point that the scales cannot carry: a slip rate that underflows
+    // (1e-310 l0 / t0 is subnormal) and a temperature whose 1/T squared overflows; refused
+    // before anything runs.
+    for (v, t, mention) in [
+        ("1e-310,1", "1", "plate.v = 1e-310: the law's slip rate V l0 / t0 would be 6.66"),
+        ("1", "1e-200,1", "junctions.temperature = 1e-200: the friction law is fitted in 1/T"),
+    ] {
+        let mut args = vec!["friction-law", fig2_static(), "--param", "plate.v", "--values", v];
+        args.extend(["--param", "junctions.temperature", "--values", t, "--out", &o_s]);
+        args.extend(SCALES);
+        assert_refused(&stickslip(&args), mention);
+        assert!(!out.exists());
+    }
     // An unfinished sweep: the journal of the 2-D sweep cut to its header and one run, its
     // tables gone (as a sweep killed after one run leaves it).
     let cut = dir.path().join("cut");

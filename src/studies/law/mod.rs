@@ -60,9 +60,9 @@ pub fn fit_coordinates(v: f64, t: f64) -> (f64, f64) {
 
 impl FrictionLaw {
     /// The law of `input` in the units of `scales`, its form fitted at degree `degree`
-    /// (1 or 2). Refuses a `V` or `T` that is not > 0 and a grid point given twice.
+    /// (1 or 2). Refuses what [`source::checked_points`] refuses.
     pub fn new(input: &LawInput, scales: Scales, degree: u32) -> Result<FrictionLaw, SourceError> {
-        let sorted = source::checked_points(input)?;
+        let sorted = source::checked_points(input, &scales)?;
         let points: Vec<LawPoint> = sorted.iter().map(|p| LawPoint::new(p, &scales)).collect();
         let fitted: Vec<usize> = (0..points.len()).filter(|&k| points[k].steady).collect();
         let data: Vec<FitPoint> = fitted

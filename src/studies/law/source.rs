@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use super::points::{PointRuns, RunRecord};
+use super::scales::Scales;
 use crate::observe::regime::Regime;
-use crate::scene::error::printable;
+use crate::scene::error::{compact, printable};
 use crate::studies::journal;
 use crate::studies::sweep::{Sweep, SweepOutcome};
 
@@ -47,6 +48,16 @@ pub enum SourceError {
     Damaged { path: String, why: String },
     #[error("{field} = {value}: the friction law needs {field} > 0 (it is fitted in ln V and 1/T)")]
     NotPositive { field: &'static str, value: f64 },
+    #[error(
+        "{field} = {}: the law's {what} would be {} {unit}, not a normal positive number (from 2.2e-308 to 1.8e308)",
+        compact(*value), compact(*physical)
+    )]
+    Unrepresentable { field: &'static str, value: f64, what: &'static str, physical: f64, unit: &'static str },
+    #[error(
+        "{T_FIELD} = {}: the friction law is fitted in 1/T and its square, which needs {T_FIELD} from {}",
+        compact(*value), compact(T_MIN)
+    )]
+    TooCold { value: f64 },
     #[error("{field} = {value} and {other} = {other_value}: the grid point is there twice")]
     Duplicate { field: &'static str, value: f64, other: &'static str, other_value: f64 },
 }
@@ -196,15 +207,31 @@ pub fn read_sweep_dir(dir: &Path) -> Result<LawInput, SourceError> {
     Ok(LawInput { scene: rec.scene, replicas: rec.replicas, points })
 }
 
-/// Checks that every `V` and `T` is > 0 and that no grid point is there twice; returns the
-/// points sorted by `T`, then `V` (the order of the tables).
-pub fn checked_points(input: &LawInput) -> Result<Vec<&PointRuns>, SourceError> {
+/// The least temperature a law is fitted at: `1/T` and its square stay finite.
+pub const T_MIN: f64 = 1e-150;
+
+/// Checks that every `V` and `T` is > 0, that `T` is at least [`T_MIN`], that the slip rate
+/// and the temperature in kelvin are positive normal numbers in `scales`, and that no grid
+/// point is there twice; returns the points sorted by `T`, then `V` (the order of the tables).
+pub fn checked_points<'a>(input: &'a LawInput, scales: &Scales) -> Result<Vec<&'a PointRuns>, SourceError> {
     for p in &input.points {
         if p.v.is_nan() || p.v <= 0.0 {
             return Err(SourceError::NotPositive { field: V_FIELD, value: p.v });
         }
         if p.t.is_nan() || p.t <= 0.0 {
             return Err(SourceError::NotPositive { field: T_FIELD, value: p.t });
+        }
+        if p.t < T_MIN {
+            return Err(SourceError::TooCold { value: p.t });
+        }
+        let (slip, kelvin) = (scales.slip_rate(p.v), scales.kelvin(p.t));
+        if !slip.is_normal() {
+            let (field, what, unit) = (V_FIELD, "slip rate V l0 / t0", "m/s");
+            return Err(SourceError::Unrepresentable { field, value: p.v, what, physical: slip, unit });
+        }
+        if !kelvin.is_normal() {
+            let (field, what, unit) = (T_FIELD, "temperature T t_ref", "K");
+            return Err(SourceError::Unrepresentable { field, value: p.t, what, physical: kelvin, unit });
         }
     }
     let mut sorted: Vec<&PointRuns> = input.points.iter().collect();
