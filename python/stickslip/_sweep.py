@@ -43,7 +43,7 @@ def _texts(values: Values) -> list[str]:
     """Values as ``--values`` texts (numbers in their shortest round-trip form)."""
     if isinstance(values, str):
         return [values]
-    return [value_text(v) for v in values]
+    return [value_text(v, "--values: value") for v in values]
 
 
 def _axes(param: Union[str, Sequence[str]], values: Any, log: Any) -> list[tuple[str, list[str], bool]]:
@@ -185,10 +185,10 @@ def sweep(
 
     ``scene`` (a :class:`Scene` or a scene file, with ``overrides`` applied as ``--set``)
     is run at every value of ``param`` (``"plate.v"``), ``replicas`` times each, with the
-    CLI's seeds. ``values`` is a list of numbers (or their texts), a ``--values`` text
-    (``"0.1,1,10"``), or :func:`log_range` / :func:`linear_range` of a range; for a 2-D map
-    give ``param=("plate.v", "plate.k")`` and ``values=(VALUES1, VALUES2)``. ``log``
-    draws the axis (or each axis) on a log scale in ``sweep.svg``.
+    CLI's seeds. ``values`` is a list of numbers (a numpy array too) or their texts, a
+    ``--values`` text (``"0.1,1,10"``), or :func:`log_range` / :func:`linear_range` of a
+    range; for a 2-D map give ``param=("plate.v", "plate.k")`` and ``values=(VALUES1,
+    VALUES2)``. ``log`` draws the axis (or each axis) on a log scale in ``sweep.svg``.
 
     Runs are mapped onto ``client`` (a ``dask.distributed.Client``: a LocalCluster, a
     dask-jobqueue cluster, ...); without one a LocalCluster of ``n_workers`` processes

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import cloudpickle
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -109,6 +110,20 @@ def test_a_result_lost_before_the_client_reads_it_is_computed_again(cli, repo, t
     table = stickslip.sweep(repo / SCENE, "plate.v", VALUES, 2, client, out=str(tmp_path / "py"), **SET)
     assert seen and seen[0] != "finished"
     assert_same_tables(c, tmp_path / "py", table)
+
+
+def test_numpy_values_and_overrides_are_the_numbers_they_hold(cli, repo, tmp_path, client):
+    # numpy's scalars (from np.linspace, np.arange, a DataFrame's column) are numbers, as
+    # values and as overrides, whose repr under numpy 2 is np.float64(0.3): the CLI's sweep.
+    c = cli_sweep(cli, tmp_path / "cli", "--param", "plate.v", "--values", "0.3,1,3", "--replicas", "2")
+    sets = {k: np.float64(v) for k, v in SET.items()}
+    values = np.array(VALUES, dtype=float)
+    table = stickslip.sweep(repo / SCENE, "plate.v", values, 2, client, out=str(tmp_path / "py"), **sets)
+    assert_same_tables(c, tmp_path / "py", table)
+    a = stickslip.load(repo / SCENE, junctions__n=np.int64(30), plate__v=np.float32(0.5), output__plot=np.False_)
+    assert a == stickslip.load(repo / SCENE, junctions__n=30, plate__v=0.5, output__plot=False)
+    with pytest.raises(ValueError, match=r"^--values: value None: expected a bool, a number or a str$"):
+        stickslip.sweep(repo / SCENE, "plate.v", [0.5, None])
 
 
 def test_bad_sweeps_are_value_errors_with_the_cli_message(cli, repo, monkeypatch):
