@@ -12,6 +12,7 @@ With an output directory the client journals every finished run there (the CLI's
 from __future__ import annotations
 
 import io
+import numbers
 import os
 import time
 from dataclasses import dataclass
@@ -99,8 +100,9 @@ def run_sweep(
     **overrides: Any,
 ) -> SweepResult:
     """As :func:`sweep`, returning both tables and the library's outcome."""
-    if isinstance(replicas, bool) or not isinstance(replicas, int) or replicas < 1:
-        raise ValueError(f"--replicas {replicas}: must be a whole number from 1 to 100000")
+    if isinstance(replicas, bool) or not isinstance(replicas, numbers.Integral) or not 1 <= replicas <= 100_000:
+        raise ValueError(f"--replicas {replicas!r}: must be a whole number from 1 to 100000")
+    replicas = int(replicas)
     base = as_scene(scene, overrides)
     # Everything is validated and seeded before a cluster is started.
     plan = Sweep(base, _axes(param, values, log), replicas, override_texts(overrides))

@@ -126,7 +126,7 @@ def test_numpy_values_and_overrides_are_the_numbers_they_hold(cli, repo, tmp_pat
         stickslip.sweep(repo / SCENE, "plate.v", [0.5, None])
 
 
-def test_bad_sweeps_are_value_errors_with_the_cli_message(cli, repo, monkeypatch):
+def test_bad_sweeps_are_value_errors_with_the_cli_message(cli, repo, monkeypatch, client):
     monkeypatch.chdir(repo)
     for args, kwargs in [
         (["--param", "plate.nope", "--values", "1"], dict(param="plate.nope", values=[1])),
@@ -139,6 +139,11 @@ def test_bad_sweeps_are_value_errors_with_the_cli_message(cli, repo, monkeypatch
         with pytest.raises(ValueError) as e:
             stickslip.sweep(SCENE, **kwargs)  # refused before any cluster starts
         assert p.stderr.strip() == "error: " + str(e.value)
+    # The command's bounds of --replicas, whatever kind of integer gives them.
+    assert len(stickslip.run_sweep(SCENE, "plate.v", [1], np.int64(2), client, **SET).runs) == 2
+    for replicas in [0, 100_001, np.int64(0), 2.0, True]:
+        with pytest.raises(ValueError, match=r"^--replicas .*: must be a whole number from 1 to 100000$"):
+            stickslip.sweep(SCENE, "plate.v", [1], replicas)  # refused before any cluster starts
 
 
 def test_a_failed_run_fails_the_sweep_with_the_cli_message(cli, repo, tmp_path, client):
