@@ -59,6 +59,8 @@ def _axes(param: Union[str, Sequence[str]], values: Any, log: Any) -> list[tuple
             "param=(FIELD1, FIELD2) and values=(VALUES1, VALUES2)"
         )
     logs = tuple(log) if isinstance(log, (tuple, list)) else (bool(log), bool(log))
+    if len(logs) != 2:
+        raise ValueError(f"log={log!r}: a 2-D sweep takes one bool for both fields or two, one per field")
     return [(p, _texts(v), bool(lg)) for p, v, lg in zip(params, values, logs)]
 
 

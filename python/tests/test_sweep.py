@@ -139,6 +139,10 @@ def test_bad_sweeps_are_value_errors_with_the_cli_message(cli, repo, monkeypatch
         with pytest.raises(ValueError) as e:
             stickslip.sweep(SCENE, **kwargs)  # refused before any cluster starts
         assert p.stderr.strip() == "error: " + str(e.value)
+    # A 2-D sweep's log flags are one or two: (True,) dropped the second field.
+    for log in [(True,), [True, False, True]]:
+        with pytest.raises(ValueError, match=r"^log=.*: a 2-D sweep takes one bool for both fields or two"):
+            stickslip.sweep(SCENE, ("plate.v", "plate.k"), ([0.5, 1], [5, 50]), log=log)
     # The command's bounds of --replicas, whatever kind of integer gives them.
     assert len(stickslip.run_sweep(SCENE, "plate.v", [1], np.int64(2), client, **SET).runs) == 2
     for replicas in [0, 100_001, np.int64(0), 2.0, True]:
