@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 import os
 from typing import Any, Mapping, Union
 
@@ -12,19 +13,23 @@ from ._stickslip import Scene
 SceneLike = Union[Scene, str, "os.PathLike[str]"]
 
 
-def value_text(value: Any) -> str:
-    """A Python value as the text after ``=`` in ``--set section.key=value``."""
-    if isinstance(value, bool):
+def value_text(value: Any, what: str = "override value") -> str:
+    """A Python value as the text after ``=`` in ``--set section.key=value``: a bool, an
+    integer or a real number (numpy's scalars included) or a text. ``what`` names the value
+    in the error."""
+    if isinstance(value, bool) or (getattr(value, "shape", None) == () and value.dtype.kind == "b"):
         return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        # repr is the shortest text that reads back to the same float; TOML reads
-        # 'inf'/'nan' too, and the scene's validation refuses them with its message.
-        return repr(value) if math.isfinite(value) else ("nan" if math.isnan(value) else ("inf" if value > 0 else "-inf"))
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    if isinstance(value, numbers.Real):
+        # repr of a float is the shortest text that reads back to it (numpy's scalars are
+        # made floats first: their repr is ``np.float64(0.5)``); TOML reads 'inf'/'nan'
+        # too, and the scene's validation refuses them with its message.
+        x = float(value)
+        return repr(x) if math.isfinite(x) else ("nan" if math.isnan(x) else ("inf" if x > 0 else "-inf"))
     if isinstance(value, str):
         return value
-    raise ValueError(f"override value {value!r}: expected a bool, int, float or str")
+    raise ValueError(f"{what} {value!r}: expected a bool, a number or a str")
 
 
 def override_texts(overrides: Mapping[str, Any]) -> list[str]:

@@ -12,6 +12,7 @@ With an output directory the client journals every finished run there (the CLI's
 from __future__ import annotations
 
 import io
+import numbers
 import os
 import time
 from dataclasses import dataclass
@@ -43,7 +44,7 @@ def _texts(values: Values) -> list[str]:
     """Values as ``--values`` texts (numbers in their shortest round-trip form)."""
     if isinstance(values, str):
         return [values]
-    return [value_text(v) for v in values]
+    return [value_text(v, "--values: value") for v in values]
 
 
 def _axes(param: Union[str, Sequence[str]], values: Any, log: Any) -> list[tuple[str, list[str], bool]]:
@@ -58,6 +59,8 @@ def _axes(param: Union[str, Sequence[str]], values: Any, log: Any) -> list[tuple
             "param=(FIELD1, FIELD2) and values=(VALUES1, VALUES2)"
         )
     logs = tuple(log) if isinstance(log, (tuple, list)) else (bool(log), bool(log))
+    if len(logs) != 2:
+        raise ValueError(f"log={log!r}: a 2-D sweep takes one bool for both fields or two, one per field")
     return [(p, _texts(v), bool(lg)) for p, v, lg in zip(params, values, logs)]
 
 
@@ -99,8 +102,9 @@ def run_sweep(
     **overrides: Any,
 ) -> SweepResult:
     """As :func:`sweep`, returning both tables and the library's outcome."""
-    if isinstance(replicas, bool) or not isinstance(replicas, int) or replicas < 1:
-        raise ValueError(f"--replicas {replicas}: must be a whole number from 1 to 100000")
+    if isinstance(replicas, bool) or not isinstance(replicas, numbers.Integral) or not 1 <= replicas <= 100_000:
+        raise ValueError(f"--replicas {replicas!r}: must be a whole number from 1 to 100000")
+    replicas = int(replicas)
     base = as_scene(scene, overrides)
     # Everything is validated and seeded before a cluster is started.
     plan = Sweep(base, _axes(param, values, log), replicas, override_texts(overrides))
@@ -185,10 +189,10 @@ def sweep(
 
     ``scene`` (a :class:`Scene` or a scene file, with ``overrides`` applied as ``--set``)
     is run at every value of ``param`` (``"plate.v"``), ``replicas`` times each, with the
-    CLI's seeds. ``values`` is a list of numbers (or their texts), a ``--values`` text
-    (``"0.1,1,10"``), or :func:`log_range` / :func:`linear_range` of a range; for a 2-D map
-    give ``param=("plate.v", "plate.k")`` and ``values=(VALUES1, VALUES2)``. ``log``
-    draws the axis (or each axis) on a log scale in ``sweep.svg``.
+    CLI's seeds. ``values`` is a list of numbers (a numpy array too) or their texts, a
+    ``--values`` text (``"0.1,1,10"``), or :func:`log_range` / :func:`linear_range` of a
+    range; for a 2-D map give ``param=("plate.v", "plate.k")`` and ``values=(VALUES1,
+    VALUES2)``. ``log`` draws the axis (or each axis) on a log scale in ``sweep.svg``.
 
     Runs are mapped onto ``client`` (a ``dask.distributed.Client``: a LocalCluster, a
     dask-jobqueue cluster, ...); without one a LocalCluster of ``n_workers`` processes

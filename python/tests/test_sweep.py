@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import cloudpickle
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -111,7 +112,21 @@ def test_a_result_lost_before_the_client_reads_it_is_computed_again(cli, repo, t
     assert_same_tables(c, tmp_path / "py", table)
 
 
-def test_bad_sweeps_are_value_errors_with_the_cli_message(cli, repo, monkeypatch):
+def test_numpy_values_and_overrides_are_the_numbers_they_hold(cli, repo, tmp_path, client):
+    # numpy's scalars (from np.linspace, np.arange, a DataFrame's column) are numbers, as
+    # values and as overrides, whose repr under numpy 2 is np.float64(0.3): the CLI's sweep.
+    c = cli_sweep(cli, tmp_path / "cli", "--param", "plate.v", "--values", "0.3,1,3", "--replicas", "2")
+    sets = {k: np.float64(v) for k, v in SET.items()}
+    values = np.array(VALUES, dtype=float)
+    table = stickslip.sweep(repo / SCENE, "plate.v", values, 2, client, out=str(tmp_path / "py"), **sets)
+    assert_same_tables(c, tmp_path / "py", table)
+    a = stickslip.load(repo / SCENE, junctions__n=np.int64(30), plate__v=np.float32(0.5), output__plot=np.False_)
+    assert a == stickslip.load(repo / SCENE, junctions__n=30, plate__v=0.5, output__plot=False)
+    with pytest.raises(ValueError, match=r"^--values: value None: expected a bool, a number or a str$"):
+        stickslip.sweep(repo / SCENE, "plate.v", [0.5, None])
+
+
+def test_bad_sweeps_are_value_errors_with_the_cli_message(cli, repo, monkeypatch, client):
     monkeypatch.chdir(repo)
     for args, kwargs in [
         (["--param", "plate.nope", "--values", "1"], dict(param="plate.nope", values=[1])),
@@ -124,6 +139,15 @@ def test_bad_sweeps_are_value_errors_with_the_cli_message(cli, repo, monkeypatch
         with pytest.raises(ValueError) as e:
             stickslip.sweep(SCENE, **kwargs)  # refused before any cluster starts
         assert p.stderr.strip() == "error: " + str(e.value)
+    # A 2-D sweep's log flags are one or two: (True,) dropped the second field.
+    for log in [(True,), [True, False, True]]:
+        with pytest.raises(ValueError, match=r"^log=.*: a 2-D sweep takes one bool for both fields or two"):
+            stickslip.sweep(SCENE, ("plate.v", "plate.k"), ([0.5, 1], [5, 50]), log=log)
+    # The command's bounds of --replicas, whatever kind of integer gives them.
+    assert len(stickslip.run_sweep(SCENE, "plate.v", [1], np.int64(2), client, **SET).runs) == 2
+    for replicas in [0, 100_001, np.int64(0), 2.0, True]:
+        with pytest.raises(ValueError, match=r"^--replicas .*: must be a whole number from 1 to 100000$"):
+            stickslip.sweep(SCENE, "plate.v", [1], replicas)  # refused before any cluster starts
 
 
 def test_a_failed_run_fails_the_sweep_with_the_cli_message(cli, repo, tmp_path, client):

@@ -14,12 +14,19 @@
 //! h(i, r) = mix(mix(mix(s) ^ i) ^ r)
 //! ```
 //!
-//! The seed is `h >> 1` (a TOML integer, `0 ..= 2^63 - 1`), or `1 + h mod (2^31 - 2)` when
-//! the run uses the Park–Miller generator (`run.engine = "fixed"`, `fixed.rng =
-//! "park-miller"`), whose seeds lie in `[1, 2^31 - 2]`. Seeds are assigned in point-major
-//! order (all replicas of point 0, then of point 1, ...); a seed equal to one already
-//! assigned (possible, though unlikely, in the Park–Miller range) is replaced by the next
-//! `h <- mix(h)` until it is new, so every run of a sweep has its own seed.
+//! - PCG streams (the exact engine; the fixed engine with `fixed.rng = "pcg"`): the seed is
+//!   `h(i, r) >> 1` (a TOML integer, `0 ..= 2^63 - 1`). Seeds are assigned in point-major
+//!   order (all replicas of point 0, then of point 1, ...); a seed equal to one already
+//!   assigned is replaced by the next `h <- mix(h)` until it is new, so every run of such a
+//!   sweep has its own seed.
+//! - Park–Miller (`run.engine = "fixed"`, `fixed.rng = "park-miller"`): the replicas of a
+//!   point take consecutive, disjoint blocks of the generator's single cycle, as in a
+//!   work-precision study (below): the point starts at the state `1 + h(i, 2^64 - 1) mod
+//!   (2^31 - 2)` and replica `r` `r L` draws further on, `L = N (steps + 1)` the draws one
+//!   replica can use (one per junction and step, and one per junction for a stationary
+//!   start; `steps` the fixed steps to `run.t_end`). A point whose replicas need more than
+//!   the period `2^31 - 2` draws is refused. Different points may share states: each point
+//!   is an estimate of its own, and only its replicas must be independent.
 //!
 //! **Work-precision studies** (`stickslip compare`). Every replica of every point gets its
 //! own seed, a function of `(run.seed, role, point, replica)` only:
@@ -84,8 +91,9 @@ pub fn hash(scene_seed: u64, index: u64, replica: u64) -> u64 {
     chain(scene_seed, &[index, replica])
 }
 
-/// Seeds of all runs of a sweep: `seeds[i][r]` for `points` grid points and `replicas`
-/// replicas, distinct. `range(i)` gives the seed range of point `i`'s runs.
+/// Hashed seeds `seeds[i][r] = range(i)` of `h(i, r)` for `points` grid points and
+/// `replicas` replicas, distinct: a sweep's PCG seeds (`SeedRange::Full`), and a
+/// calibration's ([`crate::fit`]). `range(i)` gives the seed range of point `i`'s runs.
 pub fn derive_all(
     scene_seed: u64,
     points: usize,
@@ -137,12 +145,26 @@ pub const PARK_MILLER_PERIOD: u64 = ParkMiller::MODULUS as u64 - 1;
 /// allowed `draws` numbers: disjoint consecutive blocks of the cycle starting at a hashed
 /// state. `None` if the blocks do not fit in one period.
 pub fn park_miller_seeds(base: u64, point: u64, replicas: usize, draws: u64) -> Option<Vec<u64>> {
+    park_miller_blocks(chain(base, &[Role::Fixed as u64, point, u64::MAX]), replicas, draws)
+}
+
+/// The Park–Miller seeds of the replicas of sweep grid point `index`, each allowed `draws`
+/// numbers: disjoint consecutive blocks of the cycle from the state `1 + h(index, 2^64 - 1)
+/// mod (2^31 - 2)`. `None` if the blocks do not fit in one period.
+pub fn sweep_park_miller_seeds(scene_seed: u64, index: u64, replicas: usize, draws: u64) -> Option<Vec<u64>> {
+    park_miller_blocks(hash(scene_seed, index, u64::MAX), replicas, draws)
+}
+
+/// `replicas` states of the Park–Miller cycle, `draws` apart, from `1 + h mod (2^31 - 2)`:
+/// the first states of consecutive blocks of `draws` numbers. `None` if the blocks do not
+/// fit in one period.
+fn park_miller_blocks(h: u64, replicas: usize, draws: u64) -> Option<Vec<u64>> {
     let total = (replicas as u64).checked_mul(draws)?;
     if total > PARK_MILLER_PERIOD {
         return None;
     }
     let m = u64::from(ParkMiller::MODULUS);
-    let start = 1 + chain(base, &[Role::Fixed as u64, point, u64::MAX]) % PARK_MILLER_PERIOD;
+    let start = 1 + h % PARK_MILLER_PERIOD;
     let jump = u64::from(ParkMiller::jump(draws % PARK_MILLER_PERIOD));
     let mut s = start;
     Some(

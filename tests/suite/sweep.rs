@@ -5,8 +5,9 @@
 //!   the seeds of their index, rows that aggregate their own runs, and a heat map; summaries
 //!   of runs made through the library API (travelling as JSON) give the command's tables, and
 //!   summaries out of order are refused;
-//! - bad `--values`, `--log-range`, `--range`, `--param`, `--replicas`, `--log-y` (also for
-//!   maps) give one line on stderr, exit code 2, and no output directory;
+//! - bad `--values`, `--log-range`, `--range`, `--param`, `--replicas` (also more
+//!   Park–Miller replicas than the generator's cycle holds), `--log-y` (also for maps) give
+//!   one line on stderr, exit code 2, and no output directory;
 //! - the regime criterion labels the fig2 scene smooth at V = 0.1 and stick-slip at V = 1
 //!   (fixed seeds; its period, amplitude and cycles as `summary.json` reports them), and the
 //!   velocity hysteresis alone (the first criterion, now a supporting sign) would have
@@ -158,6 +159,12 @@ fn bad_sweep_arguments_are_refused() {
     expect_bad_input(&["--param", "run.seed", "--values", "1,2"], &["run.seed"]);
     expect_bad_input(&["--param", "junctions.n", "--values", "10.5"], &["junctions.n", "10.5"]);
     expect_bad_input(&["--param", "junctions.temperature", "--values", "1,0"], &["junctions.temperature", "0"]);
+    // The fixed engine's Park-Miller cycle holds 119 replicas of fig2's 300 junctions over
+    // 60000 steps (18000300 draws each), not 120.
+    expect_bad_input(
+        &["--set", "run.engine=fixed", "--param", "plate.v", "--values", "1,2", "--replicas", "120"],
+        &["--replicas 120: at plate.v = 1 ", "120 x 18000300 Park-Miller draws", "--set fixed.rng=pcg"],
+    );
 }
 
 #[test]

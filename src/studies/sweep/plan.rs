@@ -97,6 +97,18 @@ pub enum SpecError {
     Replicas { replicas: usize, points: usize },
     #[error("{flag}: value {value} of {param} is not > 0 (a log axis needs positive values)")]
     LogAxis { flag: &'static str, param: String, value: String },
+    #[error(
+        "--replicas {replicas}: at {point} the replicas need {replicas} x {draws} Park-Miller draws, more than the generator's period {period}; use {fewer}a larger fixed.dt or --set fixed.rng=pcg",
+        period = seeds::PARK_MILLER_PERIOD,
+        fewer = if *.replicas > 1 { "fewer replicas, " } else { "" }
+    )]
+    ParkMillerPeriod {
+        /// `plate.v = 0.5` (each swept field).
+        point: String,
+        replicas: usize,
+        /// Draws one replica can use, `N (steps + 1)`.
+        draws: u64,
+    },
     #[error("{point}: {source}")]
     Value {
         /// `value V for P` (1-D) or `values P1 = V1, P2 = V2` (2-D).
@@ -132,7 +144,8 @@ fn check_field(base: &Scene, param: &str) -> Result<(), SpecError> {
 impl Sweep {
     /// Checks the fields and every grid point (its values applied to `base` and validated
     /// like the scene file) and derives every run's seed ([`crate::studies::seeds`], grid
-    /// point index and replica). Nothing runs.
+    /// point index and replica; with the Park–Miller generator, disjoint blocks of its cycle
+    /// for the replicas of a point, refused when they do not fit). Nothing runs.
     pub fn prepare(base: Scene, spec: SweepSpec) -> Result<Sweep, SpecError> {
         let SweepSpec { axes, replicas, set } = spec;
         match axes.len() {
@@ -182,15 +195,20 @@ impl Sweep {
             })?;
             scenes.push((values, scene));
         }
-        let range = |g: usize| {
-            let s: &Scene = &scenes[g].1;
-            if s.run.engine == EngineKind::Fixed && s.fixed.rng == RngKind::ParkMiller {
-                SeedRange::ParkMiller
-            } else {
-                SeedRange::Full
+        let mut seeds = seeds::derive_all(base.run.seed, grid.len(), replicas, |_| SeedRange::Full);
+        for (g, (values, scene)) in scenes.iter().enumerate() {
+            if scene.run.engine == EngineKind::Fixed && scene.fixed.rng == RngKind::ParkMiller {
+                // One draw per junction and step, and one per junction for a stationary start.
+                let n = scene.junctions.n as u64;
+                let draws = n.saturating_mul(scene.fixed.steps_for(scene.run.t_end).saturating_add(1));
+                seeds[g] =
+                    seeds::sweep_park_miller_seeds(base.run.seed, g as u64, replicas, draws).ok_or_else(|| {
+                        let point =
+                            axes.iter().zip(values).map(|(a, v)| format!("{} = {}", a.param, printable(&v.text)));
+                        SpecError::ParkMillerPeriod { point: point.collect::<Vec<_>>().join(", "), replicas, draws }
+                    })?;
             }
-        };
-        let seeds = seeds::derive_all(base.run.seed, grid.len(), replicas, range);
+        }
         let points = scenes
             .into_iter()
             .zip(seeds)
@@ -236,5 +254,62 @@ impl Sweep {
     /// The swept fields joined by `-` (for the default output directory).
     pub fn name(&self) -> String {
         self.axes.iter().map(|a| a.param.as_str()).collect::<Vec<_>>().join("-")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::ParkMiller;
+    use crate::studies::sweep::{ValueSpec, parse_values};
+
+    fn spec(param: &str, values: &str, replicas: usize) -> SweepSpec {
+        let values = parse_values(ValueSpec::List(values)).unwrap();
+        SweepSpec { axes: vec![SweepAxis { param: param.into(), values, log: false }], replicas, set: vec![] }
+    }
+
+    fn seeds_of(s: &Sweep) -> Vec<Vec<u64>> {
+        s.points.iter().map(|p| p.scenes.iter().map(|s| s.run.seed).collect()).collect()
+    }
+
+    /// The replicas of a Park–Miller point follow each other on the generator's cycle, each
+    /// `N (steps + 1)` draws after the one before (the draws a replica can use at that
+    /// point's step), from the point's hashed state.
+    #[test]
+    fn park_miller_replicas_take_consecutive_disjoint_blocks() {
+        let sweep = Sweep::prepare(crate::test_scenes::fig1(), spec("fixed.dt", "1,0.5", 3)).unwrap();
+        // fig1: N = 300, t_end = 150.
+        for (g, (row, draws)) in seeds_of(&sweep).iter().zip([300 * 151, 300 * 301]).enumerate() {
+            assert_eq!(row[0], 1 + seeds::hash(1, g as u64, u64::MAX) % seeds::PARK_MILLER_PERIOD);
+            for w in row.windows(2) {
+                let mut rng = ParkMiller::new(w[0]).unwrap();
+                for _ in 0..draws {
+                    rng.next_state();
+                }
+                assert_eq!(u64::from(rng.state()), w[1], "point {g}: {row:?}");
+            }
+        }
+    }
+
+    /// A Park–Miller point whose replicas need more draws than the cycle holds is refused in
+    /// one line naming the replicas, the point and the ways out; PCG seeds are the hashed
+    /// ones whatever the draws.
+    #[test]
+    fn park_miller_points_whose_replicas_do_not_fit_are_refused() {
+        // dt = 1e-4: 1.5e6 steps of 300 junctions, 450_000_300 draws a replica; 4 fit.
+        assert!(Sweep::prepare(crate::test_scenes::fig1(), spec("fixed.dt", "1,1e-4", 4)).is_ok());
+        let e = Sweep::prepare(crate::test_scenes::fig1(), spec("fixed.dt", "1,1e-4", 5)).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "--replicas 5: at fixed.dt = 1e-4 the replicas need 5 x 450000300 Park-Miller draws, more than the \
+             generator's period 2147483646; use fewer replicas, a larger fixed.dt or --set fixed.rng=pcg"
+        );
+        // One replica that alone would go round the cycle.
+        let e = Sweep::prepare(crate::test_scenes::fig1(), spec("fixed.dt", "1e-5", 1)).unwrap_err().to_string();
+        assert!(e.starts_with("--replicas 1: at fixed.dt = 1e-5 ") && !e.contains("fewer"), "{e}");
+        assert!(e.ends_with("use a larger fixed.dt or --set fixed.rng=pcg"), "{e}");
+        let pcg = crate::test_scenes::fig1_with(&["fixed.rng=pcg"]);
+        let sweep = Sweep::prepare(pcg, spec("fixed.dt", "1,1e-4", 5)).unwrap();
+        assert_eq!(seeds_of(&sweep), seeds::derive_all(1, 2, 5, |_| SeedRange::Full));
     }
 }

@@ -130,9 +130,11 @@ impl SweepOutcome {
             replicas: sweep.replicas,
             set: &sweep.set,
             seed: sweep.base.run.seed,
-            seed_rule: "seed(i, r) = mix(mix(mix(run.seed) ^ i) ^ r), mix = SplitMix64 output of x + 0x9E3779B97F4A7C15; \
-                        h >> 1, or 1 + h mod (2^31 - 2) for Park-Miller; i = grid point index (the value index of a \
-                        1-D sweep; i1 * len(values2) + i2 in a 2-D one), r = replica (0-based); see src/studies/seeds.rs",
+            seed_rule: "h(i, r) = mix(mix(mix(run.seed) ^ i) ^ r), mix = SplitMix64 output of x + 0x9E3779B97F4A7C15; \
+                        seed = h(i, r) >> 1; for Park-Miller, replica r of point i starts r L draws after the state \
+                        1 + h(i, 2^64 - 1) mod (2^31 - 2), L = N (steps + 1) the draws of one replica (disjoint \
+                        blocks of the cycle); i = grid point index (the value index of a 1-D sweep; i1 * len(values2) \
+                        + i2 in a 2-D one), r = replica (0-based); see src/studies/seeds.rs",
             seeds: sweep.points.iter().map(|p| p.scenes.iter().map(|s| s.run.seed).collect()).collect(),
             threads: self.timing.map(|t| t.threads),
             wall_seconds: self.timing.map(|t| t.wall_seconds),
