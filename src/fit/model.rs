@@ -5,8 +5,10 @@
 //! replicas, `F_sim(theta, c_i)`, with its standard error `se_i` (the replicas' sample
 //! standard deviation over `sqrt(R)`; 0 with one replica). Replica `r` of point `i` has the
 //! same seed at every `theta` (common random numbers: [`crate::studies::seeds::derive_all`]
-//! of the scene's `run.seed`, the point index and the replica), so that the misfit changes
-//! smoothly with `theta` instead of jumping with fresh noise at every evaluation.
+//! of the scene's `run.seed`, the point index and the replica; with the Park–Miller
+//! generator, disjoint blocks of its cycle, [`crate::studies::seeds::sweep_park_miller_seeds`]),
+//! so that the misfit changes smoothly with `theta` instead of jumping with fresh noise at
+//! every evaluation.
 //!
 //! The misfit minimised (the "score"):
 //! - with `sigma` in the data: `chi2 = sum_i ((F_sim_i - F_i) / s_i)^2`,
@@ -24,7 +26,7 @@ use super::free::{FreeParam, assignment};
 use crate::runner::StopFlag;
 use crate::scene::{EngineKind, RngKind, Scene};
 use crate::studies::journal::Journal;
-use crate::studies::seeds::{self, SeedRange};
+use crate::studies::seeds;
 
 /// One evaluation: the free parameters' values and, per data point, the simulated mean
 /// friction per junction and its standard error over the replicas.
@@ -87,12 +89,29 @@ impl Problem {
         if replicas == 0 {
             return Err("--replicas 0: must be at least 1".into());
         }
-        let range = if base.run.engine == EngineKind::Fixed && base.fixed.rng == RngKind::ParkMiller {
-            SeedRange::ParkMiller
-        } else {
-            SeedRange::Full
-        };
-        let seeds = seeds::derive_all(base.run.seed, n, replicas, |_| range);
+        let mut seeds = seeds::derive_all(base.run.seed, n, replicas);
+        if base.run.engine == EngineKind::Fixed && base.fixed.rng == RngKind::ParkMiller {
+            // The replicas of a data point take disjoint blocks of the generator's cycle (as a
+            // sweep's do), of the draws its runs can use at the smallest step the fit may set.
+            for (i, row) in seeds.iter_mut().enumerate() {
+                let mut o = data.overrides(i);
+                if let Some(dt) = free.iter().find(|f| f.field == "fixed.dt") {
+                    o.push(assignment("fixed.dt", dt.low));
+                }
+                let scene = base.with_overrides(&o).map_err(|e| e.to_string())?;
+                let draws =
+                    (scene.junctions.n as u64).saturating_mul(scene.fixed.steps_for(scene.run.t_end).saturating_add(1));
+                *row = seeds::sweep_park_miller_seeds(base.run.seed, i as u64, replicas, draws).ok_or_else(|| {
+                    format!(
+                        "--replicas {replicas}: at data line {} the replicas need {replicas} x {draws} Park-Miller \
+                         draws, more than the generator's period {}; use {}a larger fixed.dt or --set fixed.rng=pcg",
+                        data.points[i].line,
+                        seeds::PARK_MILLER_PERIOD,
+                        if replicas > 1 { "fewer replicas, " } else { "" }
+                    )
+                })?;
+            }
+        }
         Ok(Problem { base, data, free, replicas, seeds })
     }
 
@@ -381,5 +400,43 @@ impl Simulator for PoolSimulator<'_> {
                 })
                 .collect()
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::ParkMiller;
+
+    fn problem(replicas: usize, free: Vec<FreeParam>) -> Result<Problem, String> {
+        let base = crate::test_scenes::fig1();
+        let data = DataSet::parse("plate.v,friction,sigma\n0.5,1,1\n2,1,1\n", "d.csv", &base, 1.0).unwrap();
+        Problem::new(base, data, free, replicas)
+    }
+
+    /// With the letter's generator (Fig. 1: `N = 300`, 150 steps), the replicas of a data
+    /// point take consecutive blocks of the cycle, `N (steps + 1)` draws each, at the least
+    /// step a free `fixed.dt` may take; more replicas than the cycle holds are refused.
+    #[test]
+    fn park_miller_replicas_take_disjoint_blocks_of_the_cycle() {
+        let dt = FreeParam { field: "fixed.dt".into(), low: 0.5, high: 1.0, log: false, start: 1.0 };
+        for (free, draws) in [(vec![], 300 * 151), (vec![dt], 300 * 301)] {
+            let p = problem(3, free).unwrap();
+            for (i, row) in p.seeds.iter().enumerate() {
+                assert_eq!(row[0], 1 + seeds::hash(1, i as u64, u64::MAX) % seeds::PARK_MILLER_PERIOD);
+                for w in row.windows(2) {
+                    let mut g = ParkMiller::new(w[0]).unwrap();
+                    for _ in 0..draws {
+                        g.next_state();
+                    }
+                    assert_eq!(u64::from(g.state()), w[1], "point {i}: {row:?}");
+                }
+            }
+        }
+        let e = problem(50_000, vec![]).unwrap_err();
+        assert!(
+            e.starts_with("--replicas 50000: at data line 2 the replicas need 50000 x 45300 Park-Miller draws"),
+            "{e}"
+        );
     }
 }

@@ -47,7 +47,6 @@
 use std::collections::HashSet;
 
 use crate::rng::ParkMiller;
-use crate::scene::validate::PARK_MILLER_SEED_MAX;
 
 /// SplitMix64's increment (the golden ratio in 64-bit fixed point).
 pub const GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
@@ -68,51 +67,25 @@ pub fn chain(base: u64, values: &[u64]) -> u64 {
 // ---------------------------------------------------------------------------------------
 // Sweeps
 
-/// The range a run's seed must lie in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SeedRange {
-    /// `0 ..= 2^63 - 1` (any seed a scene file can hold).
-    Full,
-    /// `1 ..= 2^31 - 2` (the Park–Miller generator).
-    ParkMiller,
-}
-
-impl SeedRange {
-    fn map(self, h: u64) -> u64 {
-        match self {
-            SeedRange::Full => h >> 1,
-            SeedRange::ParkMiller => 1 + h % PARK_MILLER_SEED_MAX,
-        }
-    }
-}
-
-/// `h(i, r)` of a sweep's run before mapping into a range.
+/// `h(i, r)` of a sweep's run.
 pub fn hash(scene_seed: u64, index: u64, replica: u64) -> u64 {
     chain(scene_seed, &[index, replica])
 }
 
-/// Hashed seeds `seeds[i][r] = range(i)` of `h(i, r)` for `points` grid points and
-/// `replicas` replicas, distinct: a sweep's PCG seeds (`SeedRange::Full`), and a
-/// calibration's ([`crate::fit`]). `range(i)` gives the seed range of point `i`'s runs.
-pub fn derive_all(
-    scene_seed: u64,
-    points: usize,
-    replicas: usize,
-    range: impl Fn(usize) -> SeedRange,
-) -> Vec<Vec<u64>> {
+/// Hashed seeds `seeds[i][r] = h(i, r) >> 1` for `points` grid points and `replicas`
+/// replicas, distinct (a repeat is replaced by the next `h <- mix(h)`): a sweep's and a
+/// calibration's ([`crate::fit`]) PCG seeds.
+pub fn derive_all(scene_seed: u64, points: usize, replicas: usize) -> Vec<Vec<u64>> {
     let mut seen = HashSet::with_capacity(points * replicas);
     (0..points)
         .map(|i| {
-            let rng = range(i);
             (0..replicas)
                 .map(|r| {
                     let mut h = hash(scene_seed, i as u64, r as u64);
-                    let mut s = rng.map(h);
-                    while !seen.insert(s) {
+                    while !seen.insert(h >> 1) {
                         h = mix(h);
-                        s = rng.map(h);
                     }
-                    s
+                    h >> 1
                 })
                 .collect()
         })
@@ -194,9 +167,8 @@ mod tests {
     fn derived_seeds_are_those_of_the_documented_results() {
         // Computed with the two mixers this module replaced (the sweep's `mix` and the
         // comparison's `splitmix64`): the published sweeps and studies keep their seeds. docs/figures/fig2-sweep/sweep.json lists seeds[13][3].
-        let fig2 = derive_all(1, 14, 4, |_| SeedRange::Full);
+        let fig2 = derive_all(1, 14, 4);
         assert_eq!(fig2[13][3], 4_231_203_880_505_546_300);
-        assert_eq!(SeedRange::ParkMiller.map(hash(5, 2, 1)), 1_761_769_255);
         assert_eq!(pcg_seed(7, Role::Exact, 1, 3), 3_368_791_360_226_051_095);
         assert_eq!(pcg_seed(1, Role::Reference, 0, 0), 7_256_120_447_724_176_321);
         assert_eq!(chain(1, &[Role::Fixed as u64, 2, u64::MAX]), 8_444_155_210_490_955_777);
@@ -204,27 +176,19 @@ mod tests {
 
     #[test]
     fn seeds_are_distinct_and_in_range() {
-        for range in [SeedRange::Full, SeedRange::ParkMiller] {
-            let s = derive_all(1, 50, 20, |_| range);
-            let flat: Vec<u64> = s.iter().flatten().copied().collect();
-            let set: HashSet<u64> = flat.iter().copied().collect();
-            assert_eq!(set.len(), 1000);
-            for &x in &flat {
-                match range {
-                    SeedRange::Full => assert!(x <= i64::MAX as u64),
-                    SeedRange::ParkMiller => assert!((1..=PARK_MILLER_SEED_MAX).contains(&x)),
-                }
-            }
-        }
+        let flat: Vec<u64> = derive_all(1, 50, 20).into_iter().flatten().collect();
+        let set: HashSet<u64> = flat.iter().copied().collect();
+        assert_eq!(set.len(), 1000);
+        assert!(flat.iter().all(|&x| x <= i64::MAX as u64));
     }
 
     #[test]
     fn a_seed_depends_on_its_index_and_replica_only() {
-        let a = derive_all(7, 3, 4, |_| SeedRange::Full);
-        let b = derive_all(7, 5, 4, |_| SeedRange::Full);
+        let a = derive_all(7, 3, 4);
+        let b = derive_all(7, 5, 4);
         assert_eq!(a[..], b[..3]);
         assert_eq!(a[2][3], hash(7, 2, 3) >> 1);
-        assert_ne!(derive_all(8, 1, 1, |_| SeedRange::Full), derive_all(7, 1, 1, |_| SeedRange::Full));
+        assert_ne!(derive_all(8, 1, 1), derive_all(7, 1, 1));
     }
 
     #[test]

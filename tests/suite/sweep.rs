@@ -272,7 +272,7 @@ fn a_map_has_both_fields_as_leading_columns_and_grid_point_seeds() {
     assert_eq!(json["param2"], "plate.k");
     assert_eq!(json["values2"], serde_json::json!(["15", "150"]));
     // Grid point g = i * 2 + j gets the seeds of value index g of a 1-D sweep.
-    let expected = stickslip::studies::seeds::derive_all(1, 6, 2, |_| stickslip::studies::seeds::SeedRange::Full);
+    let expected = stickslip::studies::seeds::derive_all(1, 6, 2);
     let seeds: Vec<Vec<u64>> = serde_json::from_value(json["seeds"].clone()).unwrap();
     assert_eq!(seeds, expected);
     let from_runs: Vec<u64> = runs1.lines().skip(1).map(|l| l.split(',').nth(3).unwrap().parse().unwrap()).collect();

@@ -6,7 +6,7 @@ use serde::Serialize;
 use super::values::SweepValue;
 use crate::scene::error::printable;
 use crate::scene::{EngineKind, RngKind, Scene, SceneError};
-use crate::studies::seeds::{self, SeedRange};
+use crate::studies::seeds;
 
 /// Most runs (grid points x replicas) a sweep may have.
 pub const MAX_RUNS: usize = 1_000_000;
@@ -195,7 +195,7 @@ impl Sweep {
             })?;
             scenes.push((values, scene));
         }
-        let mut seeds = seeds::derive_all(base.run.seed, grid.len(), replicas, |_| SeedRange::Full);
+        let mut seeds = seeds::derive_all(base.run.seed, grid.len(), replicas);
         for (g, (values, scene)) in scenes.iter().enumerate() {
             if scene.run.engine == EngineKind::Fixed && scene.fixed.rng == RngKind::ParkMiller {
                 // One draw per junction and step, and one per junction for a stationary start.
@@ -310,6 +310,6 @@ mod tests {
         assert!(e.ends_with("use a larger fixed.dt or --set fixed.rng=pcg"), "{e}");
         let pcg = crate::test_scenes::fig1_with(&["fixed.rng=pcg"]);
         let sweep = Sweep::prepare(pcg, spec("fixed.dt", "1,1e-4", 5)).unwrap();
-        assert_eq!(seeds_of(&sweep), seeds::derive_all(1, 2, 5, |_| SeedRange::Full));
+        assert_eq!(seeds_of(&sweep), seeds::derive_all(1, 2, 5));
     }
 }
