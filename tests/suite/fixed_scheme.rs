@@ -779,3 +779,56 @@ fn divergence_is_reported_with_its_step_and_no_nan_is_output() {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "{integ}: output left behind");
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// The Park–Miller period.
+
+/// A run that draws more numbers than the Park–Miller period `2^31 - 2` is told so: a
+/// warning on stderr before it starts and on the summary lines, and `rng_period_exceeded`
+/// in `summary.json`. The scene shows why: `N = 99962 = 2 151 331` divides the period, so
+/// from step 21483 on every junction draws the numbers of step 0 again; with a kinematic
+/// plate, strong bonds, `kon0 dt >= 1` (a detached junction forms surely) and
+/// `reattach = "unstretched"`, the junctions' state forgets its past within a few dozen
+/// steps, and the trace repeats itself row for row 21483 steps later.
+#[test]
+fn a_run_beyond_the_park_miller_period_is_warned_about() {
+    const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
+    const PERIOD: u64 = 2_147_483_646;
+    let n: u64 = 99_962;
+    let lap = PERIOD / n;
+    assert_eq!(lap * n, PERIOD);
+    let steps = lap + 200;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let (n_set, t_end) = (format!("junctions.n={n}"), format!("run.t_end={steps}"));
+    let mut args = vec!["run", "scenarios/fig1.toml", "--out", out.to_str().unwrap()];
+    for set in [
+        n_set.as_str(),
+        &t_end,
+        "plate.kinematic=true",
+        "junctions.force_law=linear",
+        "junctions.reattach=unstretched",
+        "junctions.kon0=1000",
+        "output.plot=false",
+    ] {
+        args.extend(["--set", set]);
+    }
+    let o = std::process::Command::new(BIN).args(&args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{stderr}");
+    let draws = n * steps;
+    let warning = format!(
+        "warning: the run draws {draws} numbers from the Park-Miller generator, 1.009 times its period of 2147483646"
+    );
+    assert!(stderr.lines().any(|l| l.starts_with(&warning)), "stderr: {stderr}");
+    assert!(stdout.lines().any(|l| l.starts_with(&warning)), "stdout: {stdout}");
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["rng_period_exceeded"], serde_json::json!({ "draws": draws, "period": PERIOD }));
+    // The stream did repeat: rows 150..200 come back 21483 steps later (t, x apart).
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = trace.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len() as u64, steps + 1);
+    for k in 150..200 {
+        assert_eq!(rows[k][3..], rows[k + lap as usize][3..], "row {k}");
+    }
+}
