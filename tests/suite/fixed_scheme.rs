@@ -762,7 +762,7 @@ fn divergence_is_reported_with_its_step_and_no_nan_is_output() {
             panic!("{integ}: expected divergence, got {:?}", t.error)
         };
         assert!(step >= 1 && at == step as f64 * 10.0, "{integ}: step {step} at t = {at}");
-        assert!(quantity == "X" || quantity == "Xd");
+        assert!(["X", "Xd", "F_b", "eta Xd", "F"].contains(&quantity), "{quantity}");
         assert!(!value.is_finite() || value.abs() > fixed::DIVERGENCE_LIMIT, "{value}");
         // Steps 1..step-1 were reported, step `step` was not.
         assert_eq!(t.segments.len() as u64, step - 1);
@@ -778,6 +778,46 @@ fn divergence_is_reported_with_its_step_and_no_nan_is_output() {
         assert!(err.to_string().contains(&format!("step {step}")), "{err}");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "{integ}: output left behind");
     }
+}
+
+/// A stiff drive (`K = 1e9`) turns a plate displacement far below `1e100` into a friction
+/// force far above it: `scenarios/stiff.toml`'s plate under velocity Verlet at 1.01 times
+/// its limit. The run stops with the divergence error as soon as a force it reports passes
+/// `1e100` (here `F = K (V t - X)`, while `|X|` is still about `1e91`), and no sample or
+/// segment before holds a force, position or velocity beyond the limit.
+#[test]
+fn a_force_beyond_the_divergence_limit_stops_the_run() {
+    let base = scene(&[
+        "plate.mass=1e-6",
+        "plate.eta=100",
+        "plate.k=1e9",
+        "fixed.integrator=velocity-verlet",
+        "junctions.initial=stationary",
+        "run.t_end=1",
+    ]);
+    let limit = fixed::stability::analyse(&base).selected().dt_unstable;
+    let s = base.with_overrides(&[format!("fixed.dt={}", 1.01 * limit)]).unwrap();
+    let t = record(&s, 30_000);
+    let Some(EngineError::Diverged { step, quantity, value, .. }) = t.error else {
+        panic!("expected divergence, got {:?}", t.error)
+    };
+    assert_eq!(quantity, "F", "{value:e} at step {step}");
+    assert!(value.abs() > fixed::DIVERGENCE_LIMIT);
+    let last = t.samples.last().unwrap();
+    assert!(last.x.abs() < 1e-6 * fixed::DIVERGENCE_LIMIT, "X = {:e}", last.x);
+    let within = |v: f64| v.is_finite() && v.abs() <= fixed::DIVERGENCE_LIMIT;
+    for smp in &t.samples {
+        assert!([smp.x, smp.v, smp.friction, smp.bond_force].into_iter().all(within), "{smp:?}");
+    }
+    for seg in &t.segments {
+        assert!([seg.friction, seg.bond_force, seg.viscous].into_iter().all(within), "{seg:?}");
+    }
+    // A kinematic plate has no plate equation to diverge: its large forces are the scene's.
+    let kinematic =
+        scene(&["plate.kinematic=true", "junctions.kappa=1e200", "fixed.dt=0.5", "junctions.force_law=linear"]);
+    let t = record(&kinematic, 40);
+    assert!(t.error.is_none(), "{:?}", t.error);
+    assert!(t.segments.iter().any(|seg| seg.bond_force > fixed::DIVERGENCE_LIMIT));
 }
 
 // ---------------------------------------------------------------------------------------
