@@ -47,6 +47,9 @@ pub(crate) fn run(
     if let Some(w) = super::stability::warning(&scene) {
         eprintln!("{w}");
     }
+    if let Some(w) = crate::engine::fixed::period_warning(&scene) {
+        eprintln!("{w}");
+    }
     let threads = threads.unwrap_or_else(rayon::current_num_threads);
     let opts = RunOptions { checkpoint_every, progress: true, stop: None, threads };
     match run_scene_with(&scene, Some(&out), &opts).and_then(|s| draw_plot(&scene, &out).map(|()| s)) {
@@ -84,18 +87,20 @@ fn regime_text(s: &Summary) -> String {
     }
 }
 
-/// The four summary lines `run` and `resume` print.
+/// The four summary lines `run` and `resume` print, and a fifth, a warning, when the run
+/// drew more numbers than the Park–Miller generator's period.
 pub(crate) fn summary_lines(s: &Summary, out: &Path) -> String {
     let work = match (s.counters.steps, s.counters.events) {
         (Some(n), _) => format!("{n} steps"),
         (_, Some(n)) => format!("{n} events"),
         _ => String::new(),
     };
+    let period = s.rng_period_exceeded.map_or(String::new(), |p| format!("warning: {p}\n"));
     format!(
         "scene {} ({} engine, seed {}, N = {}, t_end = {})\n\
          friction per junction {} (std of total {}) over [{}, {}]\n\
          attached fraction {:.4}; {}\n\
-         {work}, {} ruptures, {} formations in {:.3} s; output in {}\n",
+         {work}, {} ruptures, {} formations in {:.3} s; output in {}\n{period}",
         crate::scene::error::printable(&s.scene),
         s.engine_name(),
         s.seed,

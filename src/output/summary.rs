@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 use crate::engine::Counters;
 use crate::observe::regime::numerics::Numerics;
 use crate::observe::regime::{Oscillation, Regime};
+use crate::rng::PeriodExceeded;
 use crate::scene::{EngineKind, Scene};
 
 /// Everything a run reports at its end.
@@ -52,6 +53,10 @@ pub struct Summary {
     /// period-2 oscillation.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub stability: Option<Numerics>,
+    /// Fixed-step runs on the Park–Miller generator that drew more numbers than its period
+    /// `2^31 - 2` (its stream repeated): `draws` and `period`. Absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub rng_period_exceeded: Option<PeriodExceeded>,
     #[serde(flatten)]
     pub counters: Counters,
     /// Wall-clock time of the run in seconds.

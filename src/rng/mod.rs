@@ -7,7 +7,7 @@ pub mod park_miller;
 
 pub use below::below;
 
-pub use park_miller::ParkMiller;
+pub use park_miller::{ParkMiller, PeriodExceeded};
 pub use rand_pcg::Pcg64;
 
 use rand::SeedableRng;

@@ -19,6 +19,9 @@ impl ParkMiller {
     pub const MODULUS: u32 = 2_147_483_647;
     /// The multiplier `7^5`.
     pub const MULTIPLIER: u32 = 16_807;
+    /// The period `2^31 - 2`: from any seed, draw `n + PERIOD` is draw `n` again (16807 is
+    /// a primitive root modulo the prime `2^31 - 1`).
+    pub const PERIOD: u64 = Self::MODULUS as u64 - 1;
 
     /// A generator with state `seed`, which must lie in `[1, 2^31 - 2]`.
     pub fn new(seed: u64) -> Result<Self, BadSeed> {
@@ -114,6 +117,38 @@ impl ParkMiller {
         for s in rest {
             *s = convert(self.next_state());
         }
+    }
+}
+
+/// A run that draws more numbers from a Park–Miller generator than its period
+/// ([`ParkMiller::PERIOD`]): from draw `PERIOD + 1` on, the stream repeats its first draws
+/// in the same order, so later steps reuse the random numbers of earlier ones.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PeriodExceeded {
+    /// The numbers the run draws.
+    pub draws: u64,
+    /// The generator's period, `2^31 - 2`.
+    pub period: u64,
+}
+
+impl PeriodExceeded {
+    /// `Some` when `draws` exceeds the period.
+    pub fn of(draws: u64) -> Option<PeriodExceeded> {
+        (draws > ParkMiller::PERIOD).then_some(PeriodExceeded { draws, period: ParkMiller::PERIOD })
+    }
+}
+
+impl std::fmt::Display for PeriodExceeded {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the run draws {} numbers from the Park-Miller generator, {:.3} times its period of {}: \
+             the random stream repeats, and later steps reuse the numbers of earlier ones \
+             (fixed.rng = \"pcg\" has no such limit)",
+            self.draws,
+            self.draws as f64 / self.period as f64,
+            self.period
+        )
     }
 }
 
@@ -219,6 +254,21 @@ mod tests {
                 assert_eq!(many, one);
             }
         }
+    }
+
+    /// The period is `2^31 - 2`: the state comes back to the seed after exactly that many
+    /// draws and not after any proper divisor of it (so no shorter cycle exists).
+    #[test]
+    fn period_is_two_to_the_31_minus_2() {
+        assert_eq!(ParkMiller::PERIOD, 2_147_483_646);
+        assert_eq!(ParkMiller::jump(ParkMiller::PERIOD), 1);
+        // 2^31 - 2 = 2 3^2 7 11 31 151 331.
+        for p in [2u64, 3, 7, 11, 31, 151, 331] {
+            assert_ne!(ParkMiller::jump(ParkMiller::PERIOD / p), 1, "a cycle of (2^31 - 2) / {p}");
+        }
+        assert_eq!(PeriodExceeded::of(ParkMiller::PERIOD), None);
+        let over = PeriodExceeded::of(ParkMiller::PERIOD + 1).unwrap();
+        assert_eq!((over.draws, over.period), (2_147_483_647, 2_147_483_646));
     }
 
     #[test]

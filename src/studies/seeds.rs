@@ -112,7 +112,7 @@ pub fn pcg_seed(base: u64, role: Role, point: u64, replica: u64) -> u64 {
 }
 
 /// The Park–Miller period `2^31 - 2`.
-pub const PARK_MILLER_PERIOD: u64 = ParkMiller::MODULUS as u64 - 1;
+pub const PARK_MILLER_PERIOD: u64 = ParkMiller::PERIOD;
 
 /// The Park–Miller seeds of `replicas` replicas of one fixed-step point of a study, each
 /// allowed `draws` numbers: disjoint consecutive blocks of the cycle starting at a hashed

@@ -762,7 +762,7 @@ fn divergence_is_reported_with_its_step_and_no_nan_is_output() {
             panic!("{integ}: expected divergence, got {:?}", t.error)
         };
         assert!(step >= 1 && at == step as f64 * 10.0, "{integ}: step {step} at t = {at}");
-        assert!(quantity == "X" || quantity == "Xd");
+        assert!(["X", "Xd", "F_b", "eta Xd", "F"].contains(&quantity), "{quantity}");
         assert!(!value.is_finite() || value.abs() > fixed::DIVERGENCE_LIMIT, "{value}");
         // Steps 1..step-1 were reported, step `step` was not.
         assert_eq!(t.segments.len() as u64, step - 1);
@@ -777,5 +777,98 @@ fn divergence_is_reported_with_its_step_and_no_nan_is_output() {
         let err = stickslip::run_scene(&s, Some(dir.path())).unwrap_err();
         assert!(err.to_string().contains(&format!("step {step}")), "{err}");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "{integ}: output left behind");
+    }
+}
+
+/// A stiff drive (`K = 1e9`) turns a plate displacement far below `1e100` into a friction
+/// force far above it: `scenarios/stiff.toml`'s plate under velocity Verlet at 1.01 times
+/// its limit. The run stops with the divergence error as soon as a force it reports passes
+/// `1e100` (here `F = K (V t - X)`, while `|X|` is still about `1e91`), and no sample or
+/// segment before holds a force, position or velocity beyond the limit.
+#[test]
+fn a_force_beyond_the_divergence_limit_stops_the_run() {
+    let base = scene(&[
+        "plate.mass=1e-6",
+        "plate.eta=100",
+        "plate.k=1e9",
+        "fixed.integrator=velocity-verlet",
+        "junctions.initial=stationary",
+        "run.t_end=1",
+    ]);
+    let limit = fixed::stability::analyse(&base).selected().dt_unstable;
+    let s = base.with_overrides(&[format!("fixed.dt={}", 1.01 * limit)]).unwrap();
+    let t = record(&s, 30_000);
+    let Some(EngineError::Diverged { step, quantity, value, .. }) = t.error else {
+        panic!("expected divergence, got {:?}", t.error)
+    };
+    assert_eq!(quantity, "F", "{value:e} at step {step}");
+    assert!(value.abs() > fixed::DIVERGENCE_LIMIT);
+    let last = t.samples.last().unwrap();
+    assert!(last.x.abs() < 1e-6 * fixed::DIVERGENCE_LIMIT, "X = {:e}", last.x);
+    let within = |v: f64| v.is_finite() && v.abs() <= fixed::DIVERGENCE_LIMIT;
+    for smp in &t.samples {
+        assert!([smp.x, smp.v, smp.friction, smp.bond_force].into_iter().all(within), "{smp:?}");
+    }
+    for seg in &t.segments {
+        assert!([seg.friction, seg.bond_force, seg.viscous].into_iter().all(within), "{seg:?}");
+    }
+    // A kinematic plate has no plate equation to diverge: its large forces are the scene's.
+    let kinematic =
+        scene(&["plate.kinematic=true", "junctions.kappa=1e200", "fixed.dt=0.5", "junctions.force_law=linear"]);
+    let t = record(&kinematic, 40);
+    assert!(t.error.is_none(), "{:?}", t.error);
+    assert!(t.segments.iter().any(|seg| seg.bond_force > fixed::DIVERGENCE_LIMIT));
+}
+
+// ---------------------------------------------------------------------------------------
+// The Park–Miller period.
+
+/// A run that draws more numbers than the Park–Miller period `2^31 - 2` is told so: a
+/// warning on stderr before it starts and on the summary lines, and `rng_period_exceeded`
+/// in `summary.json`. The scene shows why: `N = 99962 = 2 151 331` divides the period, so
+/// from step 21483 on every junction draws the numbers of step 0 again; with a kinematic
+/// plate, strong bonds, `kon0 dt >= 1` (a detached junction forms surely) and
+/// `reattach = "unstretched"`, the junctions' state forgets its past within a few dozen
+/// steps, and the trace repeats itself row for row 21483 steps later.
+#[test]
+fn a_run_beyond_the_park_miller_period_is_warned_about() {
+    const BIN: &str = env!("CARGO_BIN_EXE_stickslip");
+    const PERIOD: u64 = 2_147_483_646;
+    let n: u64 = 99_962;
+    let lap = PERIOD / n;
+    assert_eq!(lap * n, PERIOD);
+    let steps = lap + 200;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let (n_set, t_end) = (format!("junctions.n={n}"), format!("run.t_end={steps}"));
+    let mut args = vec!["run", "scenarios/fig1.toml", "--out", out.to_str().unwrap()];
+    for set in [
+        n_set.as_str(),
+        &t_end,
+        "plate.kinematic=true",
+        "junctions.force_law=linear",
+        "junctions.reattach=unstretched",
+        "junctions.kon0=1000",
+        "output.plot=false",
+    ] {
+        args.extend(["--set", set]);
+    }
+    let o = std::process::Command::new(BIN).args(&args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{stderr}");
+    let draws = n * steps;
+    let warning = format!(
+        "warning: the run draws {draws} numbers from the Park-Miller generator, 1.009 times its period of 2147483646"
+    );
+    assert!(stderr.lines().any(|l| l.starts_with(&warning)), "stderr: {stderr}");
+    assert!(stdout.lines().any(|l| l.starts_with(&warning)), "stdout: {stdout}");
+    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["rng_period_exceeded"], serde_json::json!({ "draws": draws, "period": PERIOD }));
+    // The stream did repeat: rows 150..200 come back 21483 steps later (t, x apart).
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = trace.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len() as u64, steps + 1);
+    for k in 150..200 {
+        assert_eq!(rows[k][3..], rows[k + lap as usize][3..], "row {k}");
     }
 }

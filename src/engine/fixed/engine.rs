@@ -29,7 +29,8 @@ use crate::physics::{Bond, ForceLaw, Formation, Plate};
 use crate::rng::UniformSource;
 use crate::scene::{EngineKind, Initial, Reattach, Scene};
 
-/// Magnitude beyond which the plate is declared diverged.
+/// Magnitude beyond which the plate is declared diverged: of `X`, `Xd`, or (with a plate
+/// equation) a force the step reports (`F_b`, `eta Xd`, `F = K (V t - X)`).
 pub const DIVERGENCE_LIMIT: f64 = 1e100;
 
 /// The fixed-step engine, specialised to a force law `L`, bond kind `B`, generator `R`
@@ -418,7 +419,15 @@ where
         let pass = self.junction_pass(t, on_threshold, events);
         let state = PlateState { t, t_next, x: self.plate_x, v: self.plate_v, bond_force: pass.bond_force };
         let next = self.integrator.step(&self.plate, self.dt, state, |dx| self.bond_force_moved(dx, pass));
-        for (quantity, value) in [("X", next.x), ("Xd", next.v)] {
+        // The plate, and (with a plate equation) the forces the step's segment and the next
+        // sample report; a kinematic plate follows its drive whatever the forces.
+        let forces = [
+            ("F_b", pass.bond_force),
+            ("eta Xd", self.plate.eta * next.viscous_v),
+            ("F", self.plate.k * (self.plate.v * t_next - next.x)),
+        ];
+        let forces = if self.kinematic() { &forces[..0] } else { &forces[..] };
+        for &(quantity, value) in [("X", next.x), ("Xd", next.v)].iter().chain(forces) {
             if !value.is_finite() || value.abs() > DIVERGENCE_LIMIT {
                 return Err(EngineError::Diverged { step: self.steps + 1, t: t_next, quantity, value });
             }

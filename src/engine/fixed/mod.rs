@@ -23,9 +23,32 @@ pub use team::PARALLEL_MIN;
 
 use super::contract::{EngineError, EngineVisitor};
 use crate::physics::{Bond, ForceLaw};
-use crate::rng::{self, ParkMiller, UniformSource};
+use crate::rng::{self, ParkMiller, PeriodExceeded, UniformSource};
 use crate::scene::laws::{BondVisitor, LawVisitor, with_bond, with_force_law};
-use crate::scene::{FlipRule, RngKind, Scene};
+use crate::scene::{EngineKind, FlipRule, Initial, RngKind, Scene};
+
+/// The uniforms a fixed-step run of `scene` draws in `steps` steps: `N` a step, and `N`
+/// more before the first for `junctions.initial = "stationary"` (saturating at `u64::MAX`).
+pub fn draws(scene: &Scene, steps: u64) -> u64 {
+    let n = scene.junctions.n as u64;
+    let start = if scene.junctions.initial == Initial::Stationary { n } else { 0 };
+    n.saturating_mul(steps).saturating_add(start)
+}
+
+/// `Some` when `scene` runs the fixed-step engine on the Park–Miller generator and its
+/// `steps` steps draw more numbers than the generator's period (the stream repeats).
+pub fn park_miller_period_exceeded(scene: &Scene, steps: u64) -> Option<PeriodExceeded> {
+    if scene.run.engine != EngineKind::Fixed || scene.fixed.rng != RngKind::ParkMiller {
+        return None;
+    }
+    PeriodExceeded::of(draws(scene, steps))
+}
+
+/// The warning a run of `scene` to its `t_end` prints before it starts when it will draw
+/// more than the Park–Miller generator's period ([`park_miller_period_exceeded`]).
+pub fn period_warning(scene: &Scene) -> Option<String> {
+    park_miller_period_exceeded(scene, scene.fixed.steps_for(scene.run.t_end)).map(|p| format!("warning: {p}"))
+}
 
 /// Builds the fixed-step engine for `scene` and hands it to `visitor`.
 ///
@@ -89,4 +112,37 @@ where
         FlipRule::Exponential => visitor.visit(FixedEngine::try_new(scene, law, bond, rng, ExponentialFlip)?),
         FlipRule::AsPrinted => visitor.visit(FixedEngine::try_new(scene, law, bond, rng, AsPrintedFlip)?),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_scenes as testkit;
+
+    /// `N` draws a step, `N` more for a stationary start; the period is exceeded from one
+    /// draw past it, only by a fixed-step run on the Park–Miller generator.
+    #[test]
+    fn park_miller_period_is_exceeded_one_draw_past_it() {
+        let n = 99_962u64;
+        let lap = ParkMiller::PERIOD / n;
+        let s = testkit::fig1_with(&["junctions.n=99962", "run.engine=fixed"]);
+        assert_eq!(draws(&s, lap), ParkMiller::PERIOD);
+        assert_eq!(park_miller_period_exceeded(&s, lap), None);
+        let over = park_miller_period_exceeded(&s, lap + 1).unwrap();
+        assert_eq!((over.draws, over.period), (ParkMiller::PERIOD + n, ParkMiller::PERIOD));
+        let stationary = testkit::fig1_with(&["junctions.n=99962", "run.engine=fixed", "junctions.initial=stationary"]);
+        assert_eq!(draws(&stationary, lap), ParkMiller::PERIOD + n);
+        assert!(park_miller_period_exceeded(&stationary, lap).is_some());
+        for other in ["fixed.rng=pcg", "run.engine=exact"] {
+            let s = testkit::fig1_with(&["junctions.n=99962", other]);
+            assert_eq!(park_miller_period_exceeded(&s, lap + 1), None, "{other}");
+        }
+        assert_eq!(draws(&s, u64::MAX), u64::MAX);
+        // The warning counts the steps to t_end as the engine takes them.
+        let t_end = format!("run.t_end={}", lap + 1);
+        let at = testkit::fig1_with(&["junctions.n=99962", "run.engine=fixed", "fixed.dt=1", &t_end]);
+        assert!(period_warning(&at).unwrap().starts_with("warning: the run draws 2147583608 numbers"));
+        let t_end = format!("run.t_end={lap}");
+        assert_eq!(period_warning(&testkit::fig1_with(&["junctions.n=99962", "fixed.dt=1", &t_end])), None);
+    }
 }
