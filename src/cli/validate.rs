@@ -32,6 +32,9 @@ pub(crate) fn validate(args: &SceneArgs) -> ExitCode {
     for line in super::stability::validate_block(&crate::engine::fixed::stability::analyse(&scene), scene.run.engine) {
         let _ = writeln!(text, "{line}");
     }
+    if let Some(w) = crate::engine::fixed::period_warning(&scene) {
+        let _ = writeln!(text, "# {w}");
+    }
     let out = std::path::Path::new("out").join(&scene.name);
     for line in crate::estimate::Estimate::of(&scene, false).report(&out) {
         let _ = writeln!(text, "{line}");

@@ -864,6 +864,12 @@ fn a_run_beyond_the_park_miller_period_is_warned_about() {
     assert!(stdout.lines().any(|l| l.starts_with(&warning)), "stdout: {stdout}");
     let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["rng_period_exceeded"], serde_json::json!({ "draws": draws, "period": PERIOD }));
+    // `validate` says so too, as a comment of its scene file.
+    args[0] = "validate";
+    args.drain(2..4);
+    let v = std::process::Command::new(BIN).args(&args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
+    let report = String::from_utf8_lossy(&v.stdout);
+    assert!(v.status.success() && report.lines().any(|l| l.starts_with(&format!("# {warning}"))), "{report}");
     // The stream did repeat: rows 150..200 come back 21483 steps later (t, x apart).
     let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
     let rows: Vec<Vec<&str>> = trace.lines().skip(1).map(|l| l.split(',').collect()).collect();
