@@ -150,6 +150,10 @@ pub enum JournalError {
     OtherScene { path: PathBuf, found_name: String, found: String, name: String, expected: String },
     #[error("{path} is damaged at line {line}: {why}")]
     Damaged { path: PathBuf, line: usize, why: String },
+    #[error(
+        "{path} line {line}: run {run} has seed {found} where this study's seed rule gives {expected}: the journal was written with other seeds (by another version of stickslip, or edited) and cannot be continued; run the study again into a new --out"
+    )]
+    OtherSeeds { path: PathBuf, line: usize, run: usize, found: u64, expected: u64 },
     #[error("run {run} (seed {seed}) cannot be journaled: its result does not read back from JSON as it was")]
     NotJson { run: usize, seed: u64 },
     #[error("{path} is closed after an earlier write failed")]
@@ -316,7 +320,8 @@ impl Journal {
                 return Err(damaged(format!("run {} of a study of {} runs", entry.run, seeds.len())));
             };
             if entry.seed != seed {
-                return Err(damaged(format!("run {} has seed {}, the study's has seed {seed}", entry.run, entry.seed)));
+                let (run, found) = (entry.run, entry.seed);
+                return Err(JournalError::OtherSeeds { path: path.clone(), line: k + 2, run, found, expected: seed });
             }
             if done[entry.run].replace(entry.result).is_some() {
                 return Err(damaged(format!("run {} is there twice", entry.run)));
@@ -445,7 +450,7 @@ mod tests {
         }
         assert!(matches!(
             Journal::open::<String>(d.path(), &h, &[10, 99, 12]),
-            Err(JournalError::Damaged { line: 2, .. })
+            Err(JournalError::OtherSeeds { line: 2, run: 1, found: 11, expected: 99, .. })
         ));
         // A damaged line that is not the last.
         let text = String::from_utf8(before.clone()).unwrap();
