@@ -63,9 +63,17 @@ impl Cause {
 pub struct Numerics {
     /// Growth factor per step of the plate's oscillation with every junction attached
     /// (the largest over attached counts for the integrators here; `compare`'s `plate_growth`).
-    pub growth_factor: f64,
-    /// Below this `dt` the plate step is stable for every attached count.
-    pub largest_stable_dt: f64,
+    /// `None` (absent from `summary.json`, which holds finite numbers only) when it is not a
+    /// finite number: plate parameters at the edge of the floating-point range (a subnormal
+    /// `plate.mass`) leave it infinite or undefined.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub growth_factor: Option<f64>,
+    /// Below this `dt` the plate step is stable for every attached count. `None` (absent
+    /// from `summary.json`) when it is not a finite number: the step is stable at every `dt`
+    /// (a plate without stiffness, `K + kappa N = 0`, and without mass or damping), or, at
+    /// the edge of the floating-point range, the limit is undefined.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub largest_stable_dt: Option<f64>,
     /// Why the run is unstable; absent when it is not.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub unstable: Option<Cause>,
@@ -218,8 +226,8 @@ impl NumericsDetector {
         };
         let shown = seen.or(d.best).unwrap_or(d.longest);
         Numerics {
-            growth_factor: p.growth_factor,
-            largest_stable_dt: p.largest_stable_dt,
+            growth_factor: Some(p.growth_factor).filter(|g| g.is_finite()),
+            largest_stable_dt: Some(p.largest_stable_dt).filter(|dt| dt.is_finite()),
             unstable,
             locked_steps: shown.len,
             locked_amplitude: shown.amplitude(),
