@@ -80,8 +80,11 @@ pub struct Numerics {
     /// Steps of the strongest locked stretch (the period-2 component of one sign, not
     /// decaying), or of the longest stretch of one sign when none is locked.
     pub locked_steps: u64,
-    /// RMS amplitude (force) of the period-2 component over that stretch.
-    pub locked_amplitude: f64,
+    /// RMS amplitude (force) of the period-2 component over that stretch. `None` (absent
+    /// from `summary.json`) when it is not a finite number: its squares overflow the
+    /// floating-point range (forces beyond about `1e154`).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub locked_amplitude: Option<f64>,
 }
 
 /// The analysis's side of the verdict, fixed by the scene.
@@ -230,7 +233,7 @@ impl NumericsDetector {
             largest_stable_dt: Some(p.largest_stable_dt).filter(|dt| dt.is_finite()),
             unstable,
             locked_steps: shown.len,
-            locked_amplitude: shown.amplitude(),
+            locked_amplitude: Some(shown.amplitude()).filter(|a| a.is_finite()),
         }
     }
 }
@@ -294,7 +297,7 @@ mod tests {
             assert_eq!(v.unstable, Some(Cause::Seen), "growth {growth}: {v:?}");
             assert!(v.locked_steps >= 150, "{v:?}");
             // Too small against the junctions' noise: not the scheme's.
-            assert_eq!(d.judge(v.locked_amplitude).unstable, None);
+            assert_eq!(d.judge(v.locked_amplitude.unwrap()).unstable, None);
         }
     }
 
