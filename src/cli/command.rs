@@ -27,8 +27,8 @@ pub enum Command {
         /// Engine (overrides run.engine).
         #[arg(long)]
         engine: Option<EngineArg>,
-        /// Random seed (overrides run.seed).
-        #[arg(long)]
+        /// Random seed (overrides run.seed; a TOML integer, so at most 9223372036854775807).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(..=i64::MAX as u64))]
         seed: Option<u64>,
         /// Output directory (default: `out/<scene file stem>/`).
         #[arg(long)]

@@ -80,8 +80,8 @@ fn regime_text(s: &Summary) -> String {
             "regime unstable ({}: the plate step grows x{} per step with every junction attached; \
              largest stable dt {}, see `stickslip stability`)",
             n.unstable.map_or("seen", |c| c.as_str()),
-            super::stability::num(n.growth_factor),
-            super::stability::num(n.largest_stable_dt)
+            n.growth_factor.map_or_else(|| "undefined".to_string(), super::stability::num),
+            n.largest_stable_dt.map_or_else(|| "undefined".to_string(), super::stability::num)
         ),
         _ => format!("regime {} ({} stick-slip cycles)", s.regime.as_str(), s.stick_slip_cycles),
     }

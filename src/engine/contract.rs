@@ -5,6 +5,7 @@ use serde::{Serialize, de::DeserializeOwned};
 
 use crate::observe::{Observer, Sample};
 use crate::scene::EngineKind;
+use crate::scene::error::compact;
 
 /// Counters an engine keeps; reported in `summary.json`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
@@ -50,7 +51,12 @@ pub enum EngineError {
     #[error("numerical trouble at t = {t}: {quantity} = {value}")]
     NonFinite { t: f64, quantity: &'static str, value: f64 },
     /// The adaptive integrator could not meet its tolerance.
-    #[error("the adaptive plate integrator failed at t = {t}: step size {h} too small for exact.rtol = {rtol}")]
+    #[error(
+        "the adaptive plate integrator failed at t = {}: step size {} too small for exact.rtol = {}",
+        compact(t),
+        compact(h),
+        compact(rtol)
+    )]
     StepSizeUnderflow { t: f64, h: f64, rtol: f64 },
     /// The adaptive integrator failed for another reason.
     #[error("the adaptive plate integrator failed at t = {t}: {source}")]
@@ -114,4 +120,20 @@ pub trait Engine: Serialize + DeserializeOwned + Send + 'static {
 pub trait EngineVisitor {
     type Output;
     fn visit<E: Engine>(self, engine: E) -> Self::Output;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A step size far below 1 is shown in exponent form (it was written out as 80
+    /// characters of zeros and digits).
+    #[test]
+    fn a_step_size_underflow_shows_short_numbers() {
+        let e = EngineError::StepSizeUnderflow { t: 0.0, h: 4.4336561899658515e-62, rtol: 1e-10 };
+        assert_eq!(
+            e.to_string(),
+            "the adaptive plate integrator failed at t = 0: step size 4.4336561899658515e-62 too small for exact.rtol = 0.0000000001"
+        );
+    }
 }

@@ -225,4 +225,25 @@ mod tests {
         let b = run_scene(&scene, None).unwrap();
         assert_eq!(summary_without_wall_time(&a), summary_without_wall_time(&b));
     }
+
+    /// `trace.csv`'s last row is at `t_end` for the exact engine, and at the end of the
+    /// fixed engine's last step, `ceil(t_end / dt) dt`, when `t_end` is not a whole number of
+    /// steps (docs/runs.md); the window of the summary ends at `t_end` either way.
+    #[test]
+    fn the_trace_ends_at_t_end_or_at_the_end_of_the_last_step() {
+        for (engine, last) in [("exact", "10.3"), ("fixed", "10.5")] {
+            let scene =
+                fig1_with(&[&format!("run.engine={engine}"), "fixed.dt=0.5", "run.t_end=10.3", "output.sample_dt=1"]);
+            let dir = tempfile::tempdir().unwrap();
+            let s = run_scene(&scene, Some(dir.path())).unwrap();
+            let trace = std::fs::read_to_string(dir.path().join("trace.csv")).unwrap();
+            let times: Vec<&str> = trace.lines().skip(1).map(|l| l.split(',').next().unwrap()).collect();
+            assert_eq!(times.len(), 12, "{engine}: {times:?}");
+            assert_eq!((times[10], times[11]), ("10.0", last), "{engine}");
+            assert_eq!(s.t_end, 10.3);
+            if engine == "fixed" {
+                assert_eq!(s.counters.steps, Some(21));
+            }
+        }
+    }
 }

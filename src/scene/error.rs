@@ -22,7 +22,7 @@ pub enum SceneError {
     Invalid { field: &'static str, value: String, allowed: String },
     /// A `--set section.key=value` override is malformed.
     #[error("--set {assignment}: {reason}")]
-    Override { assignment: String, reason: &'static str },
+    Override { assignment: String, reason: String },
 }
 
 impl SceneError {

@@ -326,6 +326,11 @@ fn set_with_bad_value() {
     expect_bad_args(&["--set", "junctions.n=0"], &["junctions.n", "0"]);
     expect_bad_args(&["--set", "junctions.bond=medium"], &["junctions.bond", "medium"]);
     expect_bad_args(&["--set", "run.seed=0"], &["run.seed", "0"]);
+    // A number TOML cannot hold is refused as a number, not read as a string.
+    for big in ["plate.v=1e400", "run.seed=9223372036854775808", "junctions.n=99999999999999999999"] {
+        let line = expect_bad_args(&["--set", big], &[&format!("--set {big}: not a TOML number")]);
+        assert!(!line.contains("string"), "{line}");
+    }
     // A later override is checked too, and the first bad one is reported.
     expect_bad_args(&["--set", "plate.v=0.1", "--set", "plate.k=-1"], &["plate.k", "-1"]);
 }
@@ -335,6 +340,12 @@ fn seed_flag() {
     expect_bad_args(&["--seed", "abc"], &["--seed", "abc"]);
     expect_bad_args(&["--seed", "-1"], &["-1"]);
     expect_bad_args(&["--seed", "99999999999999999999"], &["--seed", "99999999999999999999"]);
+    // A u64 beyond the TOML integers run.seed takes: refused as the flag's value (it was
+    // refused as `run.seed: invalid type: string "18446744073709551615"`).
+    for big in ["9223372036854775808", "18446744073709551615"] {
+        let line = expect_bad_args(&["--seed", big], &["--seed", big, "0..=9223372036854775807"]);
+        assert!(!line.contains("string"), "{line}");
+    }
     // A number, but not a Park-Miller seed: checked like the scene field it overrides.
     expect_bad_args(&["--seed", "0"], &["run.seed", "0"]);
     expect_bad_args(&["--seed", "2147483647"], &["run.seed", "2147483647"]);

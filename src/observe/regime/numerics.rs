@@ -63,17 +63,28 @@ impl Cause {
 pub struct Numerics {
     /// Growth factor per step of the plate's oscillation with every junction attached
     /// (the largest over attached counts for the integrators here; `compare`'s `plate_growth`).
-    pub growth_factor: f64,
-    /// Below this `dt` the plate step is stable for every attached count.
-    pub largest_stable_dt: f64,
+    /// `None` (absent from `summary.json`, which holds finite numbers only) when it is not a
+    /// finite number: plate parameters at the edge of the floating-point range (a subnormal
+    /// `plate.mass`) leave it infinite or undefined.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub growth_factor: Option<f64>,
+    /// Below this `dt` the plate step is stable for every attached count. `None` (absent
+    /// from `summary.json`) when it is not a finite number: the step is stable at every `dt`
+    /// (a plate without stiffness, `K + kappa N = 0`, and without mass or damping), or, at
+    /// the edge of the floating-point range, the limit is undefined.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub largest_stable_dt: Option<f64>,
     /// Why the run is unstable; absent when it is not.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub unstable: Option<Cause>,
     /// Steps of the strongest locked stretch (the period-2 component of one sign, not
     /// decaying), or of the longest stretch of one sign when none is locked.
     pub locked_steps: u64,
-    /// RMS amplitude (force) of the period-2 component over that stretch.
-    pub locked_amplitude: f64,
+    /// RMS amplitude (force) of the period-2 component over that stretch. `None` (absent
+    /// from `summary.json`) when it is not a finite number: its squares overflow the
+    /// floating-point range (forces beyond about `1e154`).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub locked_amplitude: Option<f64>,
 }
 
 /// The analysis's side of the verdict, fixed by the scene.
@@ -218,11 +229,11 @@ impl NumericsDetector {
         };
         let shown = seen.or(d.best).unwrap_or(d.longest);
         Numerics {
-            growth_factor: p.growth_factor,
-            largest_stable_dt: p.largest_stable_dt,
+            growth_factor: Some(p.growth_factor).filter(|g| g.is_finite()),
+            largest_stable_dt: Some(p.largest_stable_dt).filter(|dt| dt.is_finite()),
             unstable,
             locked_steps: shown.len,
-            locked_amplitude: shown.amplitude(),
+            locked_amplitude: Some(shown.amplitude()).filter(|a| a.is_finite()),
         }
     }
 }
@@ -286,7 +297,7 @@ mod tests {
             assert_eq!(v.unstable, Some(Cause::Seen), "growth {growth}: {v:?}");
             assert!(v.locked_steps >= 150, "{v:?}");
             // Too small against the junctions' noise: not the scheme's.
-            assert_eq!(d.judge(v.locked_amplitude).unstable, None);
+            assert_eq!(d.judge(v.locked_amplitude.unwrap()).unstable, None);
         }
     }
 
