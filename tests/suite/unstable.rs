@@ -122,18 +122,16 @@ fn the_exact_engine_is_never_unstable() {
 /// A fixed-step plate without stiffness (`K + kappa N = 0`) and without mass is stable at
 /// every step: its `largest_stable_dt` is infinite, and `summary.json`, which holds finite
 /// numbers only, leaves it out (it read `null`, which did not read back into a summary, so a
-/// sweep of such a scene could not journal its runs). So do plate parameters at the edge of
-/// the floating-point range: a subnormal mass, whose growth factor is not a number, and
-/// forces near `1e200`, whose period-2 component's squares overflow.
+/// sweep of such a scene could not journal its runs). So does a subnormal mass, whose growth
+/// factor is not a number. (Forces near `1e200`, whose period-2 component's squares would
+/// overflow, now stop the run as a divergence first: `a_force_beyond_the_divergence_limit_stops_the_run`.)
 #[test]
 fn summary_json_leaves_out_stability_numbers_that_are_not_finite() {
     let no_stiffness = ["plate.k=0", "junctions.kappa=0"];
-    let huge = ["plate.mass=1e200", "plate.k=1e200", "run.t_end=20", "fixed.dt=0.1"];
     for (extra, dt_absent, growth_absent, amplitude_absent) in [
         (&[&no_stiffness[..], &["plate.mass=0"]].concat(), true, false, false),
         (&[&no_stiffness[..], &["plate.eta=0"]].concat(), true, false, false),
         (&[&no_stiffness[..], &["plate.mass=1e-310"]].concat(), false, true, false),
-        (&huge.to_vec(), false, false, true),
     ] {
         let dir = tempfile::tempdir().unwrap();
         let summary = run_scene(&fig1_with(extra), Some(dir.path())).unwrap_or_else(|e| panic!("{extra:?}: {e}"));
