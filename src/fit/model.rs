@@ -406,7 +406,6 @@ impl Simulator for PoolSimulator<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::ParkMiller;
 
     fn problem(replicas: usize, free: Vec<FreeParam>) -> Result<Problem, String> {
         let base = crate::test_scenes::fig1();
@@ -423,14 +422,7 @@ mod tests {
         for (free, draws) in [(vec![], 300 * 151), (vec![dt], 300 * 301)] {
             let p = problem(3, free).unwrap();
             for (i, row) in p.seeds.iter().enumerate() {
-                assert_eq!(row[0], 1 + seeds::hash(1, i as u64, u64::MAX) % seeds::PARK_MILLER_PERIOD);
-                for w in row.windows(2) {
-                    let mut g = ParkMiller::new(w[0]).unwrap();
-                    for _ in 0..draws {
-                        g.next_state();
-                    }
-                    assert_eq!(u64::from(g.state()), w[1], "point {i}: {row:?}");
-                }
+                seeds::assert_consecutive_blocks(row, draws, Some(i as u64));
             }
         }
         let e = problem(50_000, vec![]).unwrap_err();

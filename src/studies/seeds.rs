@@ -151,6 +151,24 @@ fn park_miller_blocks(h: u64, replicas: usize, draws: u64) -> Option<Vec<u64>> {
     )
 }
 
+/// Asserts that `seeds` are the first states of consecutive blocks of `draws` numbers of
+/// the Park–Miller cycle, the first at the state of sweep point `index` of `run.seed = 1`
+/// ([`sweep_park_miller_seeds`]; `None` for another start).
+#[cfg(test)]
+pub(crate) fn assert_consecutive_blocks(seeds: &[u64], draws: u64, index: Option<u64>) {
+    if let Some(i) = index {
+        assert_eq!(seeds[0], 1 + hash(1, i, u64::MAX) % PARK_MILLER_PERIOD, "point {i}");
+    }
+    for w in seeds.windows(2) {
+        let mut g = ParkMiller::new(w[0]).unwrap();
+        for _ in 0..draws {
+            g.next_state();
+        }
+        // The next replica starts where this one's block ends: no draw is shared.
+        assert_eq!(u64::from(g.state()), w[1], "{seeds:?}");
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -195,14 +213,7 @@ mod tests {
     fn park_miller_blocks_follow_each_other_on_the_cycle() {
         let draws = 1000;
         let seeds = park_miller_seeds(7, 3, 4, draws).unwrap();
-        for w in seeds.windows(2) {
-            let mut g = ParkMiller::new(w[0]).unwrap();
-            for _ in 0..draws {
-                g.next_state();
-            }
-            // The next replica starts where this one's block ends: no draw is shared.
-            assert_eq!(u64::from(g.state()), w[1]);
-        }
+        assert_consecutive_blocks(&seeds, draws, None);
         assert!(seeds.iter().all(|&s| (1..=PARK_MILLER_PERIOD).contains(&s)));
     }
 

@@ -260,7 +260,6 @@ impl Sweep {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::ParkMiller;
     use crate::studies::sweep::{ValueSpec, parse_values};
 
     fn spec(param: &str, values: &str, replicas: usize) -> SweepSpec {
@@ -280,14 +279,7 @@ mod tests {
         let sweep = Sweep::prepare(crate::test_scenes::fig1(), spec("fixed.dt", "1,0.5", 3)).unwrap();
         // fig1: N = 300, t_end = 150.
         for (g, (row, draws)) in seeds_of(&sweep).iter().zip([300 * 151, 300 * 301]).enumerate() {
-            assert_eq!(row[0], 1 + seeds::hash(1, g as u64, u64::MAX) % seeds::PARK_MILLER_PERIOD);
-            for w in row.windows(2) {
-                let mut rng = ParkMiller::new(w[0]).unwrap();
-                for _ in 0..draws {
-                    rng.next_state();
-                }
-                assert_eq!(u64::from(rng.state()), w[1], "point {g}: {row:?}");
-            }
+            seeds::assert_consecutive_blocks(row, draws, Some(g as u64));
         }
     }
 
