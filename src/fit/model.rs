@@ -99,16 +99,10 @@ impl Problem {
                     o.push(assignment("fixed.dt", dt.low));
                 }
                 let scene = base.with_overrides(&o).map_err(|e| e.to_string())?;
-                let draws =
-                    (scene.junctions.n as u64).saturating_mul(scene.fixed.steps_for(scene.run.t_end).saturating_add(1));
+                let draws = seeds::replica_draws(&scene);
                 *row = seeds::sweep_park_miller_seeds(base.run.seed, i as u64, replicas, draws).ok_or_else(|| {
-                    format!(
-                        "--replicas {replicas}: at data line {} the replicas need {replicas} x {draws} Park-Miller \
-                         draws, more than the generator's period {}; use {}a larger fixed.dt or --set fixed.rng=pcg",
-                        data.points[i].line,
-                        seeds::PARK_MILLER_PERIOD,
-                        if replicas > 1 { "fewer replicas, " } else { "" }
-                    )
+                    let line = data.points[i].line;
+                    format!("--replicas {replicas}: at data line {line} {}", seeds::blocks_do_not_fit(replicas, draws))
                 })?;
             }
         }

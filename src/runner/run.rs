@@ -185,12 +185,10 @@ pub fn summarize<E: Engine>(
         stick_slip_cycles: verdict.cycles,
         oscillation: verdict.oscillation,
         stability: verdict.numerics,
-        rng_period_exceeded: match engine.counters().steps {
-            Some(steps) if E::KIND == crate::scene::EngineKind::Fixed => {
-                crate::engine::fixed::park_miller_period_exceeded(scene, steps)
-            }
-            _ => None,
-        },
+        rng_period_exceeded: engine
+            .counters()
+            .steps
+            .and_then(|steps| crate::engine::fixed::park_miller_period_exceeded(scene, steps)),
         counters: engine.counters(),
         wall_seconds,
         parameters: scene.clone(),

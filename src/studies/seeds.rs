@@ -47,6 +47,7 @@
 use std::collections::HashSet;
 
 use crate::rng::ParkMiller;
+use crate::scene::Scene;
 
 /// SplitMix64's increment (the golden ratio in 64-bit fixed point).
 pub const GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
@@ -113,6 +114,24 @@ pub fn pcg_seed(base: u64, role: Role, point: u64, replica: u64) -> u64 {
 
 /// The Park–Miller period `2^31 - 2`.
 pub const PARK_MILLER_PERIOD: u64 = ParkMiller::PERIOD;
+
+/// The numbers one replica of `scene` may draw from the Park–Miller generator, the length
+/// of its block of the cycle: `N (steps + 1)` for the steps to `run.t_end` (one per junction
+/// and step, and one per junction for a stationary start).
+pub fn replica_draws(scene: &Scene) -> u64 {
+    (scene.junctions.n as u64).saturating_mul(scene.fixed.steps_for(scene.run.t_end).saturating_add(1))
+}
+
+/// Why `replicas` blocks of `draws` numbers do not fit in the Park–Miller cycle, and the
+/// ways out (fewer replicas only when there are several).
+pub fn blocks_do_not_fit(replicas: usize, draws: u64) -> String {
+    format!(
+        "the replicas need {replicas} x {draws} Park-Miller draws, more than the generator's period {}; use {}a \
+         larger fixed.dt or --set fixed.rng=pcg",
+        PARK_MILLER_PERIOD,
+        if replicas > 1 { "fewer replicas, " } else { "" }
+    )
+}
 
 /// The Park–Miller seeds of `replicas` replicas of one fixed-step point of a study, each
 /// allowed `draws` numbers: disjoint consecutive blocks of the cycle starting at a hashed

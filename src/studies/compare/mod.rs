@@ -259,8 +259,7 @@ impl Plan {
             let seeds: Vec<u64> = match fixed.fixed.rng {
                 RngKind::Pcg => (0..replicas).map(|r| seeds::pcg_seed(base, Role::Fixed, j as u64, r as u64)).collect(),
                 RngKind::ParkMiller => {
-                    let n = fixed.junctions.n as u64;
-                    let draws = n.saturating_mul(fixed.fixed.steps_for(fixed.run.t_end).saturating_add(1));
+                    let draws = seeds::replica_draws(&fixed);
                     seeds::park_miller_seeds(base, j as u64, replicas, draws).ok_or_else(|| {
                         PlanError(format!(
                             "--replicas = {replicas}: at --dts {dt} the replicas need {replicas} x {draws} Park-Miller \

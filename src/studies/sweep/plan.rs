@@ -97,11 +97,7 @@ pub enum SpecError {
     Replicas { replicas: usize, points: usize },
     #[error("{flag}: value {value} of {param} is not > 0 (a log axis needs positive values)")]
     LogAxis { flag: &'static str, param: String, value: String },
-    #[error(
-        "--replicas {replicas}: at {point} the replicas need {replicas} x {draws} Park-Miller draws, more than the generator's period {period}; use {fewer}a larger fixed.dt or --set fixed.rng=pcg",
-        period = seeds::PARK_MILLER_PERIOD,
-        fewer = if *.replicas > 1 { "fewer replicas, " } else { "" }
-    )]
+    #[error("--replicas {replicas}: at {point} {}", seeds::blocks_do_not_fit(*replicas, *draws))]
     ParkMillerPeriod {
         /// `plate.v = 0.5` (each swept field).
         point: String,
@@ -198,9 +194,7 @@ impl Sweep {
         let mut seeds = seeds::derive_all(base.run.seed, grid.len(), replicas);
         for (g, (values, scene)) in scenes.iter().enumerate() {
             if scene.run.engine == EngineKind::Fixed && scene.fixed.rng == RngKind::ParkMiller {
-                // One draw per junction and step, and one per junction for a stationary start.
-                let n = scene.junctions.n as u64;
-                let draws = n.saturating_mul(scene.fixed.steps_for(scene.run.t_end).saturating_add(1));
+                let draws = seeds::replica_draws(scene);
                 seeds[g] =
                     seeds::sweep_park_miller_seeds(base.run.seed, g as u64, replicas, draws).ok_or_else(|| {
                         let point =
