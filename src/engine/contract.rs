@@ -126,8 +126,8 @@ pub trait EngineVisitor {
 mod tests {
     use super::*;
 
-    /// A step size far below 1 is shown in exponent form (it was written out as 80
-    /// characters of zeros and digits).
+    /// A step size far below 1 is shown in exponent form, not as 80 characters of zeros
+    /// and digits.
     #[test]
     fn a_step_size_underflow_shows_short_numbers() {
         let e = EngineError::StepSizeUnderflow { t: 0.0, h: 4.4336561899658515e-62, rtol: 1e-10 };

@@ -84,8 +84,8 @@ mod tests {
         }
     }
 
-    /// A number TOML cannot hold is refused as such (it was taken as a string, and the
-    /// field then said `invalid type: string "1e400", expected f64`).
+    /// A number TOML cannot hold is refused as a number, not taken as a string (which the
+    /// field would refuse as `invalid type: string "1e400", expected f64`).
     #[test]
     fn numbers_beyond_toml_are_refused_as_numbers() {
         for bad in [

@@ -121,10 +121,10 @@ fn the_exact_engine_is_never_unstable() {
 
 /// A fixed-step plate without stiffness (`K + kappa N = 0`) and without mass is stable at
 /// every step: its `largest_stable_dt` is infinite, and `summary.json`, which holds finite
-/// numbers only, leaves it out (it read `null`, which did not read back into a summary, so a
-/// sweep of such a scene could not journal its runs). So does a subnormal mass, whose growth
-/// factor is not a number. (Forces near `1e200`, whose period-2 component's squares would
-/// overflow, now stop the run as a divergence first: `a_force_beyond_the_divergence_limit_stops_the_run`.)
+/// numbers only, leaves it out (`null` would not read back into a summary, and a sweep of
+/// such a scene could not journal its runs). So does a subnormal mass, whose growth factor
+/// is not a number. (Forces near `1e200`, whose period-2 component's squares would overflow,
+/// stop the run as a divergence first: `a_force_beyond_the_divergence_limit_stops_the_run`.)
 #[test]
 fn summary_json_leaves_out_stability_numbers_that_are_not_finite() {
     let no_stiffness = ["plate.k=0", "junctions.kappa=0"];
